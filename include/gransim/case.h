@@ -1,0 +1,71 @@
+/* gransim — a case: everything a run needs, read and validated from a YAML
+ * case file (see docs/case-files.md for every key).
+ *
+ * gs_case_load validates the whole file where it is read: grid, initial
+ * distribution, mechanisms with their kernels, solver, output times and
+ * checks.  Any problem is reported with file, line, key, value and
+ * expectation, and nothing is run. */
+#ifndef GRANSIM_CASE_H
+#define GRANSIM_CASE_H
+
+#include "gransim/cfg.h"
+#include "gransim/integrator.h"
+#include "gransim/pbm.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct gs_checks {
+  double mass_tolerance;     /* relative error allowed in the volume balance of every axis */
+  double negative_tolerance; /* negative numbers allowed down to -tol * max(N) */
+  double max_loss;           /* fraction of volume allowed to leave through grid boundaries */
+} gs_checks;
+
+typedef struct gs_case {
+  gs_cfg *cfg;
+  char title[256];
+  gs_model model;
+  double *y0;          /* nstate + nledger: numbers then ledger (zero) */
+  double t0;
+  double *times;       /* output times, increasing, times[0] = t0 */
+  size_t ntimes;
+  gs_ode ode;          /* the ODE system of the model (numbers + ledger) */
+  double *abs_scale;   /* error-control scale per component (ledger excluded) */
+  gs_integrator integrator;
+  gs_checks checks;
+} gs_case;
+
+/* Read, validate and build a case from a file, or from an already loaded
+ * configuration (taken over by the case). */
+int gs_case_load(const char *path, gs_case *c, gs_error *err);
+int gs_case_from_cfg(gs_cfg *cfg, gs_case *c, gs_error *err);
+void gs_case_free(gs_case *c);
+
+/* ---- running ------------------------------------------------------------ */
+typedef struct gs_run_options {
+  const char *out_dir; /* where result.h5 and summary.csv go (NULL: no files) */
+  int resume;          /* continue an interrupted run from its partial files */
+  int progress;        /* -1 auto (when stderr is a terminal), 0 off, 1 on */
+} gs_run_options;
+
+typedef struct gs_run_report {
+  double t_end;
+  gs_integrator_stats stats;
+  double wall_seconds;
+  double max_balance_error; /* largest relative volume-balance error seen */
+  double max_loss;          /* largest fraction of volume lost through boundaries */
+} gs_run_report;
+
+/* Integrate the case over its output times, checking after every output time
+ * for non-finite or negative numbers, the volume balance of every axis and
+ * the loss through grid boundaries, and writing outputs.  On failure returns
+ * GS_ENUMERIC (or GS_EIO) with a message naming the time, compartment and
+ * cell, and leaves no result files.  y (may be NULL) receives the final state. */
+int gs_case_run(gs_case *c, const gs_run_options *opt, double *y, gs_run_report *report,
+                gs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

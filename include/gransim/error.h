@@ -1,0 +1,43 @@
+/* gransim — error reporting.
+ *
+ * Every fallible function returns an int status (GS_OK on success) and, on
+ * failure, fills a caller-owned gs_error with a complete, human-readable
+ * message.  Messages about case files always name the file, the line, the key,
+ * the offending value and what was expected. */
+#ifndef GRANSIM_ERROR_H
+#define GRANSIM_ERROR_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum gs_status {
+  GS_OK = 0,
+  GS_EINPUT = 1,   /* invalid case file, table or argument */
+  GS_ENUMERIC = 2, /* NaN, negative density, lost mass, integrator failure */
+  GS_EIO = 3,      /* file could not be read or written */
+  GS_ENOMEM = 4    /* allocation failed */
+};
+
+typedef struct gs_error {
+  int code;
+  char msg[2048];
+} gs_error;
+
+/* Set *err (if non-NULL) to code and a printf-formatted message; returns code. */
+int gs_error_set(gs_error *err, int code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* Prefix an existing message with context ("while reading X: ..."); returns err->code. */
+int gs_error_prefix(gs_error *err, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* malloc/calloc that set GS_ENOMEM in *err on failure (return NULL). */
+void *gs_malloc(size_t nbytes, gs_error *err);
+void *gs_calloc(size_t count, size_t size, gs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

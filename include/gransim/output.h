@@ -1,0 +1,53 @@
+/* gransim — result files.
+ *
+ * gs_output writes DIR/result.h5 (HDF5) and DIR/summary.csv.  Both are written
+ * to temporary names (".result.h5.partial", ".summary.csv.partial") and only
+ * renamed into place by gs_output_finish(ok = 1): a failed or killed run never
+ * leaves a half-written result under the final names.
+ *
+ * result.h5 layout:
+ *   /grid/<axis name>/edges, /grid/<axis name>/pivots   (float64)
+ *   /grid attributes: dim, ncomp, ncells, axis_names
+ *   /time                          (ntimes)
+ *   /number                        (ntimes, ncomp, n0[, n1[, n2]]) particle numbers per cell
+ *   /summary/<column>              (ntimes, ncomp) every summary.csv column
+ *   /ledger                        (ntimes, ncomp, 2*dim) external and lost volume per axis
+ *   /case  attribute "text": the case file as read; attribute "file": its name
+ *   attributes on /: gransim_version, status ("complete")
+ * The datasets are extendible along time and flushed after every write.
+ *
+ * summary.csv: one row per output time and compartment:
+ *   time,compartment,M0,M1,M2,d10,d50,d90,mean_<axis>...,total_<axis>...
+ * M1 and M2 are moments of the granule volume (sum of the size axes). */
+#ifndef GRANSIM_OUTPUT_H
+#define GRANSIM_OUTPUT_H
+
+#include "gransim/pbm.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct gs_output gs_output;
+
+/* Create DIR if needed and open the partial files.  case_text/case_name are
+ * stored as the case echo. */
+gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_text,
+                          const char *case_name, gs_error *err);
+/* Append one output time: state y (nstate) and ledger (nledger). */
+int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
+                    const double *ledger, gs_error *err);
+/* Checkpoint/restart: reopen the partial files left in DIR by an interrupted
+ * run of the same case (same grid; checked), read back the last written time,
+ * state and ledger into *t, y, ledger, and continue appending after it.
+ * Fails with a clear message if there is nothing to resume or the grid differs. */
+gs_output *gs_output_resume(const char *dir, const gs_model *m, double *t, double *y,
+                            double *ledger, gs_error *err);
+/* ok = 1: close and rename into place; ok = 0: close and delete the partial files.
+ * Frees o in both cases. */
+int gs_output_finish(gs_output *o, int ok, gs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

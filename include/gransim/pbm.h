@@ -1,0 +1,102 @@
+/* gransim — the sectional population-balance model.
+ *
+ * State: y[comp * ncells + cell] = number of particles represented by the
+ * pivot of `cell` in compartment `comp` (a number, not a density).
+ *
+ * Ledger: the model also integrates, alongside y, the external exchange of
+ * every coordinate's total volume, per compartment:
+ *   ledger[comp * 2*dim + k]        = volume of coordinate k brought in (feed,
+ *                                     transfer in, growth) minus taken out
+ *                                     (transfer out, product), integrated in time;
+ *   ledger[comp * 2*dim + dim + k]  = volume of coordinate k lost through the
+ *                                     grid boundaries (aggregates beyond the
+ *                                     last pivot, fragments below the first).
+ * Because the ledger is a linear functional of dy/dt, every integrator
+ * (Runge–Kutta, BDF, Euler) preserves
+ *     M1_k(y(t)) - M1_k(y(0)) = ledger_in_out_k(t) - ledger_lost_k(t)
+ * to round-off.  The run checks this identity after every output step, which
+ * turns any mechanism that creates or destroys mass into a hard error.
+ *
+ * Mechanisms (aggregation, breakage, growth, feed, transfer...) are
+ * registered types (gs_mech_type) selected by name from the case file. */
+#ifndef GRANSIM_PBM_H
+#define GRANSIM_PBM_H
+
+#include <stddef.h>
+#include "gransim/cfg.h"
+#include "gransim/grid.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct gs_model gs_model;
+
+/* ---- mechanisms ---------------------------------------------------------- */
+typedef struct gs_mech_type {
+  const char *name;    /* key used in case files: "aggregation", "breakage", ... */
+  const char *summary; /* one line for `gransim list` */
+  /* Read parameters from node (a map; "type" already consumed) and prepare
+   * all tables.  Must call gs_cfg_check_unused on the maps it reads. */
+  int (*create)(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err);
+  /* Add this mechanism's rate to dydt (all compartments) and to dledger. */
+  void (*rhs)(void *self, const gs_model *m, double t, const double *y, double *dydt,
+              double *dledger);
+  /* Optional: total number formation (birth) and depletion (death) rates per
+   * compartment, for the 0.5 / 2 identities.  NULL if not meaningful. */
+  void (*number_rates)(void *self, const gs_model *m, double t, const double *y, double *birth,
+                       double *death);
+  void (*free)(void *self);
+} gs_mech_type;
+
+typedef struct gs_mechanism {
+  const gs_mech_type *type;
+  void *self;
+  char label[64]; /* "mechanisms[i] (type)" for messages */
+} gs_mechanism;
+
+const gs_mech_type *gs_mech_lookup(const char *name);
+/* NULL-terminated list of all registered mechanism types. */
+const gs_mech_type *const *gs_mech_types(void);
+
+/* ---- the model ----------------------------------------------------------- */
+struct gs_model {
+  gs_grid grid;
+  size_t nstate;  /* ncomp * ncells */
+  size_t nledger; /* ncomp * 2 * dim */
+  gs_mechanism *mech;
+  size_t nmech;
+  int size_axes;  /* bitmask of axes summed into the granule volume for sizes (d10/d50/d90) */
+  double *size_volume; /* ncells: granule volume used for diameters */
+  char dir[1024];      /* directory of the case file, for relative paths in it ("." default) */
+};
+
+/* Allocate an empty model around a grid (grid is moved in). */
+int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err);
+/* Add a mechanism by type name, reading its parameters from node. */
+int gs_model_add_mechanism(gs_model *m, const char *type, gs_cfg_node *node, const char *label,
+                           gs_error *err);
+void gs_model_free(gs_model *m);
+
+/* Full right-hand side: dydt (nstate) and dledger (nledger) are overwritten. */
+void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger);
+
+/* ---- moments and size statistics ---------------------------------------- */
+typedef struct gs_summary {
+  double m0;                  /* number */
+  double m1;                  /* total granule volume  sum N v */
+  double m2;                  /* sum N v^2 */
+  double d10, d50, d90;       /* volume-weighted percentiles of the volume-equivalent diameter */
+  double mean[GS_MAX_DIM];    /* number-mean of each coordinate */
+  double total[GS_MAX_DIM];   /* total volume of each coordinate, sum N x_k */
+} gs_summary;
+
+/* Statistics of compartment comp of state y. */
+void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s);
+/* Mixed moment sum N x_0^p0 x_1^p1 x_2^p2 over compartment comp. */
+double gs_moment(const gs_model *m, const double *y, size_t comp, const int *powers);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,48 @@
+/* Error reporting helpers: see include/gransim/error.h. */
+#include "gransim/error.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int gs_error_set(gs_error *err, int code, const char *fmt, ...) {
+  if (err) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+    va_end(ap);
+    err->code = code;
+  }
+  return code;
+}
+
+int gs_error_prefix(gs_error *err, const char *fmt, ...) {
+  if (!err) return GS_EINPUT;
+  char prefix[512];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(prefix, sizeof prefix, fmt, ap);
+  va_end(ap);
+  /* Shift the old message right and put the prefix in front, truncating at the end. */
+  size_t plen = strlen(prefix), cap = sizeof err->msg - 1;
+  if (plen > cap) plen = cap;
+  size_t olen = strlen(err->msg);
+  if (plen + olen > cap) olen = cap - plen;
+  memmove(err->msg + plen, err->msg, olen);
+  memcpy(err->msg, prefix, plen);
+  err->msg[plen + olen] = '\0';
+  return err->code;
+}
+
+void *gs_malloc(size_t nbytes, gs_error *err) {
+  void *p = malloc(nbytes ? nbytes : 1);
+  if (!p) gs_error_set(err, GS_ENOMEM, "out of memory allocating %zu bytes", nbytes);
+  return p;
+}
+
+void *gs_calloc(size_t count, size_t size, gs_error *err) {
+  void *p = calloc(count ? count : 1, size ? size : 1);
+  if (!p) gs_error_set(err, GS_ENOMEM, "out of memory allocating %zu x %zu bytes", count, size);
+  return p;
+}

@@ -1,0 +1,133 @@
+/* One internal-coordinate axis: edges, pivots, location and lever rule. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gransim/grid.h"
+
+static int axis_alloc(gs_axis *ax, const char *name, size_t n, gs_error *err) {
+  memset(ax, 0, sizeof *ax);
+  if (n < 1) return gs_error_set(err, GS_EINPUT, "axis '%s' needs at least one cell", name);
+  if (strlen(name) >= GS_NAME_LEN || !*name)
+    return gs_error_set(err, GS_EINPUT, "axis name '%s' must have 1 to %d characters", name,
+                        GS_NAME_LEN - 1);
+  strcpy(ax->name, name);
+  ax->n = n;
+  ax->edges = gs_malloc((n + 1) * sizeof(double), err);
+  ax->pivots = gs_malloc(n * sizeof(double), err);
+  if (!ax->edges || !ax->pivots) {
+    gs_axis_free(ax);
+    return GS_ENOMEM;
+  }
+  return GS_OK;
+}
+
+static void set_midpoints(gs_axis *ax) {
+  for (size_t i = 0; i < ax->n; i++) ax->pivots[i] = 0.5 * (ax->edges[i] + ax->edges[i + 1]);
+}
+
+int gs_axis_linear(gs_axis *ax, const char *name, double lo, double hi, size_t n, gs_error *err) {
+  if (!(lo >= 0) || !(hi > lo))
+    return gs_error_set(err, GS_EINPUT, "axis '%s': linear grid needs 0 <= min < max (got %g, %g)",
+                        name, lo, hi);
+  int rc = axis_alloc(ax, name, n, err);
+  if (rc) return rc;
+  for (size_t i = 0; i <= n; i++) ax->edges[i] = lo + (hi - lo) * (double)i / (double)n;
+  set_midpoints(ax);
+  return GS_OK;
+}
+
+int gs_axis_geometric(gs_axis *ax, const char *name, double lo, double ratio, size_t n,
+                      int zero_first, gs_error *err) {
+  if (!(lo > 0) || !(ratio > 1))
+    return gs_error_set(err, GS_EINPUT,
+                        "axis '%s': geometric grid needs min > 0 and ratio > 1 (got %g, %g)", name,
+                        lo, ratio);
+  size_t off = zero_first ? 1 : 0;
+  int rc = axis_alloc(ax, name, n + off, err);
+  if (rc) return rc;
+  if (zero_first) ax->edges[0] = 0.0;
+  for (size_t k = 0; k <= n; k++) ax->edges[k + off] = lo * pow(ratio, (double)k);
+  set_midpoints(ax);
+  return GS_OK;
+}
+
+int gs_axis_from_edges(gs_axis *ax, const char *name, const double *edges, size_t n_edges,
+                       const double *pivots, gs_error *err) {
+  if (n_edges < 2)
+    return gs_error_set(err, GS_EINPUT, "axis '%s': need at least 2 edges, got %zu", name,
+                        n_edges);
+  for (size_t i = 0; i < n_edges; i++) {
+    if (!(edges[i] >= 0) || !isfinite(edges[i]))
+      return gs_error_set(err, GS_EINPUT, "axis '%s': edge %zu = %g must be finite and >= 0",
+                          name, i, edges[i]);
+    if (i && !(edges[i] > edges[i - 1]))
+      return gs_error_set(err, GS_EINPUT,
+                          "axis '%s': edges must increase strictly (edge %zu = %g <= %g)", name, i,
+                          edges[i], edges[i - 1]);
+  }
+  int rc = axis_alloc(ax, name, n_edges - 1, err);
+  if (rc) return rc;
+  memcpy(ax->edges, edges, n_edges * sizeof(double));
+  if (!pivots) {
+    set_midpoints(ax);
+    return GS_OK;
+  }
+  for (size_t i = 0; i < ax->n; i++) {
+    if (!(pivots[i] >= edges[i] && pivots[i] <= edges[i + 1]) || (i && pivots[i] <= pivots[i - 1])) {
+      rc = gs_error_set(err, GS_EINPUT,
+                        "axis '%s': pivot %zu = %g must lie in its cell [%g, %g] and exceed the "
+                        "previous pivot",
+                        name, i, pivots[i], edges[i], edges[i + 1]);
+      gs_axis_free(ax);
+      return rc;
+    }
+    ax->pivots[i] = pivots[i];
+  }
+  return GS_OK;
+}
+
+void gs_axis_free(gs_axis *ax) {
+  free(ax->edges);
+  free(ax->pivots);
+  ax->edges = ax->pivots = NULL;
+  ax->n = 0;
+}
+
+/* Largest i with a[i] <= v among a[0..n-1] (a increasing, a[0] <= v). */
+static size_t bisect(const double *a, size_t n, double v) {
+  size_t lo = 0, hi = n - 1;
+  while (lo < hi) {
+    size_t mid = (lo + hi + 1) / 2;
+    if (a[mid] <= v) lo = mid;
+    else hi = mid - 1;
+  }
+  return lo;
+}
+
+size_t gs_axis_locate(const gs_axis *ax, double v) {
+  if (!(v >= ax->edges[0]) || v > ax->edges[ax->n]) return GS_NOWHERE;
+  size_t i = bisect(ax->edges, ax->n + 1, v);
+  return i >= ax->n ? ax->n - 1 : i;
+}
+
+int gs_axis_lever(const gs_axis *ax, double v, size_t *lo, double *w) {
+  const double *p = ax->pivots;
+  size_t n = ax->n;
+  if (v < p[0]) return -1;
+  if (v > p[n - 1]) return 1;
+  if (n == 1) {
+    *lo = 0;
+    *w = 0.0;
+    return 0;
+  }
+  size_t i = bisect(p, n, v);
+  if (i == n - 1) {
+    *lo = n - 1;
+    *w = 0.0;
+    return 0;
+  }
+  *lo = i;
+  *w = (v - p[i]) / (p[i + 1] - p[i]);
+  return 0;
+}

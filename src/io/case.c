@@ -1,0 +1,274 @@
+/* Case files: read and validate every section, build the model, initial
+ * state, integrator, output times and checks.  docs/case-files.md documents
+ * every key read here. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gransim/case.h"
+#include "gransim/distribution.h"
+
+/* ---- grid ------------------------------------------------------------------ */
+static int read_axis(gs_cfg_node *n, gs_axis *ax, gs_error *err) {
+  static const char *const types[] = {"linear", "geometric", "edges", NULL};
+  const char *name = NULL;
+  int type = 0, rc = gs_cfg_require_kind(n, GS_CFG_MAP, err);
+  if (!rc) rc = gs_cfg_string_req(n, "name", &name, err);
+  if (!rc && (strlen(name) == 0 || strlen(name) >= GS_NAME_LEN || strpbrk(name, " ,/\t")))
+    rc = gs_cfg_fail(gs_cfg_get(n, "name"), err, "expected a name of 1-%d characters without spaces, commas or '/'", GS_NAME_LEN - 1);
+  if (!rc && !gs_cfg_get(n, "type")) rc = gs_cfg_fail(n, err, "missing key 'type' (linear, geometric or edges)");
+  if (!rc) rc = gs_cfg_enum_opt(n, "type", types, 0, &type, err);
+  if (rc) return rc;
+  if (type == 0) {
+    double lo, hi;
+    long cells;
+    rc = gs_cfg_double_range(n, "min", 1, 0, 0, 0, HUGE_VAL, 0, &lo, err);
+    if (!rc) rc = gs_cfg_double_range(n, "max", 1, 0, lo, 1, HUGE_VAL, 0, &hi, err);
+    if (!rc) rc = gs_cfg_long_range(n, "cells", 1, 0, 1, 100000, &cells, err);
+    if (!rc) rc = gs_axis_linear(ax, name, lo, hi, (size_t)cells, err);
+  } else if (type == 1) {
+    double lo, ratio = 0, hi = 0;
+    long cells;
+    int zero_first;
+    rc = gs_cfg_double_range(n, "min", 1, 0, 0, 1, HUGE_VAL, 0, &lo, err);
+    if (!rc) rc = gs_cfg_long_range(n, "cells", 1, 0, 1, 100000, &cells, err);
+    if (!rc) rc = gs_cfg_bool_opt(n, "zero_first", 0, &zero_first, err);
+    if (!rc && !!gs_cfg_get(n, "ratio") == !!gs_cfg_get(n, "max"))
+      rc = gs_cfg_fail(n, err, "a geometric axis needs exactly one of 'ratio' or 'max'");
+    if (!rc && gs_cfg_get(n, "ratio")) rc = gs_cfg_double_range(n, "ratio", 1, 0, 1, 1, HUGE_VAL, 0, &ratio, err);
+    if (!rc && gs_cfg_get(n, "max")) {
+      rc = gs_cfg_double_range(n, "max", 1, 0, lo, 1, HUGE_VAL, 0, &hi, err);
+      ratio = pow(hi / lo, 1.0 / (double)(cells - (zero_first ? 1 : 0) > 0 ? cells - (zero_first ? 1 : 0) : 1));
+    }
+    /* with zero_first, `cells` counts the extra [0, min] cell */
+    if (!rc && zero_first && cells < 2) rc = gs_cfg_fail(gs_cfg_get(n, "cells"), err, "expected at least 2 cells with zero_first");
+    if (!rc) rc = gs_axis_geometric(ax, name, lo, ratio, (size_t)cells - (zero_first ? 1 : 0), zero_first, err);
+  } else {
+    double *edges = NULL, *pivots = NULL;
+    size_t ne = 0, np = 0;
+    rc = gs_cfg_doubles_req(n, "edges", 0, &edges, &ne, err);
+    if (!rc && gs_cfg_get(n, "pivots")) {
+      rc = gs_cfg_doubles_req(n, "pivots", 0, &pivots, &np, err);
+      if (!rc && np + 1 != ne)
+        rc = gs_cfg_fail(gs_cfg_get(n, "pivots"), err, "expected %zu pivots (one per cell), got %zu", ne ? ne - 1 : 0, np);
+    }
+    if (!rc) rc = gs_axis_from_edges(ax, name, edges, ne, pivots, err);
+    if (rc == GS_EINPUT && gs_cfg_get(n, "edges")) {
+      /* the builder's message lacks the location */
+      gs_error_prefix(err, "%s:%d: %s: ", gs_cfg_file(n), gs_cfg_line(n), gs_cfg_path(n));
+    }
+    free(edges);
+    free(pivots);
+  }
+  if (rc == GS_EINPUT && strncmp(err->msg, gs_cfg_file(n), strlen(gs_cfg_file(n))))
+    gs_error_prefix(err, "%s:%d: %s: ", gs_cfg_file(n), gs_cfg_line(n), gs_cfg_path(n));
+  if (!rc) rc = gs_cfg_check_unused(n, err);
+  return rc;
+}
+
+static int read_grid(gs_cfg_node *root, gs_model *m, gs_error *err) {
+  gs_cfg_node *grid = NULL, *axes = NULL;
+  long ncomp = 1;
+  gs_axis ax[GS_MAX_DIM];
+  memset(ax, 0, sizeof ax);
+  int rc = gs_cfg_map_req(root, "grid", &grid, err);
+  if (!rc) rc = gs_cfg_seq_req(grid, "axes", &axes, err);
+  if (!rc && (gs_cfg_size(axes) < 1 || gs_cfg_size(axes) > GS_MAX_DIM))
+    rc = gs_cfg_fail(axes, err, "expected 1 to %d axes, got %zu", GS_MAX_DIM, gs_cfg_size(axes));
+  if (!rc) rc = gs_cfg_long_range(grid, "compartments", 0, 1, 1, 1000000, &ncomp, err);
+  int dim = rc ? 0 : (int)gs_cfg_size(axes), built = 0;
+  for (; !rc && built < dim; built++) rc = read_axis(gs_cfg_item(axes, (size_t)built), &ax[built], err);
+  gs_grid g;
+  if (!rc) {
+    rc = gs_grid_init(&g, ax, dim, (size_t)ncomp, err);
+    if (rc == GS_EINPUT) gs_error_prefix(err, "%s:%d: grid.axes: ", gs_cfg_file(axes), gs_cfg_line(axes));
+  }
+  if (rc) {
+    for (int k = 0; k < built; k++) gs_axis_free(&ax[k]);
+    return rc;
+  }
+  rc = gs_model_init(m, &g, err);
+  gs_cfg_node *sizes = rc ? NULL : gs_cfg_get(grid, "size_axes");
+  if (sizes) {
+    if ((rc = gs_cfg_require_kind(sizes, GS_CFG_SEQ, err))) return rc;
+    m->size_axes = 0;
+    for (size_t i = 0; i < gs_cfg_size(sizes); i++) {
+      const char *nm = gs_cfg_scalar(gs_cfg_item(sizes, i));
+      int k = nm ? gs_grid_axis_by_name(&m->grid, nm) : -1;
+      if (k < 0) return gs_cfg_fail(gs_cfg_item(sizes, i), err, "expected the name of a grid axis");
+      m->size_axes |= 1 << k;
+    }
+    for (size_t c = 0; c < m->grid.ncells; c++) {
+      double v = 0;
+      for (int k = 0; k < dim; k++)
+        if (m->size_axes & (1 << k)) v += m->grid.x[c * (size_t)dim + (size_t)k];
+      m->size_volume[c] = v;
+    }
+  }
+  if (!rc) rc = gs_cfg_check_unused(grid, err);
+  return rc;
+}
+
+/* ---- initial state, mechanisms -------------------------------------------- */
+static int read_initial_one(gs_cfg_node *n, gs_model *m, double *y, gs_error *err) {
+  long comp = 1;
+  int rc = gs_cfg_require_kind(n, GS_CFG_MAP, err);
+  if (!rc) rc = gs_cfg_long_range(n, "compartment", 0, 1, 1, (long)m->grid.ncomp, &comp, err);
+  if (!rc) rc = gs_distribution_add(n, &m->grid, y + (size_t)(comp - 1) * m->grid.ncells, 0, err);
+  return rc;
+}
+
+static int read_initial(gs_cfg_node *root, gs_model *m, double *y, gs_error *err) {
+  gs_cfg_node *init = gs_cfg_get(root, "initial");
+  if (!init) return GS_OK; /* empty granulator, e.g. filled by a feed */
+  if (gs_cfg_kind_of(init) != GS_CFG_SEQ) return read_initial_one(init, m, y, err);
+  for (size_t i = 0; i < gs_cfg_size(init); i++) {
+    int rc = read_initial_one(gs_cfg_item(init, i), m, y, err);
+    if (rc) return rc;
+  }
+  return GS_OK;
+}
+
+static int read_mechanisms(gs_cfg_node *root, gs_model *m, gs_error *err) {
+  gs_cfg_node *list = gs_cfg_get(root, "mechanisms");
+  if (!list) return GS_OK;
+  int rc = gs_cfg_require_kind(list, GS_CFG_SEQ, err);
+  for (size_t i = 0; !rc && i < gs_cfg_size(list); i++) {
+    gs_cfg_node *n = gs_cfg_item(list, i);
+    const char *type = NULL;
+    rc = gs_cfg_require_kind(n, GS_CFG_MAP, err);
+    if (!rc) rc = gs_cfg_string_req(n, "type", &type, err);
+    if (!rc && !gs_mech_lookup(type)) {
+      char known[512] = "";
+      const gs_mech_type *const *all = gs_mech_types();
+      for (size_t k = 0; all[k]; k++) {
+        if (k) strncat(known, ", ", sizeof known - strlen(known) - 1);
+        strncat(known, all[k]->name, sizeof known - strlen(known) - 1);
+      }
+      rc = gs_cfg_fail(gs_cfg_get(n, "type"), err, "unknown mechanism; expected one of: %s", known);
+    }
+    char label[64];
+    snprintf(label, sizeof label, "mechanisms[%zu] (%s)", i, type ? type : "?");
+    if (!rc) rc = gs_model_add_mechanism(m, type, n, label, err);
+  }
+  return rc;
+}
+
+/* ---- output times, checks, solver ----------------------------------------- */
+static int read_output(gs_cfg_node *root, gs_case *c, gs_error *err) {
+  static const char *const spacings[] = {"linear", "log", NULL};
+  gs_cfg_node *out = NULL;
+  int rc = gs_cfg_map_req(root, "output", &out, err);
+  if (!rc) rc = gs_cfg_double_range(out, "start", 0, 0, -HUGE_VAL, 0, HUGE_VAL, 0, &c->t0, err);
+  if (rc) return rc;
+  if (gs_cfg_get(out, "times")) {
+    double *t = NULL;
+    size_t n = 0;
+    if ((rc = gs_cfg_doubles_req(out, "times", 0, &t, &n, err))) return rc;
+    c->times = gs_malloc((n + 1) * sizeof(double), err);
+    if (!c->times) { free(t); return GS_ENOMEM; }
+    c->times[0] = c->t0;
+    c->ntimes = 1;
+    for (size_t i = 0; i < n && !rc; i++) {
+      if (!(t[i] >= c->times[c->ntimes - 1]))
+        rc = gs_cfg_fail(gs_cfg_get(out, "times"), err, "times must increase and not precede start (%g); entry %zu is %g", c->t0, i, t[i]);
+      else if (t[i] > c->times[c->ntimes - 1]) c->times[c->ntimes++] = t[i];
+    }
+    free(t);
+    if (!rc && c->ntimes < 2) rc = gs_cfg_fail(gs_cfg_get(out, "times"), err, "expected at least one time after start");
+  } else {
+    double end;
+    long count;
+    int spacing = 0;
+    rc = gs_cfg_double_range(out, "end", 1, 0, c->t0, 1, HUGE_VAL, 0, &end, err);
+    if (!rc) rc = gs_cfg_long_range(out, "count", 0, 11, 2, 10000000, &count, err);
+    if (!rc) rc = gs_cfg_enum_opt(out, "spacing", spacings, 0, &spacing, err);
+    double first = 0;
+    if (!rc && spacing == 1) rc = gs_cfg_double_range(out, "first", 1, 0, c->t0, 1, end, 1, &first, err);
+    if (rc) return rc;
+    c->ntimes = (size_t)count;
+    c->times = gs_malloc(c->ntimes * sizeof(double), err);
+    if (!c->times) return GS_ENOMEM;
+    for (size_t i = 0; i < c->ntimes; i++) {
+      double f = (double)i / (double)(c->ntimes - 1);
+      c->times[i] = spacing == 0 ? c->t0 + (end - c->t0) * f
+                    : i == 0    ? c->t0
+                                : first * pow(end / first, (double)(i - 1) / (double)(c->ntimes - 2));
+    }
+    c->times[c->ntimes - 1] = end;
+  }
+  if (!rc) rc = gs_cfg_check_unused(out, err);
+  return rc;
+}
+
+static int read_checks(gs_cfg_node *root, gs_checks *k, gs_error *err) {
+  gs_cfg_node *n = gs_cfg_get(root, "checks");
+  int rc = n ? gs_cfg_require_kind(n, GS_CFG_MAP, err) : GS_OK;
+  if (!rc) rc = gs_cfg_double_range(n, "mass_tolerance", 0, 1e-9, 0, 1, 1, 0, &k->mass_tolerance, err);
+  if (!rc) rc = gs_cfg_double_range(n, "negative_tolerance", 0, 1e-8, 0, 0, 1, 0, &k->negative_tolerance, err);
+  if (!rc) rc = gs_cfg_double_range(n, "max_loss", 0, 1e-6, 0, 0, 1, 0, &k->max_loss, err);
+  if (!rc && n) rc = gs_cfg_check_unused(n, err);
+  return rc;
+}
+
+static int model_ode(void *ctx, double t, const double *y, double *dydt) {
+  const gs_model *m = ctx;
+  gs_model_rhs(m, t, y, dydt, dydt + m->nstate);
+  return 0;
+}
+
+static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
+  gs_model *m = &c->model;
+  size_t n = m->nstate + m->nledger;
+  c->abs_scale = gs_malloc(n * sizeof(double), err);
+  if (!c->abs_scale) return GS_ENOMEM;
+  for (size_t i = 0; i < n; i++) c->abs_scale[i] = i < m->nstate ? 1.0 : 0.0;
+  c->ode = (gs_ode){n, model_ode, m, c->abs_scale, m->nstate};
+  gs_cfg_node *solver = gs_cfg_get(root, "solver");
+  if (solver && gs_cfg_require_kind(solver, GS_CFG_MAP, err)) return GS_EINPUT;
+  return gs_integrator_create(solver, &c->ode, &c->integrator, err);
+}
+
+int gs_case_from_cfg(gs_cfg *cfg, gs_case *c, gs_error *err) {
+  memset(c, 0, sizeof *c);
+  c->cfg = cfg;
+  gs_cfg_node *root = gs_cfg_root(cfg);
+  if (!root) return gs_error_set(err, GS_EINPUT, "%s: the case file is empty", gs_cfg_name(cfg));
+  const char *title = NULL;
+  int rc = gs_cfg_require_kind(root, GS_CFG_MAP, err);
+  if (!rc) rc = gs_cfg_string_opt(root, "title", "", &title, err);
+  if (!rc) snprintf(c->title, sizeof c->title, "%s", title);
+  const char *desc;
+  if (!rc) rc = gs_cfg_string_opt(root, "description", "", &desc, err);
+  if (!rc) rc = read_grid(root, &c->model, err);
+  if (!rc) snprintf(c->model.dir, sizeof c->model.dir, "%s", gs_cfg_dir(cfg));
+  if (!rc) {
+    c->y0 = gs_calloc(c->model.nstate + c->model.nledger, sizeof(double), err);
+    if (!c->y0) rc = GS_ENOMEM;
+  }
+  if (!rc) rc = read_initial(root, &c->model, c->y0, err);
+  if (!rc) rc = read_mechanisms(root, &c->model, err);
+  if (!rc) rc = read_output(root, c, err);
+  if (!rc) rc = read_checks(root, &c->checks, err);
+  if (!rc) rc = setup_ode(root, c, err);
+  if (!rc) rc = gs_cfg_check_unused(root, err);
+  return rc;
+}
+
+int gs_case_load(const char *path, gs_case *c, gs_error *err) {
+  memset(c, 0, sizeof *c);
+  gs_cfg *cfg = gs_cfg_load_file(path, err);
+  if (!cfg) return err->code;
+  return gs_case_from_cfg(cfg, c, err);
+}
+
+void gs_case_free(gs_case *c) {
+  gs_integrator_free(&c->integrator);
+  gs_model_free(&c->model);
+  free(c->y0);
+  free(c->times);
+  free(c->abs_scale);
+  gs_cfg_free(c->cfg);
+  memset(c, 0, sizeof *c);
+}

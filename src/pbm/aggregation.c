@@ -1,0 +1,319 @@
+/* Aggregation: the sectional form of
+ *   dn/dt = 1/2 int beta n n  -  n int beta n
+ * over unordered pairs of cells (a, b): w = beta_ab N_a N_b (1/2 if a = b)
+ * events per unit time; each removes one particle from a and one from b and
+ * creates one at x_a + x_b, which is redistributed onto the pivots by
+ *  - cell average (Kumar et al. 2006; Chaudhury 2015 sec. 3.3 in 3-D): the
+ *    births landing in each cell are pooled, their mean position computed,
+ *    and the pool placed on the 2^dim surrounding pivots by the lever rule;
+ *  - fixed pivot (Kumar & Ramkrishna 1996, Vale & McKenna 2005 in 2-D):
+ *    each pair's product is placed individually by the lever rule.
+ * Both conserve number (one per event) and the volume of every coordinate.
+ * Products beyond the last pivot are booked as lost (see lever.h).
+ *
+ * Work per right-hand side is one pass over the ncells (ncells+1)/2 pairs.
+ * Everything that does not depend on the state is precomputed: the kernel
+ * table (packed upper triangle, per compartment, when it fits in
+ * `table_limit_mb`, else kernel rows are evaluated per cell), and per axis
+ * the target cell of every pivot sum.  Internally the grid is padded to three
+ * axes (padding axes of one cell at the front) so one loop nest serves 1-, 2-
+ * and 3-D.  The pair loop is parallel over OpenMP threads with per-thread
+ * accumulators. */
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gransim/kernel.h"
+#include "gransim/pbm.h"
+#include "pbm/lever.h"
+
+enum { CELL_AVERAGE = 0, FIXED_PIVOT = 1 };
+
+typedef struct {
+  gs_kernel kernel;
+  int scheme;
+  int dim, off;          /* real axes occupy padded positions off..2 */
+  size_t ncells, ncomp, big;
+  size_t n[3], stride[3];
+  double *x[3];          /* per cell coordinate on padded axis q (NULL for padding) */
+  size_t *target[3];     /* n[q]*n[q]: cell of the pivot sum along q, times stride; >= big if outside */
+  size_t *fp_lo[3];      /* fixed pivot: lower node times stride, >= big if above the last pivot */
+  double *fp_w[3];       /* fixed pivot: weight of the upper node */
+  double *table;         /* packed kernel, ncomp * ncells*(ncells+1)/2, or NULL */
+  size_t table_size;
+  int nthreads;
+  size_t work_len;
+  double *work;          /* per thread: death, B, V[3], fp birth, row  */
+} agg_t;
+
+static size_t packed_offset(size_t a, size_t n) { return a * n - a * (a - 1) / 2; }
+
+static void agg_free(void *self) {
+  agg_t *A = self;
+  if (!A) return;
+  gs_kernel_free(&A->kernel);
+  for (int q = 0; q < 3; q++) {
+    free(A->x[q]);
+    free(A->target[q]);
+    free(A->fp_lo[q]);
+    free(A->fp_w[q]);
+  }
+  free(A->table);
+  free(A->work);
+  free(A);
+}
+
+/* Per-axis tables of where the sum of two pivots lands. */
+static int build_axis_maps(agg_t *A, const gs_grid *g, gs_error *err) {
+  for (int q = 0; q < 3; q++) {
+    size_t n = A->n[q];
+    A->target[q] = gs_malloc(n * n * sizeof(size_t), err);
+    A->fp_lo[q] = gs_malloc(n * n * sizeof(size_t), err);
+    A->fp_w[q] = gs_calloc(n * n, sizeof(double), err);
+    if (!A->target[q] || !A->fp_lo[q] || !A->fp_w[q]) return GS_ENOMEM;
+    if (q < A->off) { /* padding axis: a single cell mapping onto itself */
+      A->target[q][0] = 0;
+      A->fp_lo[q][0] = 0;
+      continue;
+    }
+    const gs_axis *ax = &g->axis[q - A->off];
+    for (size_t i = 0; i < n; i++)
+      for (size_t j = 0; j < n; j++) {
+        double s = ax->pivots[i] + ax->pivots[j];
+        size_t t = gs_axis_locate(ax, s);
+        A->target[q][i * n + j] = t == GS_NOWHERE ? A->big : t * A->stride[q];
+        size_t lo;
+        double w;
+        if (gs_axis_lever(ax, s, &lo, &w) == 0) {
+          A->fp_lo[q][i * n + j] = lo * A->stride[q];
+          A->fp_w[q][i * n + j] = w;
+        } else {
+          A->fp_lo[q][i * n + j] = A->big;
+        }
+      }
+  }
+  return GS_OK;
+}
+
+static int build_kernel_table(agg_t *A, double limit_mb, gs_error *err) {
+  size_t per = A->ncells * (A->ncells + 1) / 2;
+  double mb = (double)(per * A->ncomp) * sizeof(double) / 1048576.0;
+  if (mb > limit_mb) return GS_OK; /* evaluate rows on the fly */
+  A->table_size = per;
+  A->table = gs_malloc(per * A->ncomp * sizeof(double), err);
+  if (!A->table) return GS_ENOMEM;
+  for (size_t c = 0; c < A->ncomp; c++)
+#pragma omp parallel for schedule(dynamic, 16)
+    for (size_t a = 0; a < A->ncells; a++)
+      A->kernel.type->row(A->kernel.self, c, a, a, A->ncells,
+                          A->table + c * per + packed_offset(a, A->ncells));
+  return GS_OK;
+}
+
+static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err) {
+  static const char *const schemes[] = {"cell_average", "fixed_pivot", NULL};
+  const gs_grid *g = &m->grid;
+  agg_t *A = gs_calloc(1, sizeof *A, err);
+  if (!A) return GS_ENOMEM;
+  double limit_mb = 0;
+  gs_cfg_node *kn = NULL;
+  int rc = gs_cfg_enum_opt(node, "redistribution", schemes, CELL_AVERAGE, &A->scheme, err);
+  if (!rc) rc = gs_cfg_double_range(node, "table_limit_mb", 0, 1024, 0, 0, HUGE_VAL, 0, &limit_mb, err);
+  if (!rc) rc = gs_cfg_map_req(node, "kernel", &kn, err);
+  if (!rc) rc = gs_kernel_create(kn, g, m->dir, &A->kernel, err);
+  if (!rc) rc = gs_cfg_check_unused(node, err);
+  if (rc) {
+    agg_free(A);
+    return rc;
+  }
+  A->dim = g->dim;
+  A->off = 3 - g->dim;
+  A->ncells = g->ncells;
+  A->ncomp = g->ncomp;
+  A->big = 3 * g->ncells + 3;
+  for (int q = 0; q < 3; q++) {
+    int k = q - A->off;
+    A->n[q] = k >= 0 ? g->axis[k].n : 1;
+    A->stride[q] = k >= 0 ? g->stride[k] : 0;
+    if (k >= 0) {
+      A->x[q] = gs_malloc(g->ncells * sizeof(double), err);
+      if (!A->x[q]) rc = GS_ENOMEM;
+      for (size_t c = 0; !rc && c < g->ncells; c++) A->x[q][c] = g->x[c * (size_t)g->dim + (size_t)k];
+    }
+  }
+  if (!rc) rc = build_axis_maps(A, g, err);
+  if (!rc) rc = build_kernel_table(A, limit_mb, err);
+  if (!rc) {
+    A->nthreads = omp_get_max_threads();
+    A->work_len = 7 * A->ncells;
+    A->work = gs_malloc((size_t)A->nthreads * A->work_len * sizeof(double), err);
+    if (!A->work) rc = GS_ENOMEM;
+  }
+  if (rc) {
+    agg_free(A);
+    return rc;
+  }
+  *self = A;
+  return GS_OK;
+}
+
+/* Accumulators of one thread. */
+typedef struct {
+  double *death, *births, *vol[3], *fp, *row;
+  double lost_n, lost_v[3];
+} acc_t;
+
+static acc_t thread_acc(const agg_t *A, int tid) {
+  double *w = A->work + (size_t)tid * A->work_len;
+  size_t n = A->ncells;
+  acc_t acc = {w, w + n, {w + 2 * n, w + 3 * n, w + 4 * n}, w + 5 * n, w + 6 * n, 0, {0, 0, 0}};
+  memset(w, 0, 6 * n * sizeof(double));
+  return acc;
+}
+
+/* All pairs (a, b >= a) of one compartment for a fixed a. */
+static void pairs_of(const agg_t *A, size_t comp, const double *N, size_t a, acc_t *acc) {
+  const double Na = N[a];
+  const size_t n0 = A->n[0], n1 = A->n[1], n2 = A->n[2], big = A->big;
+  const size_t a0 = a / (n1 * n2), a1 = (a / n2) % n1, a2 = a % n2;
+  const double *beta;
+  if (A->table) {
+    beta = A->table + comp * A->table_size + packed_offset(a, A->ncells) - a;
+  } else {
+    A->kernel.type->row(A->kernel.self, comp, a, a, A->ncells, acc->row);
+    beta = acc->row - a;
+  }
+  const size_t *T0 = A->target[0] + a0 * n0, *T1 = A->target[1] + a1 * n1, *T2 = A->target[2] + a2 * n2;
+  double xa[3];
+  for (int q = A->off; q < 3; q++) xa[q] = A->x[q][a];
+  double death_a = 0;
+  for (size_t i0 = a0; i0 < n0; i0++) {
+    for (size_t i1 = (i0 == a0 ? a1 : 0); i1 < n1; i1++) {
+      const size_t row_start = (i0 == a0 && i1 == a1) ? a2 : 0;
+      const size_t bbase = (i0 * n1 + i1) * n2, tbase = T0[i0] + T1[i1];
+      for (size_t i2 = row_start; i2 < n2; i2++) {
+        const size_t b = bbase + i2;
+        double w = Na * beta[b] * N[b];
+        if (w == 0.0) continue;
+        if (b == a) w *= 0.5;
+        acc->death[b] += w;
+        death_a += w;
+        if (A->scheme == CELL_AVERAGE) {
+          const size_t t = tbase + T2[i2];
+          if (t < big && t < A->ncells) {
+            acc->births[t] += w;
+            for (int q = A->off; q < 3; q++) acc->vol[q][t] += w * (xa[q] + A->x[q][b]);
+            continue;
+          }
+        } else if (A->fp_lo[0][a0 * n0 + i0] < big && A->fp_lo[1][a1 * n1 + i1] < big &&
+                   A->fp_lo[2][a2 * n2 + i2] < big) {
+          const size_t lo = A->fp_lo[0][a0 * n0 + i0] + A->fp_lo[1][a1 * n1 + i1] + A->fp_lo[2][a2 * n2 + i2];
+          const double w0 = A->fp_w[0][a0 * n0 + i0], w1 = A->fp_w[1][a1 * n1 + i1], w2 = A->fp_w[2][a2 * n2 + i2];
+          for (int c = 0; c < 8; c++) {
+            double f0 = (c & 4) ? w0 : 1 - w0, f1 = (c & 2) ? w1 : 1 - w1, f2 = (c & 1) ? w2 : 1 - w2;
+            double f = f0 * f1 * f2;
+            if (f == 0.0) continue;
+            acc->fp[lo + ((c & 4) ? A->stride[0] : 0) + ((c & 2) ? A->stride[1] : 0) + ((c & 1) ? A->stride[2] : 0)] += w * f;
+          }
+          continue;
+        }
+        acc->lost_n += w; /* the product lies beyond the grid */
+        for (int q = A->off; q < 3; q++) acc->lost_v[q] += w * (xa[q] + A->x[q][b]);
+      }
+    }
+  }
+  acc->death[a] += death_a;
+}
+
+/* Sum the per-thread accumulators into thread 0's. */
+static void reduce_threads(const agg_t *A, int nth, acc_t *acc) {
+  for (int t = 1; t < nth; t++) {
+    const double *src = A->work + (size_t)t * A->work_len;
+    double *dst = A->work;
+    for (size_t i = 0; i < 6 * A->ncells; i++) dst[i] += src[i];
+    acc[0].lost_n += acc[t].lost_n;
+    for (int q = 0; q < 3; q++) acc[0].lost_v[q] += acc[t].lost_v[q];
+  }
+}
+
+/* Pair loop of one compartment; result in acc[0]. */
+static void compartment_pairs(const agg_t *A, size_t comp, const double *N, acc_t *acc) {
+  int nth = 1;
+#pragma omp parallel
+  {
+#pragma omp single
+    nth = omp_get_num_threads();
+    int tid = omp_get_thread_num();
+    acc[tid] = thread_acc(A, tid);
+#pragma omp for schedule(dynamic, 8)
+    for (size_t a = 0; a < A->ncells; a++)
+      if (N[a] != 0.0) pairs_of(A, comp, N, a, &acc[tid]);
+  }
+  reduce_threads(A, nth, acc);
+}
+
+/* Redistribute pooled births (cell average) or copy fixed-pivot births into
+ * dydt; returns the number placed.  Lost packets go to lost_n / lost_v. */
+static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double *dydt) {
+  double placed = 0;
+  if (A->scheme == FIXED_PIVOT) {
+    for (size_t c = 0; c < A->ncells; c++) {
+      dydt[c] += acc->fp[c];
+      placed += acc->fp[c];
+    }
+    return placed;
+  }
+  for (size_t t = 0; t < A->ncells; t++) {
+    double B = acc->births[t];
+    if (B == 0.0) continue;
+    double vbar[GS_MAX_DIM];
+    for (int k = 0; k < A->dim; k++) vbar[k] = acc->vol[A->off + k][t] / B;
+    if (gs_lever_place(g, t, vbar, B, dydt, NULL)) {
+      placed += B;
+    } else {
+      acc->lost_n += B;
+      for (int k = 0; k < A->dim; k++) acc->lost_v[A->off + k] += acc->vol[A->off + k][t];
+    }
+  }
+  return placed;
+}
+
+static void agg_rates(const agg_t *A, const gs_model *m, const double *y, double *dydt,
+                      double *dledger, double *birth, double *death) {
+  acc_t acc[A->nthreads > 0 ? A->nthreads : 1];
+  const int dim = A->dim;
+  for (size_t comp = 0; comp < A->ncomp; comp++) {
+    const double *N = y + comp * A->ncells;
+    compartment_pairs(A, comp, N, acc);
+    double *d = dydt ? dydt + comp * A->ncells : NULL;
+    double dead = 0;
+    for (size_t c = 0; c < A->ncells; c++) {
+      dead += acc[0].death[c];
+      if (d) d[c] -= acc[0].death[c];
+    }
+    double *scratch = d ? d : acc[0].row; /* number_rates: place into a scratch row */
+    if (!d) memset(scratch, 0, A->ncells * sizeof(double));
+    double born = place_births(A, &m->grid, &acc[0], scratch);
+    if (dledger)
+      for (int k = 0; k < dim; k++) dledger[comp * 2 * dim + dim + k] += acc[0].lost_v[A->off + k];
+    if (birth) birth[comp] = born;
+    if (death) death[comp] = dead;
+  }
+}
+
+static void agg_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
+                    double *dledger) {
+  (void)t;
+  agg_rates(self, m, y, dydt, dledger, NULL, NULL);
+}
+
+static void agg_number_rates(void *self, const gs_model *m, double t, const double *y,
+                             double *birth, double *death) {
+  (void)t;
+  agg_rates(self, m, y, NULL, NULL, birth, death);
+}
+
+const gs_mech_type gs_mech_aggregation = {
+    "aggregation", "binary aggregation with a kernel; cell-average or fixed-pivot redistribution",
+    agg_create, agg_rhs, agg_number_rates, agg_free};

@@ -1,0 +1,160 @@
+/* Discretisation of distribution specs; see include/gransim/distribution.h. */
+#include <gsl/gsl_cdf.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gransim/distribution.h"
+#include "pbm/lever.h"
+
+enum { D_POINT, D_CELL, D_EXPONENTIAL, D_GAMMA };
+
+/* Marginal of one axis: cumulative number F and cumulative first moment M,
+ * both normalised to total number 1. */
+typedef struct {
+  double mean, shape;
+  int exponential;
+} marginal_t;
+
+static double cum_number(const marginal_t *m, double x) {
+  if (x <= 0) return 0;
+  if (m->exponential) return -expm1(-x / m->mean);
+  return gsl_cdf_gamma_P(x, m->shape, m->mean / m->shape);
+}
+
+static double cum_moment(const marginal_t *m, double x) {
+  if (x <= 0) return 0;
+  if (m->exponential) {
+    double u = x / m->mean;
+    return m->mean * (-expm1(-u) - u * exp(-u));
+  }
+  return m->mean * gsl_cdf_gamma_P(x, m->shape + 1, m->mean / m->shape);
+}
+
+/* Per-axis weights conserving number and first moment cell by cell. */
+static int marginal_weights(const marginal_t *m, const gs_axis *ax, double coverage,
+                            gs_cfg_node *node, double *w, gs_error *err) {
+  memset(w, 0, ax->n * sizeof(double));
+  double below_n = cum_number(m, ax->edges[0]), below_m = cum_moment(m, ax->edges[0]);
+  double above_n = 1 - cum_number(m, ax->edges[ax->n]);
+  double above_m = m->mean - cum_moment(m, ax->edges[ax->n]);
+  if (below_n > coverage || above_n > coverage || above_m > coverage * m->mean ||
+      below_m > coverage * m->mean)
+    return gs_cfg_fail(node, err,
+                       "grid axis '%s' [%g, %g] does not cover this distribution: %.3g of its "
+                       "number and %.3g of its volume lie outside (allowed: %g; widen the grid or "
+                       "set 'coverage')",
+                       ax->name, ax->edges[0], ax->edges[ax->n], below_n + above_n,
+                       (below_m + above_m) / m->mean, coverage);
+  for (size_t i = 0; i < ax->n; i++) {
+    double cn = cum_number(m, ax->edges[i + 1]) - cum_number(m, ax->edges[i]);
+    double cm = cum_moment(m, ax->edges[i + 1]) - cum_moment(m, ax->edges[i]);
+    if (!(cn > 0)) continue;
+    double vbar = cm / cn, frac;
+    size_t lo;
+    int st = gs_lever_near(ax, i, vbar, &lo, &frac);
+    if (st < 0) { lo = 0; frac = 0; }            /* below the first pivot: number kept */
+    if (st > 0) { lo = ax->n - 1; frac = 0; }    /* above the last pivot: number kept */
+    w[lo] += cn * (1 - frac);
+    if (frac > 0) w[lo + 1] += cn * frac;
+  }
+  return GS_OK;
+}
+
+static int per_axis(gs_cfg_node *node, const char *key, const gs_grid *g, double **out,
+                    gs_error *err) {
+  size_t n = 0;
+  int rc = gs_cfg_doubles_req(node, key, 1, out, &n, err);
+  if (rc) return rc;
+  if (n == 1 && g->dim > 1) {
+    double *all = realloc(*out, (size_t)g->dim * sizeof(double));
+    if (!all) return gs_error_set(err, GS_ENOMEM, "out of memory");
+    *out = all;
+    for (int k = 1; k < g->dim; k++) all[k] = all[0];
+    n = (size_t)g->dim;
+  }
+  if (n != (size_t)g->dim)
+    return gs_cfg_fail(gs_cfg_get(node, key), err, "expected %d values (one per grid axis), got %zu",
+                       g->dim, n);
+  return GS_OK;
+}
+
+static int add_product(gs_cfg_node *node, const gs_grid *g, double number, int type,
+                       double coverage, double *dst, gs_error *err) {
+  double *mean = NULL, *shape = NULL, *w[GS_MAX_DIM] = {0};
+  int rc = per_axis(node, "mean", g, &mean, err);
+  if (!rc && type == D_GAMMA) rc = per_axis(node, "shape", g, &shape, err);
+  for (int k = 0; !rc && k < g->dim; k++) {
+    if (!(mean[k] > 0)) rc = gs_cfg_fail(gs_cfg_get(node, "mean"), err, "means must be > 0");
+    else if (shape && !(shape[k] > 0)) rc = gs_cfg_fail(gs_cfg_get(node, "shape"), err, "shapes must be > 0");
+    if (rc) break;
+    marginal_t m = {mean[k], shape ? shape[k] : 1, type == D_EXPONENTIAL};
+    w[k] = gs_malloc(g->axis[k].n * sizeof(double), err);
+    if (!w[k]) rc = GS_ENOMEM;
+    else rc = marginal_weights(&m, &g->axis[k], coverage, node, w[k], err);
+  }
+  size_t idx[GS_MAX_DIM];
+  for (size_t c = 0; !rc && c < g->ncells; c++) {
+    gs_grid_unindex(g, c, idx);
+    double f = number;
+    for (int k = 0; k < g->dim; k++) f *= w[k][idx[k]];
+    dst[c] += f;
+  }
+  free(mean);
+  free(shape);
+  for (int k = 0; k < GS_MAX_DIM; k++) free(w[k]);
+  return rc;
+}
+
+static int add_point(gs_cfg_node *node, const gs_grid *g, double number, double *dst,
+                     gs_error *err) {
+  double *at = NULL;
+  int rc = per_axis(node, "at", g, &at, err);
+  for (int k = 0; !rc && k < g->dim; k++) {
+    const gs_axis *ax = &g->axis[k];
+    if (!(at[k] >= ax->pivots[0] && at[k] <= ax->pivots[ax->n - 1]))
+      rc = gs_cfg_fail(gs_cfg_get(node, "at"), err,
+                       "coordinate %g on axis '%s' lies outside the pivots [%g, %g]", at[k],
+                       ax->name, ax->pivots[0], ax->pivots[ax->n - 1]);
+  }
+  if (!rc) gs_lever_place(g, GS_NOWHERE, at, number, dst, NULL);
+  free(at);
+  return rc;
+}
+
+static int add_cell(gs_cfg_node *node, const gs_grid *g, double number, double *dst,
+                    gs_error *err) {
+  double *index = NULL;
+  size_t idx[GS_MAX_DIM];
+  int rc = per_axis(node, "index", g, &index, err);
+  for (int k = 0; !rc && k < g->dim; k++) {
+    if (index[k] != floor(index[k]) || index[k] < 1 || index[k] > (double)g->axis[k].n)
+      rc = gs_cfg_fail(gs_cfg_get(node, "index"), err,
+                       "index %g on axis '%s' must be an integer from 1 to %zu", index[k],
+                       g->axis[k].name, g->axis[k].n);
+    else idx[k] = (size_t)index[k] - 1;
+  }
+  if (!rc) dst[gs_grid_index(g, idx)] += number;
+  free(index);
+  return rc;
+}
+
+int gs_distribution_add(gs_cfg_node *node, const gs_grid *g, double *dst, int keep_open,
+                        gs_error *err) {
+  static const char *const types[] = {"point", "cell", "exponential", "gamma", NULL};
+  int type = 0;
+  double number = 0, coverage = 0;
+  int rc = gs_cfg_require_kind(node, GS_CFG_MAP, err);
+  if (!rc && !gs_cfg_get(node, "type")) rc = gs_cfg_fail(node, err, "missing key 'type' (point, cell, exponential or gamma)");
+  if (!rc) rc = gs_cfg_enum_opt(node, "type", types, 0, &type, err);
+  if (!rc) rc = gs_cfg_double_range(node, "number", 1, 0, 0, 1, HUGE_VAL, 0, &number, err);
+  if (!rc) rc = gs_cfg_double_range(node, "coverage", 0, 1e-6, 0, 0, 1, 0, &coverage, err);
+  if (rc) return rc;
+  switch (type) {
+  case D_POINT: rc = add_point(node, g, number, dst, err); break;
+  case D_CELL: rc = add_cell(node, g, number, dst, err); break;
+  default: rc = add_product(node, g, number, type, coverage, dst, err); break;
+  }
+  if (!rc && !keep_open) rc = gs_cfg_check_unused(node, err);
+  return rc;
+}

@@ -1,0 +1,176 @@
+/* Growth mechanisms along one axis, all using the upwind scheme of
+ * growth_scheme.h:
+ *   growth          G = G0 + sigma * x_axis                (keys axis, constant, linear)
+ *   liquid_addition G_l = Q(comp) s / sum(N s)             spray shared in proportion to solid
+ *                                                          volume (seed 000 eq. 5), in [start, end)
+ *   consolidation   G_g = -c (s+l+g)(1-e_min)/s * max(0, l + g - e_min s/(1-e_min))
+ *                   (seed 002 eq. 2.12 with the sign of "negative growth"; see docs/models.md) */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gransim/pbm.h"
+#include "pbm/growth_scheme.h"
+
+enum { KIND_GROWTH, KIND_LIQUID, KIND_CONSOLIDATION };
+
+typedef struct {
+  int kind, axis, liquid, gas;
+  int solid[GS_MAX_DIM]; /* 1 for axes that are solid */
+  double g0, sigma;      /* growth */
+  double *q;             /* liquid_addition: rate per compartment */
+  double start, end;
+  double c, emin;        /* consolidation */
+  double *G;             /* per cell rates (workspace / precomputed) */
+  double *solid_vol;     /* per cell solid volume */
+} grow_t;
+
+static void grow_free(void *self) {
+  grow_t *G = self;
+  if (!G) return;
+  free(G->q);
+  free(G->G);
+  free(G->solid_vol);
+  free(G);
+}
+
+static int axis_key(gs_cfg_node *node, const gs_grid *g, const char *key, const char *def,
+                    int *out, gs_error *err) {
+  const char *name;
+  int rc = def ? gs_cfg_string_opt(node, key, def, &name, err) : gs_cfg_string_req(node, key, &name, err);
+  if (rc) return rc;
+  *out = gs_grid_axis_by_name(g, name);
+  if (*out >= 0) return GS_OK;
+  gs_cfg_node *n = gs_cfg_get(node, key);
+  if (n) return gs_cfg_fail(n, err, "expected the name of a grid axis");
+  return gs_cfg_fail(node, err, "needs a grid axis named '%s' (or set '%s')", def ? def : "?", key);
+}
+
+/* Solid axes: key solid_axes, default every axis that is not liquid or gas. */
+static int solid_axes(gs_cfg_node *node, const gs_grid *g, grow_t *G, gs_error *err) {
+  gs_cfg_node *list = gs_cfg_get(node, "solid_axes");
+  memset(G->solid, 0, sizeof G->solid);
+  if (!list) {
+    for (int k = 0; k < g->dim; k++) G->solid[k] = k != G->liquid && k != G->gas;
+  } else {
+    if (gs_cfg_require_kind(list, GS_CFG_SEQ, err)) return GS_EINPUT;
+    for (size_t i = 0; i < gs_cfg_size(list); i++) {
+      const char *nm = gs_cfg_scalar(gs_cfg_item(list, i));
+      int k = nm ? gs_grid_axis_by_name(g, nm) : -1;
+      if (k < 0) return gs_cfg_fail(gs_cfg_item(list, i), err, "expected the name of a grid axis");
+      G->solid[k] = 1;
+    }
+  }
+  G->solid_vol = gs_malloc(g->ncells * sizeof(double), err);
+  if (!G->solid_vol) return GS_ENOMEM;
+  for (size_t c = 0; c < g->ncells; c++) {
+    double s = 0;
+    for (int k = 0; k < g->dim; k++)
+      if (G->solid[k]) s += g->x[c * (size_t)g->dim + (size_t)k];
+    G->solid_vol[c] = s;
+  }
+  return GS_OK;
+}
+
+static int read_window(gs_cfg_node *node, grow_t *G, gs_error *err) {
+  int rc = gs_cfg_double_range(node, "start", 0, 0, -HUGE_VAL, 0, HUGE_VAL, 0, &G->start, err);
+  if (!rc) rc = gs_cfg_double_range(node, "end", 0, HUGE_VAL, G->start, 1, HUGE_VAL, 0, &G->end, err);
+  return rc;
+}
+
+static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, int kind,
+                            gs_error *err) {
+  const gs_grid *g = &m->grid;
+  grow_t *G = gs_calloc(1, sizeof *G, err);
+  if (!G) return GS_ENOMEM;
+  G->kind = kind;
+  G->liquid = G->gas = -1;
+  G->G = gs_calloc(g->ncells, sizeof(double), err);
+  int rc = G->G ? GS_OK : GS_ENOMEM;
+  if (!rc && kind == KIND_GROWTH) {
+    rc = axis_key(node, g, "axis", NULL, &G->axis, err);
+    if (!rc) rc = gs_cfg_double_opt(node, "constant", 0, &G->g0, err);
+    if (!rc) rc = gs_cfg_double_opt(node, "linear", 0, &G->sigma, err);
+    if (!rc) rc = read_window(node, G, err);
+    for (size_t c = 0; !rc && c < g->ncells; c++)
+      G->G[c] = G->g0 + G->sigma * g->x[c * (size_t)g->dim + (size_t)G->axis];
+  } else if (!rc && kind == KIND_LIQUID) {
+    size_t nq = 0;
+    rc = axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
+    G->axis = G->liquid;
+    G->gas = gs_grid_axis_by_name(g, "gas");
+    if (!rc) rc = gs_cfg_doubles_req(node, "rate", 1, &G->q, &nq, err);
+    if (!rc && nq != 1 && nq != g->ncomp)
+      rc = gs_cfg_fail(gs_cfg_get(node, "rate"), err, "expected one rate or one per compartment (%zu)", g->ncomp);
+    for (size_t i = 0; !rc && i < nq; i++)
+      if (G->q[i] < 0) rc = gs_cfg_fail(gs_cfg_get(node, "rate"), err, "rates must be >= 0");
+    if (!rc && nq == 1 && g->ncomp > 1) {
+      double *all = realloc(G->q, g->ncomp * sizeof(double));
+      if (!all) rc = GS_ENOMEM;
+      else {
+        G->q = all;
+        for (size_t i = 1; i < g->ncomp; i++) G->q[i] = G->q[0];
+      }
+    }
+    if (!rc) rc = read_window(node, G, err);
+    if (!rc) rc = solid_axes(node, g, G, err);
+  } else if (!rc) {
+    rc = axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
+    if (!rc) rc = axis_key(node, g, "gas_axis", "gas", &G->gas, err);
+    G->axis = G->gas;
+    if (!rc) rc = gs_cfg_double_range(node, "rate", 1, 0, 0, 0, HUGE_VAL, 0, &G->c, err);
+    if (!rc) rc = gs_cfg_double_range(node, "min_porosity", 1, 0, 0, 0, 1, 1, &G->emin, err);
+    if (!rc) rc = solid_axes(node, g, G, err);
+    for (size_t c = 0; !rc && c < g->ncells; c++) {
+      const double *x = g->x + c * (size_t)g->dim;
+      double s = G->solid_vol[c], l = x[G->liquid], gas = x[G->gas];
+      double excess = l + gas - G->emin * s / (1 - G->emin);
+      G->G[c] = (s > 0 && excess > 0) ? -G->c * (s + l + gas) * (1 - G->emin) / s * excess : 0.0;
+    }
+  }
+  if (!rc) rc = gs_cfg_check_unused(node, err);
+  if (rc) {
+    grow_free(G);
+    return rc;
+  }
+  *self = G;
+  return GS_OK;
+}
+
+static void grow_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
+                     double *dledger) {
+  grow_t *G = self;
+  const gs_grid *g = &m->grid;
+  if (G->kind != KIND_CONSOLIDATION && (t < G->start || t >= G->end)) return;
+  for (size_t comp = 0; comp < g->ncomp; comp++) {
+    const double *N = y + comp * g->ncells;
+    if (G->kind == KIND_LIQUID) { /* share the spray in proportion to solid volume */
+      double solid = 0;
+      for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
+      if (!(solid > 0) || G->q[comp] == 0.0) continue;
+      double per = G->q[comp] / solid;
+      for (size_t c = 0; c < g->ncells; c++) G->G[c] = per * G->solid_vol[c];
+    }
+    gs_growth_apply(g, G->axis, G->G, N, dydt + comp * g->ncells,
+                    dledger + comp * 2 * (size_t)g->dim);
+  }
+}
+
+static int growth_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
+  return grow_create_kind(n, m, s, KIND_GROWTH, e);
+}
+static int liquid_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
+  return grow_create_kind(n, m, s, KIND_LIQUID, e);
+}
+static int consol_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
+  return grow_create_kind(n, m, s, KIND_CONSOLIDATION, e);
+}
+
+const gs_mech_type gs_mech_growth = {"growth", "growth along an axis, G = constant + linear * x",
+                                     growth_create, grow_rhs, NULL, grow_free};
+const gs_mech_type gs_mech_liquid_addition = {
+    "liquid_addition", "liquid spray shared in proportion to solid volume (seed 000 eq. 5)",
+    liquid_create, grow_rhs, NULL, grow_free};
+const gs_mech_type gs_mech_consolidation = {
+    "consolidation", "loss of gas down to a minimum porosity (seed 002 eq. 2.12, corrected sign)",
+    consol_create, grow_rhs, NULL, grow_free};

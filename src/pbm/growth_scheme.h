@@ -1,0 +1,18 @@
+/* Conservative first-order upwind transfer between neighbouring pivots for
+ * growth along one axis (liquid addition, layering, consolidation as
+ * negative growth, drying).  With rate G at a pivot, particles move to the
+ * next pivot in the direction of growth at rate |G| N / (pivot spacing), so
+ *   - number is conserved exactly,
+ *   - d/dt sum N x_axis = sum G N exactly (the physical growth of volume),
+ *   - densities stay non-negative (the loss of a cell is proportional to N).
+ * At the last pivot, growing particles leave the grid (booked as lost); at
+ * the first pivot shrinking particles stay (they cannot be represented lower). */
+#ifndef GRANSIM_GROWTH_SCHEME_H
+#define GRANSIM_GROWTH_SCHEME_H
+#include "gransim/grid.h"
+
+/* N, d: one compartment; G: rate per cell (NULL entries not allowed);
+ * ledger: this compartment's 2*dim ledger entries (may be NULL). */
+void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *N, double *d,
+                     double *ledger);
+#endif

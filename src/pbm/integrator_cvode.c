@@ -1,0 +1,282 @@
+/* Integrator "cvode": SUNDIALS CVODE (BDF) for stiff cases.
+ *
+ * Keys (besides the common ones, see integrator.c):
+ *   linear_solver  dense | gmres | auto (default auto: dense up to 1000
+ *                  components, else matrix-free GMRES without preconditioner)
+ *   max_order      BDF order limit 1..5 (default 5)
+ *
+ * Absolute tolerances are per component, atol * abs_scale[i]; components with
+ * abs_scale 0 get 1e300, which removes them from the error and Newton
+ * convergence tests.  Such components must not feed back nonlinearly into f:
+ * the difference-quotient Jacobian perturbs them by amounts scaled with the
+ * tolerance (the mass ledger, which nothing reads, is the intended use).
+ *
+ * CVODE is set up once in create() with a placeholder initial state and
+ * re-initialised whenever advance() is called with a state other than the one
+ * it last returned, so consecutive calls keep the BDF history. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include "gransim/integrator.h"
+
+int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
+                              double *initial_step, double *min_step, double *max_step,
+                              long *max_steps, gs_error *err);
+
+#define GS_CVODE_EXCLUDED_ATOL 1e300
+#define GS_CVODE_DENSE_MAX_N 1000
+
+enum { GS_CVODE_AUTO, GS_CVODE_DENSE, GS_CVODE_GMRES };
+static const char *const gs_cvode_solvers[] = {"auto", "dense", "gmres", NULL};
+
+typedef struct {
+  size_t n;
+  double rtol, atol, h_init, h_min, h_max;
+  long max_steps, max_order;
+  int gmres;
+  SUNContext sunctx;
+  void *mem;
+  N_Vector y;      /* the state CVODE last returned (compared to detect restarts) */
+  N_Vector abstol; /* per-component absolute tolerances */
+  SUNMatrix jac;   /* dense only */
+  SUNLinearSolver ls;
+  int needs_reinit;
+  double t_last;      /* time of the state in y */
+  const gs_ode *ode;  /* the system of the advance() in progress */
+  int rhs_failed;
+  char msg[512];      /* CVODE's last error message */
+  gs_integrator_stats base; /* counters accumulated before the last (re)init */
+} gs_cvode;
+
+static int gs_cvode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *data) {
+  gs_cvode *self = data;
+  if (self->ode->f(self->ode->ctx, t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot))) {
+    self->rhs_failed = 1;
+    return -1; /* unrecoverable: CVODE stops instead of retrying */
+  }
+  return 0;
+}
+
+/* Keep CVODE's messages for our own error instead of letting it print;
+ * warnings (positive codes) are dropped. */
+static void gs_cvode_message(int code, const char *module, const char *function, char *msg,
+                             void *data) {
+  (void)module;
+  gs_cvode *self = data;
+  if (code < 0) snprintf(self->msg, sizeof self->msg, "%s: %s", function, msg);
+}
+
+static int gs_cvode_flag(gs_cvode *self, int flag, const char *call, gs_error *err) {
+  if (flag >= 0) return GS_OK;
+  char *name = CVodeGetReturnFlagName(flag);
+  gs_error_set(err, GS_ENUMERIC, "integrator cvode: %s failed: %s%s%s", call,
+               name ? name : "unknown flag", self->msg[0] ? ": " : "", self->msg);
+  free(name);
+  return GS_ENUMERIC;
+}
+
+static void gs_cvode_free(void *vself) {
+  gs_cvode *self = vself;
+  if (!self) return;
+  if (self->mem) CVodeFree(&self->mem);
+  if (self->ls) SUNLinSolFree(self->ls);
+  if (self->jac) SUNMatDestroy(self->jac);
+  if (self->abstol) N_VDestroy(self->abstol);
+  if (self->y) N_VDestroy(self->y);
+  if (self->sunctx) SUNContext_Free(&self->sunctx);
+  free(self);
+}
+
+static int gs_cvode_read(gs_cvode *self, gs_cfg_node *solver, gs_error *err) {
+  int solver_kind = GS_CVODE_AUTO;
+  int rc = gs_integrator_common_keys(solver, &self->rtol, &self->atol, &self->h_init,
+                                     &self->h_min, &self->h_max, &self->max_steps, err);
+  if (!rc)
+    rc = gs_cfg_enum_opt(solver, "linear_solver", gs_cvode_solvers, GS_CVODE_AUTO, &solver_kind,
+                         err);
+  if (!rc) rc = gs_cfg_long_range(solver, "max_order", 0, 5, 1, 5, &self->max_order, err);
+  self->gmres = solver_kind == GS_CVODE_GMRES ||
+                (solver_kind == GS_CVODE_AUTO && self->n > GS_CVODE_DENSE_MAX_N);
+  return rc;
+}
+
+static int gs_cvode_vectors(gs_cvode *self, const gs_ode *ode, gs_error *err) {
+  sunindextype n = (sunindextype)self->n;
+  if (SUNContext_Create(NULL, &self->sunctx) || !(self->y = N_VNew_Serial(n, self->sunctx)) ||
+      !(self->abstol = N_VNew_Serial(n, self->sunctx)))
+    return gs_error_set(err, GS_ENOMEM, "integrator cvode: cannot allocate vectors of %zu", self->n);
+  N_VConst(0.0, self->y);
+  double *a = N_VGetArrayPointer(self->abstol);
+  for (size_t i = 0; i < self->n; i++) {
+    double s = ode->abs_scale ? ode->abs_scale[i] : 1.0;
+    a[i] = s > 0 ? self->atol * s : GS_CVODE_EXCLUDED_ATOL;
+  }
+  return GS_OK;
+}
+
+static int gs_cvode_linear_solver(gs_cvode *self, gs_error *err) {
+  sunindextype n = (sunindextype)self->n;
+  if (self->gmres) {
+    /* maxl 0: SUNDIALS' default Krylov dimension (5) */
+    self->ls = SUNLinSol_SPGMR(self->y, SUN_PREC_NONE, 0, self->sunctx);
+  } else {
+    self->jac = SUNDenseMatrix(n, n, self->sunctx);
+    if (self->jac) self->ls = SUNLinSol_Dense(self->y, self->jac, self->sunctx);
+  }
+  if (!self->ls)
+    return gs_error_set(err, GS_ENOMEM, "integrator cvode: cannot allocate the %s linear solver",
+                        self->gmres ? "gmres" : "dense");
+  return gs_cvode_flag(self, CVodeSetLinearSolver(self->mem, self->ls, self->jac),
+                       "CVodeSetLinearSolver", err);
+}
+
+static int gs_cvode_options(gs_cvode *self, gs_error *err) {
+  void *m = self->mem;
+  int rc = gs_cvode_flag(self, CVodeSetMaxOrd(m, (int)self->max_order), "CVodeSetMaxOrd", err);
+  if (!rc)
+    rc = gs_cvode_flag(self, CVodeSetMaxNumSteps(m, self->max_steps), "CVodeSetMaxNumSteps", err);
+  if (!rc && !isnan(self->h_init))
+    rc = gs_cvode_flag(self, CVodeSetInitStep(m, self->h_init), "CVodeSetInitStep", err);
+  if (!rc && !isnan(self->h_min))
+    rc = gs_cvode_flag(self, CVodeSetMinStep(m, self->h_min), "CVodeSetMinStep", err);
+  if (!rc && !isnan(self->h_max))
+    rc = gs_cvode_flag(self, CVodeSetMaxStep(m, self->h_max), "CVodeSetMaxStep", err);
+  return rc;
+}
+
+/* Everything CVODE needs, initialised at t = 0, y = 0; the first advance()
+ * re-initialises with the real state. */
+static int gs_cvode_setup(gs_cvode *self, const gs_ode *ode, gs_error *err) {
+  int rc = gs_cvode_vectors(self, ode, err);
+  if (rc) return rc;
+  self->mem = CVodeCreate(CV_BDF, self->sunctx);
+  if (!self->mem) return gs_error_set(err, GS_ENOMEM, "integrator cvode: CVodeCreate failed");
+  rc = gs_cvode_flag(self, CVodeSetErrHandlerFn(self->mem, gs_cvode_message, self),
+                     "CVodeSetErrHandlerFn", err);
+  if (!rc) rc = gs_cvode_flag(self, CVodeInit(self->mem, gs_cvode_rhs, 0.0, self->y), "CVodeInit", err);
+  if (!rc) rc = gs_cvode_flag(self, CVodeSetUserData(self->mem, self), "CVodeSetUserData", err);
+  if (!rc)
+    rc = gs_cvode_flag(self, CVodeSVtolerances(self->mem, self->rtol, self->abstol),
+                       "CVodeSVtolerances", err);
+  if (!rc) rc = gs_cvode_linear_solver(self, err);
+  if (!rc) rc = gs_cvode_options(self, err);
+  self->needs_reinit = 1;
+  return rc;
+}
+
+static int gs_cvode_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_error *err) {
+  gs_cvode *self = gs_calloc(1, sizeof *self, err);
+  if (!self) return GS_ENOMEM;
+  self->n = ode->n;
+  int rc = gs_cvode_read(self, solver, err);
+  if (!rc) rc = gs_cvode_setup(self, ode, err);
+  if (rc) {
+    gs_cvode_free(self);
+    return rc;
+  }
+  *out = self;
+  return GS_OK;
+}
+
+/* CVODE's counters restart at every (re)init; fold them into base first. */
+static void gs_cvode_counters(const gs_cvode *self, gs_integrator_stats *s) {
+  long steps = 0, nfe = 0, nfels = 0, netf = 0, nncf = 0;
+  sunrealtype hlast = 0;
+  CVodeGetNumSteps(self->mem, &steps);
+  CVodeGetNumRhsEvals(self->mem, &nfe);
+  CVodeGetNumLinRhsEvals(self->mem, &nfels);
+  CVodeGetNumErrTestFails(self->mem, &netf);
+  CVodeGetNumNonlinSolvConvFails(self->mem, &nncf);
+  CVodeGetLastStep(self->mem, &hlast);
+  s->steps = self->base.steps + steps;
+  s->rhs_evals = self->base.rhs_evals + nfe + nfels;
+  s->rejected = self->base.rejected + netf + nncf;
+  s->last_step = steps ? hlast : self->base.last_step;
+}
+
+static int gs_cvode_reinit(gs_cvode *self, double t, const double *y, gs_error *err) {
+  gs_cvode_counters(self, &self->base);
+  memcpy(N_VGetArrayPointer(self->y), y, self->n * sizeof *y);
+  int rc = gs_cvode_flag(self, CVodeReInit(self->mem, t, self->y), "CVodeReInit", err);
+  if (!rc) self->needs_reinit = 0;
+  return rc;
+}
+
+static int gs_cvode_fail(gs_cvode *self, int flag, double t0, double tret, double t_out,
+                         double *t, double *y, gs_error *err) {
+  self->needs_reinit = 1;
+  /* On a failed step CVODE returns the last accepted state at tret. */
+  if (tret > t0 && tret <= t_out) {
+    memcpy(y, N_VGetArrayPointer(self->y), self->n * sizeof *y);
+    *t = tret;
+  }
+  if (self->rhs_failed)
+    return gs_error_set(err, GS_ENUMERIC, "integrator cvode: right-hand side failed near t = %.9g",
+                        *t);
+  char *name = CVodeGetReturnFlagName(flag);
+  gs_error_set(err, GS_ENUMERIC, "integrator cvode: %s at t = %.9g (integrating to %.9g)%s%s",
+               name ? name : "failure", *t, t_out, self->msg[0] ? ": " : "", self->msg);
+  free(name);
+  return GS_ENUMERIC;
+}
+
+static int gs_cvode_all_finite(const double *y, size_t n) {
+  for (size_t i = 0; i < n; i++)
+    if (!isfinite(y[i])) return 0;
+  return 1;
+}
+
+/* Continue the previous integration only if the caller hands back exactly
+ * the state we returned; anything else is a new initial value problem. */
+static int gs_cvode_prepare(gs_cvode *self, double t, const double *y, gs_error *err) {
+  if (self->needs_reinit || t != self->t_last ||
+      memcmp(y, N_VGetArrayPointer(self->y), self->n * sizeof *y) != 0)
+    return gs_cvode_reinit(self, t, y, err);
+  return GS_OK;
+}
+
+static int gs_cvode_advance(void *vself, const gs_ode *ode, double *t, double t_out, double *y,
+                            gs_error *err) {
+  gs_cvode *self = vself;
+  if (ode->n != self->n || !(t_out >= *t))
+    return gs_error_set(err, GS_EINPUT,
+                        "integrator cvode: bad call (n = %zu for %zu, t = %g to %g)", ode->n,
+                        self->n, *t, t_out);
+  if (t_out == *t) return GS_OK;
+  self->ode = ode;
+  self->rhs_failed = 0;
+  self->msg[0] = '\0';
+  int rc = gs_cvode_prepare(self, *t, y, err);
+  /* The stop time makes CVODE land on t_out instead of stepping past it and
+   * interpolating, so f is never evaluated beyond t_out. */
+  if (!rc) rc = gs_cvode_flag(self, CVodeSetStopTime(self->mem, t_out), "CVodeSetStopTime", err);
+  if (rc) return rc;
+  sunrealtype tret = *t;
+  int flag = CVode(self->mem, t_out, self->y, &tret, CV_NORMAL);
+  if (flag < 0) return gs_cvode_fail(self, flag, *t, tret, t_out, t, y, err);
+  memcpy(y, N_VGetArrayPointer(self->y), self->n * sizeof *y);
+  *t = self->t_last = t_out;
+  if (!gs_cvode_all_finite(y, self->n)) {
+    self->needs_reinit = 1;
+    return gs_error_set(err, GS_ENUMERIC, "integrator cvode: state became NaN or infinite by t = %.9g",
+                        t_out);
+  }
+  return GS_OK;
+}
+
+static void gs_cvode_stats(const void *vself, gs_integrator_stats *stats) {
+  gs_cvode_counters(vself, stats);
+}
+
+const gs_integrator_type gs_integrator_cvode = {
+    "cvode", "SUNDIALS CVODE BDF for stiff cases, linear_solver dense | gmres | auto",
+    gs_cvode_create, gs_cvode_advance, gs_cvode_stats, gs_cvode_free};

@@ -1,0 +1,167 @@
+/* Integrator "euler": the adaptive explicit Euler of seed 000, kept so that
+ * old results can be reproduced and as a first-order reference.
+ *
+ * Each step evaluates f once and picks dt from the fastest relative
+ * depletion among the number densities,
+ *   m = max over i < npositive, y_i > 0 of (-f_i / y_i),
+ * doubling dt while m < safety / dt (and 2 dt <= max_step) and halving it
+ * while m > safety / dt (and dt / 2 >= min_step).  dt is remembered between
+ * calls and only the step that would pass t_out is shortened.
+ *
+ * Keys: safety (default 0.1); initial_step (default (t_out - t) / 100 of the
+ * first call); min_step (default initial_step / 1024); max_step (default the
+ * span t_out - t of each call).  rtol and atol are accepted and ignored.
+ *
+ * The step is checked before it is applied: if a density would go below
+ * -1e-12 * max density, the call fails and y, t keep the last good state. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "gransim/integrator.h"
+
+int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
+                              double *initial_step, double *min_step, double *max_step,
+                              long *max_steps, gs_error *err);
+
+/* Densities below -GS_EULER_NEG_TOL * max density count as negative. */
+#define GS_EULER_NEG_TOL 1e-12
+
+typedef struct {
+  size_t n;
+  double h_init, h_min, h_max; /* as configured; NAN = default */
+  double safety;
+  long max_steps;
+  double dt;      /* step carried between calls; 0 until the first call */
+  double dt_min;  /* resolved min_step */
+  double *f;
+  gs_integrator_stats stats;
+} gs_euler;
+
+static void gs_euler_free(void *vself) {
+  gs_euler *self = vself;
+  if (!self) return;
+  free(self->f);
+  free(self);
+}
+
+static int gs_euler_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_error *err) {
+  gs_euler *self = gs_calloc(1, sizeof *self, err);
+  if (!self) return GS_ENOMEM;
+  self->n = ode->n;
+  double rtol, atol;
+  int rc = gs_integrator_common_keys(solver, &rtol, &atol, &self->h_init, &self->h_min,
+                                     &self->h_max, &self->max_steps, err);
+  if (!rc) rc = gs_cfg_double_range(solver, "safety", 0, 0.1, 0, 1, HUGE_VAL, 0, &self->safety, err);
+  if (!rc && !(self->f = gs_malloc(self->n * sizeof *self->f, err))) rc = GS_ENOMEM;
+  if (rc) {
+    gs_euler_free(self);
+    return rc;
+  }
+  *out = self;
+  return GS_OK;
+}
+
+/* Fastest relative depletion rate among the positive densities; -inf when
+ * none is positive (then nothing limits the step). */
+static double gs_euler_rate(const double *y, const double *f, size_t npositive) {
+  double m = -HUGE_VAL;
+  for (size_t i = 0; i < npositive; i++)
+    if (y[i] > 0) m = fmax(m, -f[i] / y[i]);
+  return m;
+}
+
+static void gs_euler_adapt(gs_euler *self, double m, double h_max) {
+  double dt = self->dt;
+  while (m < self->safety / dt && dt * 2 <= h_max) dt *= 2;
+  while (m > self->safety / dt && dt / 2 >= self->dt_min) dt /= 2;
+  self->dt = dt;
+}
+
+/* Would y + h f leave a density below the tolerance, or anything non-finite?
+ * Checked before the update so a failing step leaves y untouched. */
+static int gs_euler_check(const gs_euler *self, size_t npositive, double t, double h,
+                          const double *y, gs_error *err) {
+  const double *f = self->f;
+  double ymax = 0, ymin = 0;
+  for (size_t i = 0; i < self->n; i++) {
+    double v = y[i] + h * f[i];
+    if (!isfinite(v))
+      return gs_error_set(err, GS_ENUMERIC,
+                          "integrator euler: y[%zu] becomes %g in the step from t = %.9g (dt = %g)",
+                          i, v, t, h);
+    if (i < npositive) {
+      ymax = fmax(ymax, fabs(v));
+      ymin = fmin(ymin, v);
+    }
+  }
+  if (ymin >= -GS_EULER_NEG_TOL * ymax) return GS_OK;
+  size_t i = 0;
+  while (!(y[i] + h * f[i] < -GS_EULER_NEG_TOL * ymax)) i++;
+  return gs_error_set(err, GS_ENUMERIC,
+                      "integrator euler: negative number density y[%zu] = %g in the step from "
+                      "t = %.9g (dt = %g); lower safety or min_step",
+                      i, y[i] + h * f[i], t, h);
+}
+
+/* Defaults that depend on the first interval. */
+static void gs_euler_first_call(gs_euler *self, double span) {
+  double h0 = isnan(self->h_init) ? span / 100 : self->h_init;
+  self->dt_min = isnan(self->h_min) ? h0 / 1024 : self->h_min;
+  /* min_step: 0 must not let the halving loop reach dt = 0 (from which the
+   * doubling loop could never climb back). */
+  self->dt_min = fmax(self->dt_min, DBL_MIN);
+  self->dt = h0;
+}
+
+static int gs_euler_step(gs_euler *self, const gs_ode *ode, double *t, double t_out,
+                         double h_max, double *y, gs_error *err) {
+  self->stats.rhs_evals++;
+  if (ode->f(ode->ctx, *t, y, self->f))
+    return gs_error_set(err, GS_ENUMERIC, "integrator euler: right-hand side failed at t = %.9g",
+                        *t);
+  gs_euler_adapt(self, gs_euler_rate(y, self->f, ode->npositive), h_max);
+  int final = *t + self->dt >= t_out;
+  double h = final ? t_out - *t : self->dt;
+  if (!final && *t + h == *t)
+    return gs_error_set(err, GS_ENUMERIC,
+                        "integrator euler: step size underflow at t = %.9g (dt = %g)", *t, h);
+  int rc = gs_euler_check(self, ode->npositive, *t, h, y, err);
+  if (rc) return rc;
+  for (size_t i = 0; i < self->n; i++) y[i] += h * self->f[i];
+  *t = final ? t_out : *t + h;
+  self->stats.steps++;
+  self->stats.last_step = h;
+  return GS_OK;
+}
+
+static int gs_euler_advance(void *vself, const gs_ode *ode, double *t, double t_out, double *y,
+                            gs_error *err) {
+  gs_euler *self = vself;
+  if (ode->n != self->n || !(t_out >= *t))
+    return gs_error_set(err, GS_EINPUT,
+                        "integrator euler: bad call (n = %zu for %zu, t = %g to %g)", ode->n,
+                        self->n, *t, t_out);
+  if (t_out == *t) return GS_OK;
+  if (self->dt <= 0) gs_euler_first_call(self, t_out - *t);
+  double h_max = isnan(self->h_max) ? t_out - *t : self->h_max;
+  for (long steps = 0; *t < t_out; steps++) {
+    if (steps >= self->max_steps)
+      return gs_error_set(err, GS_ENUMERIC,
+                          "integrator euler: max_steps_per_output = %ld steps taken at t = %.9g "
+                          "before reaching %.9g",
+                          self->max_steps, *t, t_out);
+    int rc = gs_euler_step(self, ode, t, t_out, h_max, y, err);
+    if (rc) return rc;
+  }
+  return GS_OK;
+}
+
+static void gs_euler_stats(const void *vself, gs_integrator_stats *stats) {
+  const gs_euler *self = vself;
+  *stats = self->stats;
+}
+
+const gs_integrator_type gs_integrator_euler = {
+    "euler", "adaptive explicit Euler of seed 000, dt kept below safety / max(-f_i / y_i)",
+    gs_euler_create, gs_euler_advance, gs_euler_stats, gs_euler_free};

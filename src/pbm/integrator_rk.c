@@ -1,0 +1,229 @@
+/* Integrator "rk": adaptive embedded Runge–Kutta pairs from GSL odeiv2.
+ *
+ * Keys (besides the common ones, see integrator.c): variant = rkf45 | rkck |
+ * rk8pd (default rkck).  The step/control/evolve objects are used directly
+ * rather than through gsl_odeiv2_driver so that each component can carry its
+ * own absolute tolerance (atol * abs_scale[i]; components with abs_scale 0
+ * get an astronomically loose one and so never limit the step) and so that
+ * the step bounds and step budget are ours to enforce.
+ *
+ * No GSL error handler is installed here (it is process-wide state); the
+ * calls below are arranged never to hit GSL's argument-error paths. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_odeiv2.h>
+
+#include "gransim/integrator.h"
+
+int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
+                              double *initial_step, double *min_step, double *max_step,
+                              long *max_steps, gs_error *err);
+
+/* Tolerance scale for components excluded from error control: large enough
+ * that atol * scale dwarfs any error, small enough to stay finite. */
+#define GS_RK_EXCLUDED_SCALE 1e300
+
+typedef struct {
+  size_t n;
+  double rtol, atol;
+  double h_min, h_max;
+  long max_steps;
+  const char *variant;
+  gsl_odeiv2_step *step;
+  gsl_odeiv2_control *control;
+  gsl_odeiv2_evolve *evolve;
+  double *scale; /* per-component absolute-tolerance scale, as given to GSL */
+  double h;      /* step proposed for the next advance; <= 0 until chosen */
+  const gs_ode *ode; /* the system of the advance() in progress */
+  int rhs_failed;
+  gs_integrator_stats stats;
+} gs_rk;
+
+static const char *const gs_rk_variants[] = {"rkf45", "rkck", "rk8pd", NULL};
+
+static const gsl_odeiv2_step_type *gs_rk_step_type(int variant) {
+  switch (variant) {
+  case 0: return gsl_odeiv2_step_rkf45;
+  case 2: return gsl_odeiv2_step_rk8pd;
+  default: return gsl_odeiv2_step_rkck;
+  }
+}
+
+/* GSL calling convention -> gs_ode.  GSL_EBADFUNC makes evolve return at
+ * once instead of retrying with a smaller step. */
+static int gs_rk_rhs(double t, const double y[], double dydt[], void *params) {
+  gs_rk *self = params;
+  self->stats.rhs_evals++;
+  if (self->ode->f(self->ode->ctx, t, y, dydt)) {
+    self->rhs_failed = 1;
+    return GSL_EBADFUNC;
+  }
+  return GSL_SUCCESS;
+}
+
+static void gs_rk_free(void *vself) {
+  gs_rk *self = vself;
+  if (!self) return;
+  if (self->evolve) gsl_odeiv2_evolve_free(self->evolve);
+  if (self->control) gsl_odeiv2_control_free(self->control);
+  if (self->step) gsl_odeiv2_step_free(self->step);
+  free(self->scale);
+  free(self);
+}
+
+static int gs_rk_alloc_gsl(gs_rk *self, int variant, const gs_ode *ode, gs_error *err) {
+  self->scale = gs_malloc(self->n * sizeof *self->scale, err);
+  if (!self->scale) return GS_ENOMEM;
+  for (size_t i = 0; i < self->n; i++) {
+    double s = ode->abs_scale ? ode->abs_scale[i] : 1.0;
+    self->scale[i] = s > 0 ? s : GS_RK_EXCLUDED_SCALE;
+  }
+  self->step = gsl_odeiv2_step_alloc(gs_rk_step_type(variant), self->n);
+  /* a_y = 1, a_dydt = 0: tolerance rtol * |y_i| + atol * scale_i */
+  self->control = gsl_odeiv2_control_scaled_new(self->atol, self->rtol, 1.0, 0.0, self->scale,
+                                                self->n);
+  self->evolve = gsl_odeiv2_evolve_alloc(self->n);
+  if (!self->step || !self->control || !self->evolve)
+    return gs_error_set(err, GS_ENOMEM, "integrator rk: out of memory for %zu components", self->n);
+  return GS_OK;
+}
+
+static int gs_rk_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_error *err) {
+  gs_rk *self = gs_calloc(1, sizeof *self, err);
+  if (!self) return GS_ENOMEM;
+  self->n = ode->n;
+  double h0;
+  int variant = 1;
+  int rc = gs_integrator_common_keys(solver, &self->rtol, &self->atol, &h0, &self->h_min,
+                                     &self->h_max, &self->max_steps, err);
+  if (!rc) rc = gs_cfg_enum_opt(solver, "variant", gs_rk_variants, 1, &variant, err);
+  if (!rc) rc = gs_rk_alloc_gsl(self, variant, ode, err);
+  if (rc) {
+    gs_rk_free(self);
+    return rc;
+  }
+  self->variant = gs_rk_variants[variant];
+  self->h = isnan(h0) ? 0.0 : h0;
+  if (isnan(self->h_min)) self->h_min = 0.0;
+  if (isnan(self->h_max)) self->h_max = HUGE_VAL;
+  *out = self;
+  return GS_OK;
+}
+
+/* First step from the size of y and f in the tolerance norm (the first half
+ * of Hairer–Nørsett–Wanner's estimate): h = 0.01 * |y| / |f|, or the time f
+ * needs to move y by one tolerance unit when y is below atol.  The
+ * controller corrects a poor guess within a few steps; this only avoids
+ * wasting many rejections on a wildly wrong start. */
+static int gs_rk_initial_step(gs_rk *self, double t, double span, const double *y,
+                              gs_error *err) {
+  double *f = self->evolve->dydt_out; /* scratch: evolve overwrites it anyway */
+  if (gs_rk_rhs(t, y, f, self) != GSL_SUCCESS)
+    return gs_error_set(err, GS_ENUMERIC, "integrator rk: right-hand side failed at t = %.9g", t);
+  double d0 = 0, d1 = 0;
+  for (size_t i = 0; i < self->n; i++) {
+    if (self->scale[i] >= GS_RK_EXCLUDED_SCALE) continue;
+    double sc = self->atol * self->scale[i] + self->rtol * fabs(y[i]);
+    d0 = fmax(d0, fabs(y[i]) / sc);
+    d1 = fmax(d1, fabs(f[i]) / sc);
+  }
+  double h = (d1 > 0 && isfinite(d1)) ? 0.01 * fmax(d0, 1.0) / d1 : span;
+  self->h = fmin(fmin(h, span), self->h_max);
+  if (self->h < self->h_min) self->h = self->h_min;
+  return GS_OK;
+}
+
+static int gs_rk_all_finite(const double *y, size_t n) {
+  for (size_t i = 0; i < n; i++)
+    if (!isfinite(y[i])) return 0;
+  return 1;
+}
+
+/* Undo the failed step: evolve keeps the state it started from in y0. */
+static int gs_rk_fail(gs_rk *self, int status, double t0, double h, double *t, double *y,
+                      gs_error *err) {
+  memcpy(y, self->evolve->y0, self->n * sizeof *y);
+  *t = t0;
+  gsl_odeiv2_step_reset(self->step); /* required by GSL after GSL_EBADFUNC */
+  if (self->rhs_failed)
+    return gs_error_set(err, GS_ENUMERIC, "integrator rk: right-hand side failed at t = %.9g", t0);
+  if (status == GSL_FAILURE)
+    return gs_error_set(err, GS_ENUMERIC,
+                        "integrator rk (%s): step size underflow at t = %.9g (h = %g): the "
+                        "tolerances cannot be met",
+                        self->variant, t0, h);
+  return gs_error_set(err, GS_ENUMERIC, "integrator rk (%s): %s at t = %.9g", self->variant,
+                      gsl_strerror(status), t0);
+}
+
+/* A step GSL accepted may still be unusable: NaN slips through its error
+ * control (NaN never exceeds the tolerance), so roll such a step back. */
+static int gs_rk_check_finite(gs_rk *self, double t0, double *t, double *y, gs_error *err) {
+  if (gs_rk_all_finite(y, self->n)) return GS_OK;
+  memcpy(y, self->evolve->y0, self->n * sizeof *y);
+  *t = t0;
+  return gs_error_set(err, GS_ENUMERIC,
+                      "integrator rk: state became NaN or infinite in the step from t = %.9g "
+                      "(h = %g)",
+                      t0, self->evolve->last_step);
+}
+
+/* GSL has no lower step bound; a (non-final) step below min_step fails. */
+static int gs_rk_check_min_step(const gs_rk *self, double t, double t_out, gs_error *err) {
+  double h = self->evolve->last_step;
+  if (h >= self->h_min || t >= t_out) return GS_OK;
+  return gs_error_set(err, GS_ENUMERIC,
+                      "integrator rk: step size %g fell below min_step = %g at t = %.9g", h,
+                      self->h_min, t);
+}
+
+static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out, double *y,
+                         gs_error *err) {
+  gs_rk *self = vself;
+  if (ode->n != self->n || !(t_out >= *t))
+    return gs_error_set(err, GS_EINPUT, "integrator rk: bad call (n = %zu for %zu, t = %g to %g)",
+                        ode->n, self->n, *t, t_out);
+  if (t_out == *t) return GS_OK;
+  self->ode = ode;
+  self->rhs_failed = 0;
+  gsl_odeiv2_system sys = {gs_rk_rhs, NULL, self->n, self};
+  if (self->h <= 0) {
+    int rc = gs_rk_initial_step(self, *t, t_out - *t, y, err);
+    if (rc) return rc;
+  }
+  for (long steps = 0; *t < t_out; steps++) {
+    if (steps >= self->max_steps)
+      return gs_error_set(err, GS_ENUMERIC,
+                          "integrator rk: max_steps_per_output = %ld steps taken at t = %.9g "
+                          "before reaching %.9g",
+                          self->max_steps, *t, t_out);
+    double t0 = *t, h = fmin(self->h, self->h_max);
+    /* evolve shortens the step that would pass t_out and then sets t = t_out
+     * exactly; it leaves h at the controller's proposal for later calls. */
+    int status = gsl_odeiv2_evolve_apply(self->evolve, self->control, self->step, &sys, t, t_out,
+                                         &h, y);
+    self->stats.rejected += (long)self->evolve->failed_steps;
+    self->evolve->failed_steps = 0;
+    if (status != GSL_SUCCESS) return gs_rk_fail(self, status, t0, h, t, y, err);
+    int rc = gs_rk_check_finite(self, t0, t, y, err);
+    if (rc) return rc;
+    self->h = h;
+    self->stats.steps++;
+    self->stats.last_step = self->evolve->last_step;
+    rc = gs_rk_check_min_step(self, *t, t_out, err);
+    if (rc) return rc;
+  }
+  return GS_OK;
+}
+
+static void gs_rk_stats(const void *vself, gs_integrator_stats *stats) {
+  const gs_rk *self = vself;
+  *stats = self->stats;
+}
+
+const gs_integrator_type gs_integrator_rk = {
+    "rk", "adaptive embedded Runge-Kutta from GSL, variant rkf45 | rkck | rk8pd",
+    gs_rk_create, gs_rk_advance, gs_rk_stats, gs_rk_free};

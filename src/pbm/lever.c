@@ -1,0 +1,22 @@
+/* Lever-rule placement; see lever.h. */
+#include "pbm/lever.h"
+
+int gs_lever_place(const gs_grid *g, size_t cell, const double *v, double count, double *dst,
+                   double *gain) {
+  size_t lo[GS_MAX_DIM], idx[GS_MAX_DIM];
+  double w[GS_MAX_DIM];
+  if (cell != GS_NOWHERE) gs_grid_unindex(g, cell, idx);
+  for (int k = 0; k < g->dim; k++) {
+    const gs_axis *ax = &g->axis[k];
+    int st = cell != GS_NOWHERE ? gs_lever_near(ax, idx[k], v[k], &lo[k], &w[k])
+                                : gs_axis_lever(ax, v[k], &lo[k], &w[k]);
+    if (st > 0) return 0;
+    if (st < 0) {
+      lo[k] = 0;
+      w[k] = 0.0;
+      if (gain) gain[k] += count * (ax->pivots[0] - v[k]);
+    }
+  }
+  gs_lever_spread(g, lo, w, count, dst);
+  return 1;
+}

@@ -1,0 +1,193 @@
+/* The run driver: integrate a case over its output times, check the state
+ * after each output interval, write outputs, report progress. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "gransim/case.h"
+#include "gransim/output.h"
+
+/* Describe cell `cell` of compartment `comp`: "compartment 2, cell (3, 5) [solid = ..., ...]". */
+static void describe_cell(const gs_model *m, size_t comp, size_t cell, char *buf, size_t len) {
+  const gs_grid *g = &m->grid;
+  size_t idx[GS_MAX_DIM];
+  gs_grid_unindex(g, cell, idx);
+  int w = snprintf(buf, len, "compartment %zu, cell (", comp + 1);
+  for (int k = 0; k < g->dim && w < (int)len; k++)
+    w += snprintf(buf + w, len - (size_t)w, "%s%zu", k ? ", " : "", idx[k] + 1);
+  w += snprintf(buf + w, len - (size_t)w, ") [");
+  for (int k = 0; k < g->dim && w < (int)len; k++)
+    w += snprintf(buf + w, len - (size_t)w, "%s%s = %g", k ? ", " : "", g->axis[k].name,
+                  g->x[cell * (size_t)g->dim + (size_t)k]);
+  if (w < (int)len) snprintf(buf + w, len - (size_t)w, "]");
+}
+
+typedef struct {
+  gs_case *c;
+  double bad_t;
+  size_t bad_index;
+  int bad;
+} guard_t;
+
+/* Right-hand side with a guard against non-finite rates. */
+static int guarded_rhs(void *ctx, double t, const double *y, double *dydt) {
+  guard_t *gd = ctx;
+  const gs_model *m = &gd->c->model;
+  gs_model_rhs(m, t, y, dydt, dydt + m->nstate);
+  for (size_t i = 0; i < m->nstate + m->nledger; i++)
+    if (!isfinite(dydt[i])) {
+      gd->bad = 1;
+      gd->bad_t = t;
+      gd->bad_index = i;
+      return 1;
+    }
+  return 0;
+}
+
+static int check_state(const gs_case *c, const double *Y, const double *M1_0, double t,
+                       gs_run_report *rep, gs_error *err) {
+  const gs_model *m = &c->model;
+  const gs_grid *g = &m->grid;
+  const int dim = g->dim;
+  char where[512];
+  double ymax = 0;
+  for (size_t i = 0; i < m->nstate; i++) {
+    if (!isfinite(Y[i])) {
+      describe_cell(m, i / g->ncells, i % g->ncells, where, sizeof where);
+      return gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: number is %g", t, where, Y[i]);
+    }
+    ymax = fmax(ymax, fabs(Y[i]));
+  }
+  for (size_t i = 0; i < m->nstate; i++)
+    if (Y[i] < -c->checks.negative_tolerance * ymax) {
+      describe_cell(m, i / g->ncells, i % g->ncells, where, sizeof where);
+      return gs_error_set(err, GS_ENUMERIC,
+                          "numerical failure at t = %g: %s: number %g is negative beyond round-off "
+                          "(%g of the largest number %g; checks.negative_tolerance = %g). Tighten "
+                          "solver.rtol/atol or check the rates",
+                          t, where, Y[i], -Y[i] / ymax, ymax, c->checks.negative_tolerance);
+    }
+  const double *L = Y + m->nstate;
+  for (int k = 0; k < dim; k++) {
+    double scale = 0, lost = 0, held0 = 0;
+    double held[g->ncomp];
+    for (size_t comp = 0; comp < g->ncomp; comp++) {
+      const double *N = Y + comp * g->ncells;
+      held[comp] = 0;
+      for (size_t cell = 0; cell < g->ncells; cell++) held[comp] += N[cell] * g->x[cell * (size_t)dim + (size_t)k];
+      scale += M1_0[comp * (size_t)dim + (size_t)k] + fabs(held[comp]) + fabs(L[comp * 2 * (size_t)dim + (size_t)k]);
+      lost += L[comp * 2 * (size_t)dim + (size_t)dim + (size_t)k];
+      held0 += M1_0[comp * (size_t)dim + (size_t)k];
+    }
+    if (!(scale > 0)) continue;
+    for (size_t comp = 0; comp < g->ncomp; comp++) {
+      double ext = L[comp * 2 * (size_t)dim + (size_t)k], lst = L[comp * 2 * (size_t)dim + (size_t)dim + (size_t)k];
+      double expect = M1_0[comp * (size_t)dim + (size_t)k] + ext - lst;
+      double rel = fabs(held[comp] - expect) / scale;
+      if (rel > rep->max_balance_error) rep->max_balance_error = rel;
+      if (rel > c->checks.mass_tolerance)
+        return gs_error_set(err, GS_ENUMERIC,
+                            "numerical failure at t = %g: volume balance of axis '%s' broken in "
+                            "compartment %zu: held %.12g, expected %.12g (initial + exchanged - "
+                            "lost); relative error %.3g > checks.mass_tolerance = %g",
+                            t, g->axis[k].name, comp + 1, held[comp], expect, rel, c->checks.mass_tolerance);
+    }
+    double frac = fabs(lost) / scale;
+    if (frac > rep->max_loss) rep->max_loss = frac;
+    if (frac > c->checks.max_loss)
+      return gs_error_set(err, GS_ENUMERIC,
+                          "at t = %g, a fraction %.3g of the volume of axis '%s' has crossed the grid "
+                          "boundaries (%s), more than checks.max_loss = %g. Extend axis '%s' (now "
+                          "[%g, %g]) or raise checks.max_loss",
+                          t, frac, g->axis[k].name, lost > 0 ? "lost beyond the last pivot" : "created below the first pivot",
+                          c->checks.max_loss, g->axis[k].name, g->axis[k].edges[0], g->axis[k].edges[g->axis[k].n]);
+    (void)held0;
+  }
+  return GS_OK;
+}
+
+static double now_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void progress(const gs_case *c, double t, double t_end, const gs_integrator_stats *st,
+                     double elapsed) {
+  double span = t_end - c->t0;
+  fprintf(stderr, "\rgransim: t = %-10.4g of %-10.4g (%3.0f%%)  %ld steps  %.1f s   ", t, t_end,
+          span > 0 ? 100.0 * (t - c->t0) / span : 100.0, st->steps, elapsed);
+  fflush(stderr);
+}
+
+int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_report *rep_out,
+                gs_error *err) {
+  gs_model *m = &c->model;
+  const gs_grid *g = &m->grid;
+  const size_t n = c->ode.n;
+  gs_run_report rep;
+  memset(&rep, 0, sizeof rep);
+  double *Y = gs_malloc(n * sizeof(double), err);
+  double *M1_0 = gs_calloc(g->ncomp * (size_t)g->dim, sizeof(double), err);
+  if (!Y || !M1_0) {
+    free(Y);
+    free(M1_0);
+    return GS_ENOMEM;
+  }
+  memcpy(Y, c->y0, n * sizeof(double));
+  for (size_t i = 0; i < m->nstate; i++)
+    for (int k = 0; k < g->dim; k++)
+      M1_0[(i / g->ncells) * (size_t)g->dim + (size_t)k] += c->y0[i] * g->x[(i % g->ncells) * (size_t)g->dim + (size_t)k];
+  double t = c->t0;
+  int show = opt && opt->progress >= 0 ? opt->progress : isatty(STDERR_FILENO);
+  gs_output *out = NULL;
+  int rc = GS_OK;
+  if (opt && opt->out_dir) {
+    out = opt->resume ? gs_output_resume(opt->out_dir, m, &t, Y, Y + m->nstate, err)
+                      : gs_output_open(opt->out_dir, m, gs_cfg_source(c->cfg), gs_cfg_name(c->cfg), err);
+    if (!out) rc = err->code;
+  }
+  if (!rc) rc = check_state(c, Y, M1_0, t, &rep, err);
+  if (!rc && out && !(opt && opt->resume)) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
+  guard_t guard = {c, 0, 0, 0};
+  gs_ode ode = c->ode;
+  ode.f = guarded_rhs;
+  ode.ctx = &guard;
+  double start = now_seconds(), t_end = c->times[c->ntimes - 1];
+  gs_integrator_stats st = {0};
+  for (size_t i = 0; !rc && i < c->ntimes; i++) {
+    if (c->times[i] <= t) continue;
+    rc = c->integrator.type->advance(c->integrator.self, &ode, &t, c->times[i], Y, err);
+    if (rc && guard.bad) {
+      char where[512];
+      size_t idx = guard.bad_index;
+      if (idx < m->nstate) describe_cell(m, idx / g->ncells, idx % g->ncells, where, sizeof where);
+      else snprintf(where, sizeof where, "volume ledger entry %zu", idx - m->nstate);
+      rc = gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: the rate of change is not finite (NaN or infinity); check kernel and mechanism parameters", guard.bad_t, where);
+    }
+    if (!rc) rc = check_state(c, Y, M1_0, t, &rep, err);
+    if (!rc && out) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
+    c->integrator.type->get_stats(c->integrator.self, &st);
+    if (show) progress(c, t, t_end, &st, now_seconds() - start);
+  }
+  if (show) fprintf(stderr, "\n");
+  if (out) {
+    gs_error ferr;
+    int frc = gs_output_finish(out, rc == GS_OK, &ferr);
+    if (!rc && frc) {
+      *err = ferr;
+      rc = frc;
+    }
+  }
+  rep.t_end = t;
+  rep.stats = st;
+  rep.wall_seconds = now_seconds() - start;
+  if (yout) memcpy(yout, Y, n * sizeof(double));
+  if (rep_out) *rep_out = rep;
+  free(Y);
+  free(M1_0);
+  return rc;
+}

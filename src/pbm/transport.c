@@ -1,0 +1,158 @@
+/* Flow through the compartments.
+ *   feed:     particles enter one compartment at a constant rate with a given
+ *             distribution (a distribution spec whose `number` is per second),
+ *             during [start, end).
+ *   transfer: each compartment c loses particles at rate k_c N to compartment
+ *             c+1; the last one discharges them as product.  k_c is `rate`
+ *             (1/s), 1/`residence_time`, or `velocity`/`length` (the v dt / d
+ *             of seed 000), each a number or one value per compartment.
+ * Both book the volume they move in the ledger of the compartments involved,
+ * so the balance held = fed - discharged is checked per compartment. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gransim/distribution.h"
+#include "gransim/pbm.h"
+
+typedef struct {
+  size_t comp;
+  double start, end;
+  double *rate;             /* ncells: particles per second per cell */
+  double volume[GS_MAX_DIM]; /* volume per second per axis */
+} feed_t;
+
+static void feed_free(void *self) {
+  feed_t *F = self;
+  if (F) free(F->rate);
+  free(F);
+}
+
+static int feed_create(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err) {
+  const gs_grid *g = &m->grid;
+  feed_t *F = gs_calloc(1, sizeof *F, err);
+  if (!F) return GS_ENOMEM;
+  long comp = 1;
+  gs_cfg_node *dist = NULL;
+  F->rate = gs_calloc(g->ncells, sizeof(double), err);
+  int rc = F->rate ? GS_OK : GS_ENOMEM;
+  if (!rc) rc = gs_cfg_long_range(node, "compartment", 0, 1, 1, (long)g->ncomp, &comp, err);
+  if (!rc) rc = gs_cfg_double_range(node, "start", 0, 0, -HUGE_VAL, 0, HUGE_VAL, 0, &F->start, err);
+  if (!rc) rc = gs_cfg_double_range(node, "end", 0, HUGE_VAL, F->start, 1, HUGE_VAL, 0, &F->end, err);
+  if (!rc) rc = gs_cfg_map_req(node, "distribution", &dist, err);
+  if (!rc) rc = gs_distribution_add(dist, g, F->rate, 0, err);
+  if (!rc) rc = gs_cfg_check_unused(node, err);
+  if (rc) {
+    feed_free(F);
+    return rc;
+  }
+  F->comp = (size_t)comp - 1;
+  for (size_t c = 0; c < g->ncells; c++)
+    for (int k = 0; k < g->dim; k++) F->volume[k] += F->rate[c] * g->x[c * (size_t)g->dim + (size_t)k];
+  *self = F;
+  return GS_OK;
+}
+
+static void feed_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
+                     double *dledger) {
+  (void)y;
+  const feed_t *F = self;
+  const gs_grid *g = &m->grid;
+  if (t < F->start || t >= F->end) return;
+  double *d = dydt + F->comp * g->ncells;
+  for (size_t c = 0; c < g->ncells; c++) d[c] += F->rate[c];
+  for (int k = 0; k < g->dim; k++) dledger[F->comp * 2 * (size_t)g->dim + (size_t)k] += F->volume[k];
+}
+
+typedef struct {
+  double *k; /* per compartment rate [1/s] */
+} transfer_t;
+
+static void transfer_free(void *self) {
+  transfer_t *T = self;
+  if (T) free(T->k);
+  free(T);
+}
+
+/* A number or a list of one value per compartment, all > 0. */
+static int per_compartment(gs_cfg_node *node, const char *key, size_t ncomp, double **out,
+                           gs_error *err) {
+  size_t n = 0;
+  int rc = gs_cfg_doubles_req(node, key, 1, out, &n, err);
+  if (rc) return rc;
+  gs_cfg_node *kn = gs_cfg_get(node, key);
+  if (n != 1 && n != ncomp)
+    return gs_cfg_fail(kn, err, "expected one value or one per compartment (%zu), got %zu", ncomp, n);
+  for (size_t i = 0; i < n; i++)
+    if (!((*out)[i] > 0)) return gs_cfg_fail(kn, err, "values must be > 0");
+  if (n == 1) {
+    double *all = realloc(*out, ncomp * sizeof(double));
+    if (!all) return gs_error_set(err, GS_ENOMEM, "out of memory");
+    for (size_t i = 1; i < ncomp; i++) all[i] = all[0];
+    *out = all;
+  }
+  return GS_OK;
+}
+
+static int transfer_create(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err) {
+  size_t ncomp = m->grid.ncomp;
+  transfer_t *T = gs_calloc(1, sizeof *T, err);
+  if (!T) return GS_ENOMEM;
+  double *a = NULL, *b = NULL;
+  int rc = GS_OK, given = !!gs_cfg_get(node, "rate") + !!gs_cfg_get(node, "residence_time") +
+                          !!gs_cfg_get(node, "velocity");
+  if (given != 1)
+    rc = gs_cfg_fail(node, err, "give exactly one of 'rate', 'residence_time' or 'velocity' (with 'length')");
+  else if (gs_cfg_get(node, "rate"))
+    rc = per_compartment(node, "rate", ncomp, &T->k, err);
+  else if (gs_cfg_get(node, "residence_time")) {
+    rc = per_compartment(node, "residence_time", ncomp, &T->k, err);
+    for (size_t i = 0; !rc && i < ncomp; i++) T->k[i] = 1.0 / T->k[i];
+  } else {
+    rc = per_compartment(node, "velocity", ncomp, &a, err);
+    if (!rc) rc = per_compartment(node, "length", ncomp, &b, err);
+    if (!rc) {
+      T->k = a;
+      a = NULL;
+      for (size_t i = 0; i < ncomp; i++) T->k[i] /= b[i];
+    }
+  }
+  free(a);
+  free(b);
+  if (!rc) rc = gs_cfg_check_unused(node, err);
+  if (rc) {
+    transfer_free(T);
+    return rc;
+  }
+  *self = T;
+  return GS_OK;
+}
+
+static void transfer_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
+                         double *dledger) {
+  (void)t;
+  const transfer_t *T = self;
+  const gs_grid *g = &m->grid;
+  const size_t n = g->ncells, L = 2 * (size_t)g->dim;
+  for (size_t comp = 0; comp < g->ncomp; comp++) {
+    const double *N = y + comp * n;
+    double *out = dydt + comp * n, *next = comp + 1 < g->ncomp ? dydt + (comp + 1) * n : NULL;
+    double moved[GS_MAX_DIM] = {0};
+    for (size_t c = 0; c < n; c++) {
+      double r = T->k[comp] * N[c];
+      out[c] -= r;
+      if (next) next[c] += r;
+      for (int k = 0; k < g->dim; k++) moved[k] += r * g->x[c * (size_t)g->dim + (size_t)k];
+    }
+    for (int k = 0; k < g->dim; k++) {
+      dledger[comp * L + (size_t)k] -= moved[k];
+      if (next) dledger[(comp + 1) * L + (size_t)k] += moved[k];
+    }
+  }
+}
+
+const gs_mech_type gs_mech_feed = {"feed", "particles fed into a compartment at a constant rate",
+                                   feed_create, feed_rhs, NULL, feed_free};
+const gs_mech_type gs_mech_transfer = {
+    "transfer", "flow to the next compartment at rate k N; out of the last as product",
+    transfer_create, transfer_rhs, NULL, transfer_free};

@@ -1,0 +1,446 @@
+/* Time integrators: accuracy against closed forms, conservation of linear
+ * invariants, exact landing on output times, stiffness, error paths and
+ * settings validation, for every registered method. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "gransim/cfg.h"
+#include "gransim/integrator.h"
+
+/* ---- helpers ---------------------------------------------------------------- */
+
+static int make(const char *yaml, const gs_ode *ode, gs_integrator *it, gs_error *err) {
+  gs_cfg *cfg = gs_cfg_load_string(yaml, "test.yaml", err);
+  if (!cfg) return err->code;
+  int rc = gs_integrator_create(gs_cfg_get(gs_cfg_root(cfg), "solver"), ode, it, err);
+  gs_cfg_free(cfg); /* integrators must not keep pointers into the tree */
+  return rc;
+}
+
+static int advance(gs_integrator *it, const gs_ode *ode, double *t, double t_out, double *y,
+                   gs_error *err) {
+  return it->type->advance(it->self, ode, t, t_out, y, err);
+}
+
+static gs_integrator_stats stats_of(const gs_integrator *it) {
+  gs_integrator_stats s;
+  it->type->get_stats(it->self, &s);
+  return s;
+}
+
+/* Creation that must succeed; prints the message otherwise. */
+static int make_ok(const char *yaml, const gs_ode *ode, gs_integrator *it) {
+  gs_error err = {0};
+  int rc = make(yaml, ode, it, &err);
+  if (rc) fprintf(stderr, "create failed: %s\n", err.msg);
+  CHECK(rc == GS_OK);
+  return rc;
+}
+
+static int contains(const char *s, const char *part) { return strstr(s, part) != NULL; }
+
+/* ---- test systems ----------------------------------------------------------- */
+
+typedef struct {
+  double k;
+  double t_max; /* latest time f was called at */
+  double fail_after; /* f fails for t > fail_after */
+} decay_ctx;
+
+static int decay_f(void *vctx, double t, const double *y, double *dydt) {
+  decay_ctx *c = vctx;
+  if (t > c->t_max) c->t_max = t;
+  if (t > c->fail_after) return 1;
+  dydt[0] = -c->k * y[0];
+  return 0;
+}
+
+/* A -> B -> C with rates k1, k2, plus a ledger L' = k2 B outside error
+ * control: A + B + C and C - L are exact linear invariants. */
+static int chain_f(void *vctx, double t, const double *y, double *dydt) {
+  (void)t;
+  const double *k = vctx;
+  double r1 = k[0] * y[0], r2 = k[1] * y[1];
+  dydt[0] = -r1;
+  dydt[1] = r1 - r2;
+  dydt[2] = r2;
+  dydt[3] = r2;
+  return 0;
+}
+
+/* Eigenvalues -1 and -1e5: y1' = -y1, y2' = -a (y2 - y1). */
+static const double stiff_a = 1e5;
+static int stiff_f(void *vctx, double t, const double *y, double *dydt) {
+  (void)vctx;
+  (void)t;
+  dydt[0] = -y[0];
+  dydt[1] = -stiff_a * (y[1] - y[0]);
+  return 0;
+}
+
+/* Diffusion with decay on a line of n cells (moderately stiff, coupled). */
+typedef struct {
+  size_t n;
+  double d, k;
+} diffusion_ctx;
+
+static int diffusion_f(void *vctx, double t, const double *y, double *dydt) {
+  (void)t;
+  const diffusion_ctx *c = vctx;
+  for (size_t i = 0; i < c->n; i++) {
+    double left = i ? y[i - 1] : y[i], right = i + 1 < c->n ? y[i + 1] : y[i];
+    dydt[i] = c->d * (left - 2 * y[i] + right) - c->k * y[i];
+  }
+  return 0;
+}
+
+/* Independent decays with rates 1 + 0.001 i. */
+static int decays_f(void *vctx, double t, const double *y, double *dydt) {
+  (void)t;
+  const size_t *n = vctx;
+  for (size_t i = 0; i < *n; i++) dydt[i] = -(1 + 0.001 * (double)i) * y[i];
+  return 0;
+}
+
+/* Constant depletion: the Euler controller drives dt to min_step near 0. */
+static int drain_f(void *vctx, double t, const double *y, double *dydt) {
+  (void)vctx;
+  (void)t;
+  (void)y;
+  dydt[0] = -10;
+  return 0;
+}
+
+/* ---- accuracy and landing on t_out ----------------------------------------- */
+
+/* y' = -k y over 50 outputs at t = 0.1 i (none representable exactly). */
+static void test_decay(const char *yaml, double tol, double y0) {
+  decay_ctx c = {1.3, 0, HUGE_VAL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1};
+  gs_integrator it;
+  if (make_ok(yaml, &ode, &it)) return;
+  gs_error err = {0};
+  double t = 0, y = y0, worst = 0;
+  for (int i = 1; i <= 50; i++) {
+    double t_out = 0.1 * i;
+    int rc = advance(&it, &ode, &t, t_out, &y, &err);
+    if (rc) fprintf(stderr, "%s\n", err.msg);
+    CHECK(rc == GS_OK);
+    CHECK(t == t_out); /* bitwise: output times are hit exactly */
+    CHECK(c.t_max <= t_out * (1 + 4e-16)); /* never sampled past the output */
+    worst = fmax(worst, fabs(y - y0 * exp(-c.k * t_out)) / (y0 * exp(-c.k * t_out)));
+  }
+  if (!(worst <= tol)) fprintf(stderr, "decay %s: worst rel err %.3g\n", it.type->name, worst);
+  CHECK(worst <= tol);
+  gs_integrator_stats s = stats_of(&it);
+  CHECK(s.steps > 0 && s.rhs_evals >= s.steps && s.last_step > 0);
+  gs_integrator_free(&it);
+  CHECK(it.self == NULL);
+}
+
+/* Error of explicit Euler at t = 1 with dt fixed at max_step. */
+static double euler_error(double h) {
+  char yaml[256];
+  snprintf(yaml, sizeof yaml,
+           "solver:\n  method: euler\n  initial_step: %.17g\n  max_step: %.17g\n", h, h);
+  decay_ctx c = {1.0, 0, HUGE_VAL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1};
+  gs_integrator it;
+  if (make_ok(yaml, &ode, &it)) return NAN;
+  gs_error err = {0};
+  double t = 0, y = 1;
+  CHECK(advance(&it, &ode, &t, 1.0, &y, &err) == GS_OK);
+  gs_integrator_stats s = stats_of(&it);
+  CHECK(s.steps == s.rhs_evals);
+  CHECK_REL(s.last_step, h, 1e-12);
+  gs_integrator_free(&it);
+  return fabs(y - exp(-1.0));
+}
+
+static void test_euler_order(void) {
+  double e1 = euler_error(1.0 / 64), e2 = euler_error(1.0 / 128), e3 = euler_error(1.0 / 256);
+  double p1 = log2(e1 / e2), p2 = log2(e2 / e3);
+  CHECK(p1 >= 0.8 && p1 <= 1.2);
+  CHECK(p2 >= 0.8 && p2 <= 1.2);
+}
+
+/* ---- linear invariants ------------------------------------------------------ */
+
+static void test_invariants(const char *yaml, double tol) {
+  double k[2] = {2.0, 0.7};
+  const double scale[4] = {1, 1, 1, 0};
+  gs_ode ode = {4, chain_f, k, scale, 3};
+  gs_integrator it;
+  if (make_ok(yaml, &ode, &it)) return;
+  gs_error err = {0};
+  double y[4] = {1.0, 0.3, 0.1, 0.0}, t = 0;
+  double total0 = y[0] + y[1] + y[2], gap0 = y[2] - y[3];
+  double worst_total = 0, worst_gap = 0;
+  for (int i = 1; i <= 20; i++) {
+    CHECK(advance(&it, &ode, &t, 0.25 * i, y, &err) == GS_OK);
+    worst_total = fmax(worst_total, fabs(y[0] + y[1] + y[2] - total0) / total0);
+    worst_gap = fmax(worst_gap, fabs(y[2] - y[3] - gap0) / total0);
+  }
+  if (!(worst_total <= tol && worst_gap <= tol))
+    fprintf(stderr, "invariants %s: total %.3g, ledger %.3g\n", yaml, worst_total, worst_gap);
+  CHECK(worst_total <= tol);
+  CHECK(worst_gap <= tol);
+  CHECK(y[0] < 1e-3 && y[2] > 1.0); /* it did integrate */
+  gs_integrator_free(&it);
+}
+
+/* ---- stiffness -------------------------------------------------------------- */
+
+static long stiff_evals(const char *yaml) {
+  gs_ode ode = {2, stiff_f, NULL, NULL, 2};
+  gs_integrator it;
+  if (make_ok(yaml, &ode, &it)) return -1;
+  gs_error err = {0};
+  double y[2] = {1, 0}, t = 0;
+  int rc = advance(&it, &ode, &t, 10.0, y, &err);
+  if (rc) fprintf(stderr, "%s\n", err.msg);
+  CHECK(rc == GS_OK);
+  double c = stiff_a / (stiff_a - 1);
+  CHECK_REL(y[0], exp(-10.0), 1e-4);
+  CHECK_REL(y[1], c * exp(-10.0) - c * exp(-stiff_a * 10), 1e-4);
+  long evals = stats_of(&it).rhs_evals;
+  gs_integrator_free(&it);
+  return evals;
+}
+
+static void test_stiff(void) {
+  long rk = stiff_evals("solver:\n  method: rk\n  rtol: 1e-6\n");
+  long cv = stiff_evals("solver:\n  method: cvode\n  rtol: 1e-6\n");
+  fprintf(stderr, "stiff problem: rk %ld rhs evaluations, cvode %ld\n", rk, cv);
+  CHECK(cv > 0 && rk > 0);
+  CHECK(cv < rk / 5);
+}
+
+/* ---- CVODE linear solvers --------------------------------------------------- */
+
+static void diffusion_run(const char *yaml, double *y, size_t n) {
+  diffusion_ctx c = {n, 400.0, 0.5};
+  gs_ode ode = {n, diffusion_f, &c, NULL, n};
+  gs_integrator it;
+  if (make_ok(yaml, &ode, &it)) return;
+  for (size_t i = 0; i < n; i++) y[i] = i < n / 3 ? 1.0 : 0.01;
+  gs_error err = {0};
+  double t = 0;
+  for (int i = 1; i <= 4; i++) CHECK(advance(&it, &ode, &t, 0.05 * i, y, &err) == GS_OK);
+  gs_integrator_free(&it);
+}
+
+static void test_gmres_matches_dense(void) {
+  enum { N = 40 };
+  double a[N], b[N], worst = 0, ymax = 0;
+  diffusion_run("solver:\n  method: cvode\n  linear_solver: dense\n  rtol: 1e-9\n", a, N);
+  diffusion_run("solver:\n  method: cvode\n  linear_solver: gmres\n  rtol: 1e-9\n", b, N);
+  for (size_t i = 0; i < N; i++) {
+    worst = fmax(worst, fabs(a[i] - b[i]));
+    ymax = fmax(ymax, fabs(a[i]));
+  }
+  CHECK(worst <= 1e-6 * ymax);
+}
+
+/* n > 1000 picks GMRES under `auto`; still accurate. */
+static void test_cvode_auto_large(void) {
+  size_t n = 1200;
+  gs_ode ode = {n, decays_f, &n, NULL, n};
+  gs_integrator it;
+  if (make_ok("solver:\n  method: cvode\n  rtol: 1e-8\n", &ode, &it)) return;
+  double *y = malloc(n * sizeof *y), t = 0, worst = 0;
+  for (size_t i = 0; i < n; i++) y[i] = 1;
+  gs_error err = {0};
+  CHECK(advance(&it, &ode, &t, 2.0, y, &err) == GS_OK);
+  for (size_t i = 0; i < n; i++) {
+    double want = exp(-(1 + 0.001 * (double)i) * 2.0);
+    worst = fmax(worst, fabs(y[i] - want) / want);
+  }
+  CHECK(worst <= 1e-5);
+  free(y);
+  gs_integrator_free(&it);
+}
+
+/* CVODE continues its history only when handed back its own state; a state
+ * changed between calls must restart the integration from that state. */
+static void test_cvode_restart(void) {
+  decay_ctx c = {1.0, 0, HUGE_VAL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1};
+  gs_integrator it;
+  if (make_ok("solver:\n  method: cvode\n  rtol: 1e-9\n", &ode, &it)) return;
+  gs_error err = {0};
+  double t = 0, y = 1;
+  CHECK(advance(&it, &ode, &t, 1.0, &y, &err) == GS_OK);
+  y *= 2; /* e.g. a feed added between outputs */
+  CHECK(advance(&it, &ode, &t, 2.0, &y, &err) == GS_OK);
+  CHECK_REL(y, 2 * exp(-2.0), 1e-6);
+  double t_back = 0.5; /* and a restart at an earlier time */
+  y = 1;
+  CHECK(advance(&it, &ode, &t_back, 1.5, &y, &err) == GS_OK);
+  CHECK_REL(y, exp(-1.0), 1e-6);
+  gs_integrator_free(&it);
+}
+
+/* ---- failures ----------------------------------------------------------------- */
+
+static void test_rhs_failure(const char *yaml) {
+  decay_ctx c = {1.0, 0, 0.5};
+  gs_ode ode = {1, decay_f, &c, NULL, 1};
+  gs_integrator it;
+  if (make_ok(yaml, &ode, &it)) return;
+  gs_error err = {0};
+  double t = 0, y = 1;
+  int rc = advance(&it, &ode, &t, 2.0, &y, &err);
+  CHECK(rc == GS_ENUMERIC);
+  CHECK(contains(err.msg, "right-hand side"));
+  CHECK(contains(err.msg, it.type->name));
+  /* (t, y) is the last state the method accepted: consistent, before 2. */
+  CHECK(t >= 0 && t < 2.0);
+  CHECK_REL(y, exp(-t), 0.1);
+  gs_integrator_free(&it);
+}
+
+static void test_euler_negative(void) {
+  gs_ode ode = {1, drain_f, NULL, NULL, 1};
+  gs_integrator it;
+  if (make_ok("solver:\n  method: euler\n  initial_step: 0.01\n", &ode, &it)) return;
+  gs_error err = {0};
+  double t = 0, y = 1;
+  int rc = advance(&it, &ode, &t, 1.0, &y, &err);
+  CHECK(rc == GS_ENUMERIC);
+  CHECK(contains(err.msg, "negative number density"));
+  CHECK(contains(err.msg, "y[0]"));
+  CHECK(t > 0 && t < 1 && y >= 0); /* the last good state is kept */
+  gs_integrator_free(&it);
+}
+
+static void test_max_steps(const char *method) {
+  char yaml[128];
+  snprintf(yaml, sizeof yaml, "solver:\n  method: %s\n  max_steps_per_output: 5\n", method);
+  decay_ctx c = {1.0, 0, HUGE_VAL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1};
+  gs_integrator it;
+  if (make_ok(yaml, &ode, &it)) return;
+  gs_error err = {0};
+  double t = 0, y = 1;
+  CHECK(advance(&it, &ode, &t, 100.0, &y, &err) == GS_ENUMERIC);
+  CHECK(contains(err.msg, "integrator"));
+  CHECK(t < 100.0);
+  gs_integrator_free(&it);
+}
+
+/* ---- settings ------------------------------------------------------------------ */
+
+static void expect_input_error(const char *yaml, const char *part1, const char *part2) {
+  decay_ctx c = {1.0, 0, HUGE_VAL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1};
+  gs_integrator it = {NULL, NULL};
+  gs_error err = {0};
+  int rc = make(yaml, &ode, &it, &err);
+  CHECK(rc == GS_EINPUT);
+  CHECK(it.type == NULL && it.self == NULL);
+  if (!contains(err.msg, part1) || !contains(err.msg, part2))
+    fprintf(stderr, "unexpected message for\n%s-> %s\n", yaml, err.msg);
+  CHECK(contains(err.msg, part1));
+  CHECK(contains(err.msg, part2));
+}
+
+static void test_settings(void) {
+  expect_input_error("solver:\n  method: rk45\n", "test.yaml:2", "rk45");
+  expect_input_error("solver:\n  method: rk45\n", "cvode", "euler");
+  const char *methods[] = {"rk", "cvode", "euler"};
+  for (int i = 0; i < 3; i++) {
+    char yaml[256];
+    snprintf(yaml, sizeof yaml, "solver:\n  method: %s\n  rtol: -1\n", methods[i]);
+    expect_input_error(yaml, "rtol", "test.yaml:3");
+    snprintf(yaml, sizeof yaml, "solver:\n  method: %s\n  rtoll: 1e-6\n", methods[i]);
+    expect_input_error(yaml, "unknown key 'rtoll'", "rtol");
+    snprintf(yaml, sizeof yaml, "solver:\n  method: %s\n  min_step: 1\n  max_step: 0.5\n",
+             methods[i]);
+    expect_input_error(yaml, "min_step", "max_step");
+  }
+  expect_input_error("solver:\n  atol: 0\n", "atol", "> 0");
+  expect_input_error("solver:\n  max_steps_per_output: 0\n", "max_steps_per_output", ">= 1");
+  expect_input_error("solver:\n  method: rk\n  variant: rk4\n", "variant", "rk8pd");
+  expect_input_error("solver:\n  method: cvode\n  max_order: 6\n", "max_order", "5");
+  expect_input_error("solver:\n  method: cvode\n  linear_solver: lu\n", "linear_solver", "gmres");
+  expect_input_error("solver:\n  method: euler\n  safety: 0\n", "safety", "> 0");
+  expect_input_error("solver:\n  method: rk\n  max_order: 3\n", "unknown key 'max_order'", "variant");
+  expect_input_error("solver: rk\n", "solver", "map");
+}
+
+/* Every method accepts every common key, so `method` can be switched alone. */
+static void test_common_keys(void) {
+  const char *methods[] = {"rk", "cvode", "euler"};
+  for (int i = 0; i < 3; i++) {
+    char yaml[512];
+    snprintf(yaml, sizeof yaml,
+             "solver:\n  method: %s\n  rtol: 1e-7\n  atol: 1e-14\n  initial_step: 0.001\n"
+             "  min_step: 1e-12\n  max_step: 0.05\n  max_steps_per_output: 100000\n",
+             methods[i]);
+    test_decay(yaml, 0.3, 1.0);
+  }
+}
+
+static void test_registry(void) {
+  const gs_integrator_type *const *types = gs_integrator_types();
+  int count = 0;
+  for (; types[count]; count++) CHECK(gs_integrator_lookup(types[count]->name) == types[count]);
+  CHECK(count == 3);
+  CHECK(gs_integrator_lookup("cvode") && gs_integrator_lookup("euler"));
+  CHECK(gs_integrator_lookup("nope") == NULL);
+  /* No solver map at all: rk with default settings. */
+  decay_ctx c = {1.0, 0, HUGE_VAL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1};
+  gs_integrator it;
+  gs_error err = {0};
+  CHECK(gs_integrator_create(NULL, &ode, &it, &err) == GS_OK);
+  CHECK(it.type == gs_integrator_lookup("rk"));
+  double t = 0, y = 1;
+  CHECK(advance(&it, &ode, &t, 1.0, &y, &err) == GS_OK);
+  CHECK_REL(y, exp(-1.0), 1e-5);
+  gs_integrator_free(&it);
+  gs_integrator_free(&it); /* idempotent */
+  gs_ode bad = {2, decay_f, &c, NULL, 3};
+  CHECK(gs_integrator_create(NULL, &bad, &it, &err) == GS_EINPUT);
+}
+
+int main(void) {
+  test_registry();
+  test_settings();
+  test_common_keys();
+
+  test_decay("solver:\n  method: rk\n  variant: rkf45\n  rtol: 1e-9\n", 1e-7, 1.0);
+  test_decay("solver:\n  method: rk\n  rtol: 1e-9\n", 1e-7, 1.0);
+  test_decay("solver:\n  method: rk\n  variant: rk8pd\n  rtol: 1e-9\n", 1e-7, 1.0);
+  test_decay("solver:\n  method: cvode\n  rtol: 1e-8\n", 1e-6, 1.0);
+  test_decay("solver:\n  method: cvode\n  linear_solver: gmres\n  rtol: 1e-8\n", 1e-6, 1.0);
+  test_decay("solver:\n  method: euler\n", 0.3, 1.0);
+  /* Tiny densities need an atol below them: atol is absolute, in state units. */
+  test_decay("solver:\n  method: rk\n  rtol: 1e-9\n  atol: 1e-24\n", 1e-7, 1e-12);
+  test_decay("solver:\n  method: cvode\n  rtol: 1e-8\n  atol: 1e-24\n", 1e-6, 1e-12);
+  test_euler_order();
+
+  test_invariants("solver:\n  method: rk\n  variant: rkf45\n", 1e-13);
+  test_invariants("solver:\n  method: rk\n", 1e-13);
+  test_invariants("solver:\n  method: rk\n  variant: rk8pd\n", 1e-13);
+  test_invariants("solver:\n  method: cvode\n  linear_solver: dense\n", 1e-13);
+  test_invariants("solver:\n  method: cvode\n  linear_solver: gmres\n", 1e-13);
+  test_invariants("solver:\n  method: euler\n", 1e-13);
+
+  test_stiff();
+  test_gmres_matches_dense();
+  test_cvode_auto_large();
+  test_cvode_restart();
+
+  test_rhs_failure("solver:\n  method: rk\n");
+  test_rhs_failure("solver:\n  method: cvode\n");
+  test_rhs_failure("solver:\n  method: euler\n");
+  test_euler_negative();
+  test_max_steps("rk");
+  test_max_steps("cvode");
+  test_max_steps("euler");
+  TEST_EXIT();
+}

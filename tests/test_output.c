@@ -1,0 +1,420 @@
+/* Result files: partial names until finish, HDF5 layout and contents, CSV,
+ * abort, resume after a killed run (including a torn write and extra CSV
+ * rows), resume refusals; 1-, 2- and 3-D grids. */
+#include <hdf5.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "gransim/output.h"
+
+static char base[64];
+
+static int exists(const char *dir, const char *name) {
+  char p[512];
+  snprintf(p, sizeof p, "%s/%s", dir, name);
+  return access(p, F_OK) == 0;
+}
+
+/* Axes: solid (geometric, nsolid cells), liquid (4), gas (3). */
+static void make_model(gs_model *m, int dim, size_t ncomp, size_t nsolid) {
+  gs_error err;
+  gs_axis ax[3];
+  gs_grid g;
+  CHECK(gs_axis_geometric(&ax[0], "solid", 1e-3, 1.5, nsolid, 0, &err) == GS_OK);
+  if (dim > 1) CHECK(gs_axis_linear(&ax[1], "liquid", 0.0, 1e-2, 4, &err) == GS_OK);
+  if (dim > 2) CHECK(gs_axis_linear(&ax[2], "gas", 0.0, 5e-3, 3, &err) == GS_OK);
+  CHECK(gs_grid_init(&g, ax, dim, ncomp, &err) == GS_OK);
+  CHECK(gs_model_init(m, &g, &err) == GS_OK);
+}
+
+/* Distinct, recognisable values for output time k. */
+static void fill(const gs_model *m, int k, double *y, double *ledger) {
+  for (size_t i = 0; i < m->nstate; i++) y[i] = 1.0 + (double)i + 100.0 * k;
+  for (size_t i = 0; i < m->nledger; i++) ledger[i] = 0.25 * (double)i - k;
+}
+
+static double time_of(int k) { return 0.5 * k; }
+
+static void write_times(gs_output *o, const gs_model *m, int from, int to) {
+  gs_error err;
+  double *y = malloc(m->nstate * sizeof *y), *led = malloc(m->nledger * sizeof *led);
+  for (int k = from; k < to; k++) {
+    fill(m, k, y, led);
+    int rc = gs_output_write(o, m, time_of(k), y, led, &err);
+    CHECK(rc == GS_OK);
+    if (rc) fprintf(stderr, "%s\n", err.msg);
+  }
+  free(y);
+  free(led);
+}
+
+/* Whole dataset as doubles; dims/rank returned. */
+static double *read_all(hid_t f, const char *name, int *rank, hsize_t *dims) {
+  hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
+  CHECK(d >= 0);
+  if (d < 0) return NULL;
+  hid_t s = H5Dget_space(d);
+  *rank = H5Sget_simple_extent_ndims(s);
+  H5Sget_simple_extent_dims(s, dims, NULL);
+  hssize_t n = H5Sget_simple_extent_npoints(s);
+  double *buf = malloc((size_t)(n ? n : 1) * sizeof *buf);
+  CHECK(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0);
+  H5Sclose(s);
+  H5Dclose(d);
+  return buf;
+}
+
+static void read_str_attr(hid_t f, const char *obj, const char *attr, char *buf, size_t n) {
+  buf[0] = '\0';
+  hid_t a = H5Aopen_by_name(f, obj, attr, H5P_DEFAULT, H5P_DEFAULT);
+  CHECK(a >= 0);
+  if (a < 0) return;
+  hid_t t = H5Aget_type(a);
+  size_t size = H5Tget_size(t);
+  char *tmp = calloc(size + 1, 1);
+  CHECK(H5Aread(a, t, tmp) >= 0);
+  snprintf(buf, n, "%s", tmp);
+  free(tmp);
+  H5Tclose(t);
+  H5Aclose(a);
+}
+
+static long long read_int_attr(hid_t f, const char *obj, const char *attr) {
+  long long v = -1;
+  hid_t a = H5Aopen_by_name(f, obj, attr, H5P_DEFAULT, H5P_DEFAULT);
+  CHECK(a >= 0 && H5Aread(a, H5T_NATIVE_LLONG, &v) >= 0);
+  if (a >= 0) H5Aclose(a);
+  return v;
+}
+
+static size_t count_lines(const char *dir, const char *name, char *first, size_t n) {
+  char p[512], line[4096];
+  snprintf(p, sizeof p, "%s/%s", dir, name);
+  FILE *f = fopen(p, "r");
+  CHECK(f != NULL);
+  if (!f) return 0;
+  size_t count = 0;
+  while (fgets(line, sizeof line, f)) {
+    if (count == 0 && first) snprintf(first, n, "%s", line);
+    count++;
+  }
+  fclose(f);
+  return count;
+}
+
+static void expected_header(const gs_model *m, char *buf, size_t n) {
+  size_t len = (size_t)snprintf(buf, n, "time,compartment,M0,M1,M2,d10,d50,d90");
+  for (int k = 0; k < m->grid.dim; k++)
+    len += (size_t)snprintf(buf + len, n - len, ",mean_%s", m->grid.axis[k].name);
+  for (int k = 0; k < m->grid.dim; k++)
+    len += (size_t)snprintf(buf + len, n - len, ",total_%s", m->grid.axis[k].name);
+  snprintf(buf + len, n - len, "\n");
+}
+
+/* Checks result.h5 in dir holds output times 0..ntimes-1 as made by fill(). */
+static void check_result(const char *dir, const gs_model *m, int ntimes) {
+  char p[512], s[256];
+  snprintf(p, sizeof p, "%s/result.h5", dir);
+  hid_t f = H5Fopen(p, H5F_ACC_RDONLY, H5P_DEFAULT);
+  CHECK(f >= 0);
+  if (f < 0) return;
+  const gs_grid *g = &m->grid;
+  int rank;
+  hsize_t dims[8];
+  double *y = malloc(m->nstate * sizeof *y), *led = malloc(m->nledger * sizeof *led);
+
+  double *t = read_all(f, "/time", &rank, dims);
+  CHECK(rank == 1 && dims[0] == (hsize_t)ntimes);
+  for (int k = 0; k < ntimes; k++) CHECK(t[k] == time_of(k));
+  free(t);
+
+  double *num = read_all(f, "/number", &rank, dims);
+  CHECK(rank == 2 + g->dim && dims[0] == (hsize_t)ntimes && dims[1] == g->ncomp);
+  for (int k = 0; k < g->dim; k++) CHECK(dims[2 + k] == g->axis[k].n);
+  double *ledger = read_all(f, "/ledger", &rank, dims);
+  CHECK(rank == 3 && dims[0] == (hsize_t)ntimes && dims[1] == g->ncomp &&
+        dims[2] == 2 * (hsize_t)g->dim);
+  double *m0 = read_all(f, "/summary/M0", &rank, dims);
+  CHECK(rank == 2 && dims[0] == (hsize_t)ntimes && dims[1] == g->ncomp);
+  snprintf(s, sizeof s, "/summary/total_%s", g->axis[g->dim - 1].name);
+  double *tot = read_all(f, s, &rank, dims);
+  double *stime = read_all(f, "/summary/time", &rank, dims);
+  double *scomp = read_all(f, "/summary/compartment", &rank, dims);
+  for (int k = 0; k < ntimes; k++) {
+    fill(m, k, y, led);
+    for (size_t i = 0; i < m->nstate; i++) CHECK(num[(size_t)k * m->nstate + i] == y[i]);
+    for (size_t i = 0; i < m->nledger; i++) CHECK(ledger[(size_t)k * m->nledger + i] == led[i]);
+    for (size_t j = 0; j < g->ncomp; j++) {
+      gs_summary sum;
+      gs_summarize(m, y, j, &sum);
+      CHECK(m0[(size_t)k * g->ncomp + j] == sum.m0);
+      CHECK(tot[(size_t)k * g->ncomp + j] == sum.total[g->dim - 1]);
+      CHECK(stime[(size_t)k * g->ncomp + j] == time_of(k));
+      CHECK(scomp[(size_t)k * g->ncomp + j] == (double)j);
+    }
+  }
+  free(num), free(ledger), free(m0), free(tot), free(stime), free(scomp);
+
+  CHECK(read_int_attr(f, "/grid", "dim") == g->dim);
+  CHECK(read_int_attr(f, "/grid", "ncomp") == (long long)g->ncomp);
+  CHECK(read_int_attr(f, "/grid", "ncells") == (long long)g->ncells);
+  read_str_attr(f, "/grid", "axis_names", s, sizeof s);
+  CHECK(!strcmp(s, g->dim == 1 ? "solid" : g->dim == 2 ? "solid,liquid" : "solid,liquid,gas"));
+  for (int k = 0; k < g->dim; k++) {
+    char name[64];
+    snprintf(name, sizeof name, "/grid/%s/edges", g->axis[k].name);
+    double *e = read_all(f, name, &rank, dims);
+    CHECK(rank == 1 && dims[0] == g->axis[k].n + 1);
+    for (size_t i = 0; i <= g->axis[k].n; i++) CHECK(e[i] == g->axis[k].edges[i]);
+    free(e);
+    snprintf(name, sizeof name, "/grid/%s/pivots", g->axis[k].name);
+    e = read_all(f, name, &rank, dims);
+    CHECK(rank == 1 && dims[0] == g->axis[k].n);
+    for (size_t i = 0; i < g->axis[k].n; i++) CHECK(e[i] == g->axis[k].pivots[i]);
+    free(e);
+  }
+  read_str_attr(f, "/", "status", s, sizeof s);
+  CHECK(!strcmp(s, "complete"));
+  read_str_attr(f, "/", "gransim_version", s, sizeof s);
+  CHECK(strlen(s) > 0);
+  read_str_attr(f, "/case", "file", s, sizeof s);
+  CHECK(!strcmp(s, "case.yaml"));
+  CHECK(H5Fclose(f) >= 0);
+  free(y);
+  free(led);
+}
+
+/* CSV: header, ntimes*ncomp rows, and one row's values against gs_summarize. */
+static void check_csv(const char *dir, const char *name, const gs_model *m, int ntimes) {
+  char first[4096], want[4096];
+  expected_header(m, want, sizeof want);
+  CHECK(count_lines(dir, name, first, sizeof first) == 1 + (size_t)ntimes * m->grid.ncomp);
+  CHECK(!strcmp(first, want));
+  /* last row: time ntimes-1, last compartment */
+  char p[512], line[4096] = "";
+  snprintf(p, sizeof p, "%s/%s", dir, name);
+  FILE *f = fopen(p, "r");
+  if (!f) return;
+  while (fgets(line, sizeof line, f)) {}
+  fclose(f);
+  double t, comp, m0, m1;
+  CHECK(sscanf(line, "%lf,%lf,%lf,%lf", &t, &comp, &m0, &m1) == 4);
+  double *y = malloc(m->nstate * sizeof *y), *led = malloc(m->nledger * sizeof *led);
+  fill(m, ntimes - 1, y, led);
+  gs_summary s;
+  gs_summarize(m, y, m->grid.ncomp - 1, &s);
+  CHECK(t == time_of(ntimes - 1));
+  CHECK(comp == (double)(m->grid.ncomp - 1));
+  CHECK_REL(m0, s.m0, 1e-9);
+  CHECK_REL(m1, s.m1, 1e-9);
+  free(y);
+  free(led);
+}
+
+static void test_roundtrip(int dim) {
+  char dir[256];
+  snprintf(dir, sizeof dir, "%s/d%d/nested/out", base, dim);
+  gs_model m;
+  make_model(&m, dim, 2, 6);
+  gs_error err;
+  /* > 64 KiB: must still fit in an attribute */
+  size_t nbig = dim == 1 ? 200000 : 10;
+  char *text = malloc(nbig + 1);
+  memset(text, 'x', nbig);
+  text[nbig] = '\0';
+  gs_output *o = gs_output_open(dir, &m, text, "case.yaml", &err);
+  CHECK(o != NULL);
+  if (!o) {
+    fprintf(stderr, "%s\n", err.msg);
+    return;
+  }
+  CHECK(exists(dir, ".result.h5.partial") && exists(dir, ".summary.csv.partial"));
+  write_times(o, &m, 0, 3);
+  CHECK(!exists(dir, "result.h5") && !exists(dir, "summary.csv"));
+  check_csv(dir, ".summary.csv.partial", &m, 3); /* flushed after every write */
+  CHECK(gs_output_finish(o, 1, &err) == GS_OK);
+  CHECK(exists(dir, "result.h5") && exists(dir, "summary.csv"));
+  CHECK(!exists(dir, ".result.h5.partial") && !exists(dir, ".summary.csv.partial"));
+  check_result(dir, &m, 3);
+  check_csv(dir, "summary.csv", &m, 3);
+
+  char p[512], got[16];
+  snprintf(p, sizeof p, "%s/result.h5", dir);
+  hid_t f = H5Fopen(p, H5F_ACC_RDONLY, H5P_DEFAULT);
+  hid_t a = H5Aopen_by_name(f, "/case", "text", H5P_DEFAULT, H5P_DEFAULT);
+  hid_t t = H5Aget_type(a);
+  CHECK(H5Tget_size(t) == nbig + 1);
+  H5Tclose(t), H5Aclose(a);
+  read_str_attr(f, "/case", "text", got, sizeof got);
+  CHECK(!strncmp(got, "xxxx", 4));
+  H5Fclose(f);
+  free(text);
+  gs_model_free(&m);
+}
+
+static void test_abort(void) {
+  char dir[256];
+  snprintf(dir, sizeof dir, "%s/abort", base);
+  gs_model m;
+  make_model(&m, 2, 1, 5);
+  gs_error err;
+  gs_output *o = gs_output_open(dir, &m, "", "case.yaml", &err);
+  CHECK(o != NULL);
+  if (o) {
+    write_times(o, &m, 0, 1);
+    CHECK(gs_output_finish(o, 0, &err) == GS_OK);
+  }
+  CHECK(!exists(dir, "result.h5") && !exists(dir, "summary.csv"));
+  CHECK(!exists(dir, ".result.h5.partial") && !exists(dir, ".summary.csv.partial"));
+  CHECK(gs_output_finish(NULL, 0, &err) == GS_OK);
+  gs_model_free(&m);
+}
+
+/* A child process writes two times, leaves a stray CSV row and is killed
+ * without closing anything. */
+static void killed_run(const char *dir, const gs_model *m) {
+  pid_t pid = fork();
+  if (pid == 0) {
+    gs_error err;
+    gs_output *o = gs_output_open(dir, m, "case", "case.yaml", &err);
+    if (!o) _exit(2);
+    write_times(o, m, 0, 2);
+    char p[512];
+    snprintf(p, sizeof p, "%s/.summary.csv.partial", dir);
+    FILE *f = fopen(p, "a");
+    if (f) fputs("1,0,5,5,5,5,5,5,5,5\n1,1,5,5", f), fclose(f);
+    raise(SIGKILL);
+    _exit(3);
+  }
+  int status = 0;
+  CHECK(pid > 0 && waitpid(pid, &status, 0) == pid);
+  CHECK(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+}
+
+/* Simulates a kill inside gs_output_write after /number was extended. */
+static void tear_number(const char *dir) {
+  char p[512];
+  snprintf(p, sizeof p, "%s/.result.h5.partial", dir);
+  hid_t f = H5Fopen(p, H5F_ACC_RDWR, H5P_DEFAULT);
+  CHECK(f >= 0);
+  hid_t d = H5Dopen2(f, "/number", H5P_DEFAULT), s = H5Dget_space(d);
+  hsize_t dims[8];
+  H5Sget_simple_extent_dims(s, dims, NULL);
+  dims[0]++;
+  CHECK(H5Dset_extent(d, dims) >= 0);
+  H5Sclose(s), H5Dclose(d);
+  CHECK(H5Fclose(f) >= 0);
+}
+
+static void check_refused(const char *dir, int dim, size_t ncomp, size_t nsolid, const char *want) {
+  gs_model m;
+  make_model(&m, dim, ncomp, nsolid);
+  double *y = calloc(m.nstate, sizeof *y), *led = calloc(m.nledger, sizeof *led), t = -1;
+  gs_error err = {0, ""};
+  gs_output *o = gs_output_resume(dir, &m, &t, y, led, &err);
+  CHECK(o == NULL);
+  if (o) gs_output_finish(o, 0, &err);
+  CHECK(strstr(err.msg, want) != NULL);
+  if (!strstr(err.msg, want)) fprintf(stderr, "got: %s\nwant: %s\n", err.msg, want);
+  CHECK(exists(dir, ".result.h5.partial")); /* a refused resume keeps the run's data */
+  free(y);
+  free(led);
+  gs_model_free(&m);
+}
+
+static void test_resume(void) {
+  char dir[256], want[768];
+  snprintf(dir, sizeof dir, "%s/resume", base);
+  gs_model m;
+  make_model(&m, 2, 2, 20);
+  killed_run(dir, &m);
+  CHECK(exists(dir, ".result.h5.partial") && !exists(dir, "result.h5"));
+  tear_number(dir);
+
+  snprintf(want, sizeof want,
+           "cannot resume: %s/.result.h5.partial was written for a different grid (axis 'solid' "
+           "has 20 cells, case has 30)",
+           dir);
+  check_refused(dir, 2, 2, 30, want);
+  check_refused(dir, 2, 3, 20, "(2 compartments, case has 3)");
+  check_refused(dir, 3, 2, 20, "(2 axes, case has 3)");
+
+  gs_error err;
+  double *y = calloc(m.nstate, sizeof *y), *led = calloc(m.nledger, sizeof *led), t = -1;
+  double *wy = malloc(m.nstate * sizeof *wy), *wl = malloc(m.nledger * sizeof *wl);
+  gs_output *o = gs_output_resume(dir, &m, &t, y, led, &err);
+  CHECK(o != NULL);
+  if (!o) {
+    fprintf(stderr, "%s\n", err.msg);
+    return;
+  }
+  fill(&m, 1, wy, wl);
+  CHECK(t == time_of(1));
+  CHECK(!memcmp(y, wy, m.nstate * sizeof *y));
+  CHECK(!memcmp(led, wl, m.nledger * sizeof *led));
+  check_csv(dir, ".summary.csv.partial", &m, 2); /* stray rows gone */
+  write_times(o, &m, 2, 4);
+  CHECK(gs_output_finish(o, 1, &err) == GS_OK);
+  check_result(dir, &m, 4); /* the torn /number row was dropped */
+  check_csv(dir, "summary.csv", &m, 4);
+  CHECK(!exists(dir, ".result.h5.partial"));
+  free(y), free(led), free(wy), free(wl);
+  gs_model_free(&m);
+}
+
+static void test_nothing_to_resume(void) {
+  char dir[256], want[512];
+  snprintf(dir, sizeof dir, "%s/empty", base);
+  CHECK(mkdir(dir, 0777) == 0);
+  gs_model m;
+  make_model(&m, 1, 1, 4);
+  double y[4], led[2], t;
+  gs_error err = {0, ""};
+  CHECK(gs_output_resume(dir, &m, &t, y, led, &err) == NULL);
+  CHECK(err.code == GS_EIO);
+  snprintf(want, sizeof want, "nothing to resume in %s (no .result.h5.partial)", dir);
+  CHECK(!strcmp(err.msg, want));
+  gs_model_free(&m);
+}
+
+static void test_bad_dir(void) {
+  char file[256], dir[300];
+  snprintf(file, sizeof file, "%s/plainfile", base);
+  FILE *f = fopen(file, "w");
+  CHECK(f != NULL);
+  if (f) fclose(f);
+  snprintf(dir, sizeof dir, "%s/sub", file);
+  gs_model m;
+  make_model(&m, 1, 1, 4);
+  gs_error err = {0, ""};
+  CHECK(gs_output_open(dir, &m, "", "c", &err) == NULL);
+  CHECK(err.code == GS_EIO && strstr(err.msg, dir) != NULL);
+  gs_model_free(&m);
+}
+
+int main(void) {
+  snprintf(base, sizeof base, "/tmp/gs_test_output.XXXXXX");
+  if (!mkdtemp(base)) {
+    perror("mkdtemp");
+    return 1;
+  }
+  for (int dim = 1; dim <= 3; dim++) test_roundtrip(dim);
+  test_abort();
+  test_resume();
+  test_nothing_to_resume();
+  test_bad_dir();
+  if (!check_failures && !getenv("GS_TEST_KEEP")) {
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", base);
+    CHECK(system(cmd) == 0);
+  } else {
+    fprintf(stderr, "test files kept in %s\n", base);
+  }
+  TEST_EXIT();
+}
