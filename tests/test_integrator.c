@@ -104,6 +104,13 @@ static int decays_f(void *vctx, double t, const double *y, double *dydt) {
   return 0;
 }
 
+/* Returns success but NaN derivatives after t = 0.5. */
+static int nan_f(void *vctx, double t, const double *y, double *dydt) {
+  (void)vctx;
+  dydt[0] = t > 0.5 ? (double)NAN : -y[0];
+  return 0;
+}
+
 /* Constant depletion: the Euler controller drives dt to min_step near 0. */
 static int drain_f(void *vctx, double t, const double *y, double *dydt) {
   (void)vctx;
@@ -302,6 +309,30 @@ static void test_rhs_failure(const char *yaml) {
   gs_integrator_free(&it);
 }
 
+/* NaN must surface as an error, not as a NaN state at t_out. */
+static void test_nan(const char *yaml) {
+  gs_ode ode = {1, nan_f, NULL, NULL, 1};
+  gs_integrator it;
+  if (make_ok(yaml, &ode, &it)) return;
+  gs_error err = {0};
+  double t = 0, y = 1;
+  CHECK(advance(&it, &ode, &t, 2.0, &y, &err) == GS_ENUMERIC);
+  CHECK(contains(err.msg, it.type->name));
+  gs_integrator_free(&it);
+}
+
+/* GSL has no step floor of its own; min_step is enforced by the wrapper. */
+static void test_rk_min_step(void) {
+  gs_ode ode = {2, stiff_f, NULL, NULL, 2};
+  gs_integrator it;
+  if (make_ok("solver:\n  method: rk\n  min_step: 1e-3\n", &ode, &it)) return;
+  gs_error err = {0};
+  double y[2] = {1, 0}, t = 0;
+  CHECK(advance(&it, &ode, &t, 10.0, y, &err) == GS_ENUMERIC);
+  CHECK(contains(err.msg, "min_step"));
+  gs_integrator_free(&it);
+}
+
 static void test_euler_negative(void) {
   gs_ode ode = {1, drain_f, NULL, NULL, 1};
   gs_integrator it;
@@ -439,6 +470,10 @@ int main(void) {
   test_rhs_failure("solver:\n  method: cvode\n");
   test_rhs_failure("solver:\n  method: euler\n");
   test_euler_negative();
+  test_nan("solver:\n  method: rk\n");
+  test_nan("solver:\n  method: cvode\n");
+  test_nan("solver:\n  method: euler\n");
+  test_rk_min_step();
   test_max_steps("rk");
   test_max_steps("cvode");
   test_max_steps("euler");

@@ -13,7 +13,8 @@
  *   /summary/<column>              (ntimes, ncomp) every summary.csv column
  *   /ledger                        (ntimes, ncomp, 2*dim) external and lost volume per axis
  *   /case  attribute "text": the case file as read; attribute "file": its name
- *   attributes on /: gransim_version, status ("complete")
+ *   attributes on /: gransim_version, status ("complete"), ntimes (output
+ *   times completely written: the commit mark a resume trusts)
  * The datasets are extendible along time and flushed after every write.
  *
  * summary.csv: one row per output time and compartment:

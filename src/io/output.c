@@ -1,15 +1,22 @@
 /* Result files: DIR/result.h5 and DIR/summary.csv (see include/gransim/output.h).
  *
  * Crash safety.  Everything is written under the partial names and renamed
- * only by gs_output_finish(ok = 1).  Without SWMR, HDF5 writes dirty metadata
- * and chunks to disk in no particular order, so no dataset's length can serve
- * as a commit mark (a killed run was seen to leave /time one row longer than
- * /ledger, or with rows whose data never reached the disk).  Hence a two-phase
- * commit: gs_output_write writes every dataset, flushes, and only then sets the
- * root attribute "ntimes" (complete output times) and flushes again.  Resume
- * trusts "ntimes" and drops any rows beyond it.  The CSV is written after the
- * HDF5 commit and resume regenerates it from /summary, so it always agrees
- * with result.h5. */
+ * only by gs_output_finish(ok = 1).  Three rules keep a killed run resumable:
+ *
+ * 1. Two-phase commit.  Without SWMR, HDF5 writes dirty metadata and chunks in
+ *    no particular order, so no dataset's length can mark what is complete (a
+ *    killed run was seen to leave /time longer than /ledger, or rows whose data
+ *    never reached the disk).  gs_output_write writes every dataset, flushes,
+ *    and only then raises the root attribute "ntimes" and flushes again.
+ * 2. A killed file is never modified.  Its uncommitted rows may point at file
+ *    space beyond the end recorded in the superblock; freeing or rewriting them
+ *    fails ("addr overflow").  Resume therefore opens the old partial read-only,
+ *    copies the committed rows into a fresh file and renames that over it.
+ * 3. The skeleton (grid, case, empty datasets) is built under DIR/.result.h5.new
+ *    and renamed to .result.h5.partial only once complete, so a run killed
+ *    while opening leaves nothing that looks resumable.
+ * The CSV is written after each HDF5 commit and regenerated from /summary on
+ * resume, so it always agrees with result.h5. */
 #include "gransim/output.h"
 
 #include <errno.h>
@@ -27,50 +34,62 @@
 #endif
 
 #define H5_PARTIAL ".result.h5.partial"
+#define H5_NEW ".result.h5.new"
 #define CSV_PARTIAL ".summary.csv.partial"
-#define NCOL_FIXED 8                             /* time .. d90 */
-#define NCOL_MAX (NCOL_FIXED + 2 * GS_MAX_DIM)   /* + mean_<axis>, total_<axis> */
-#define RANK_MAX (2 + GS_MAX_DIM)                /* /number: time, comp, axes */
-#define CHUNK_ROWS 64                            /* time rows per chunk of the small series */
-#define CSV_BLOCK 65536                          /* values per column read when rebuilding the CSV */
+#define NCOL_FIXED 8                           /* time .. d90 */
+#define NCOL_MAX (NCOL_FIXED + 2 * GS_MAX_DIM) /* + mean_<axis>, total_<axis> */
+#define NSERIES_MAX (3 + NCOL_MAX)             /* /time, /number, /ledger, /summary/<col> */
+#define RANK_MAX (2 + GS_MAX_DIM)              /* /number: time, comp, axes */
+#define CHUNK_ROWS 64                          /* time rows per chunk of the small series */
+#define BLOCK_VALUES 65536                     /* doubles per read when copying or rebuilding */
+
+enum { S_TIME, S_NUMBER, S_LEDGER, S_SUMMARY };
 
 struct gs_output {
-  char *dir, *h5_tmp, *h5_final, *csv_tmp, *csv_final;
-  hid_t file, d_time, d_number, d_ledger;
-  hid_t d_sum[NCOL_MAX];
-  char colname[NCOL_MAX][GS_NAME_LEN + 8];
-  int ncol;
+  char *dir, *h5_new, *h5_tmp, *h5_final, *csv_tmp, *csv_final;
+  const char *h5_path; /* the name the open HDF5 file has now, for messages */
+  int published;       /* the open file is .result.h5.partial (no longer .new) */
+  hid_t file;
+  int nseries, ncol;
+  hid_t ds[NSERIES_MAX];
+  char sname[NSERIES_MAX][GS_NAME_LEN + 24]; /* "/summary/total_<axis>" */
+  int rank[NSERIES_MAX];
+  hsize_t rest[NSERIES_MAX][RANK_MAX - 1]; /* dimensions after time */
+  size_t rowlen[NSERIES_MAX];              /* values per time row */
   FILE *csv;
-  int created;     /* the partial files are ours to delete if open fails */
-  hsize_t ntimes;  /* complete output times in the file */
-  size_t ncomp, nstate, nledger;
-  double *sbuf;    /* ncol * ncomp: one output time of every summary column */
+  hsize_t ntimes; /* committed output times */
+  size_t ncomp, nstate;
+  double *sbuf; /* ncol * ncomp: one output time of every summary column */
 };
+
+static const char *colname(const gs_output *o, int c) {
+  return o->sname[S_SUMMARY + c] + strlen("/summary/");
+}
 
 /* ---- paths and directories ------------------------------------------------ */
 
 static char *path_join(const char *dir, const char *name, gs_error *err) {
   size_t n = strlen(dir) + strlen(name) + 2;
   char *p = gs_malloc(n, err);
-  if (p) snprintf(p, n, "%s/%s", dir, name);
+  if (p) snprintf(p, n, "%s%s%s", dir, *name ? "/" : "", name);
   return p;
 }
 
 /* mkdir -p: create every missing component, then insist on a directory. */
 static int mkdir_p(const char *dir, gs_error *err) {
-  char *p = gs_malloc(strlen(dir) + 1, err);
+  char *p = path_join(dir, "", err);
   if (!p) return GS_ENOMEM;
-  strcpy(p, dir);
   for (char *s = p + 1; *s; s++) {
     if (*s != '/') continue;
     *s = '\0';
     if (mkdir(p, 0777) && errno != EEXIST) break; /* the final check reports it */
     *s = '/';
   }
+  free(p);
   int rc = mkdir(dir, 0777) && errno != EEXIST ? errno : 0;
   struct stat st;
-  if (!rc && (stat(dir, &st) || !S_ISDIR(st.st_mode))) rc = errno ? errno : ENOTDIR;
-  free(p);
+  if (!rc && stat(dir, &st)) rc = errno;
+  if (!rc && !S_ISDIR(st.st_mode)) rc = ENOTDIR;
   if (rc)
     return gs_error_set(err, GS_EIO, "cannot create output directory %s: %s", dir, strerror(rc));
   return GS_OK;
@@ -78,8 +97,8 @@ static int mkdir_p(const char *dir, gs_error *err) {
 
 /* ---- HDF5 error reporting ------------------------------------------------- */
 
-/* Innermost HDF5 error description (the one nearest the cause, e.g. the
- * operating-system message), captured before another API call clears it. */
+/* Innermost HDF5 error description (nearest the cause, e.g. the system's
+ * message), captured before the next API call clears the stack. */
 static herr_t h5_walk_first(unsigned n, const H5E_error2_t *e, void *data) {
   if (n == 0 && e->desc) snprintf((char *)data, 512, "%s", e->desc);
   return 0;
@@ -98,8 +117,8 @@ static int h5_error(gs_error *err, const char *path, const char *fmt, ...) {
   return gs_error_set(err, GS_EIO, "cannot %s in %s%s%s", what, path, *detail ? ": " : "", detail);
 }
 
-/* The library reports through gs_error; HDF5's own stack dump on stderr would
- * only duplicate (and precede) our message. */
+/* Errors are reported through gs_error; HDF5's own stack dump on stderr would
+ * only duplicate (and precede) the message. */
 static void h5_quiet(void) { H5Eset_auto2(H5E_DEFAULT, NULL, NULL); }
 
 /* ---- attributes ----------------------------------------------------------- */
@@ -120,6 +139,24 @@ static herr_t set_str_attr(hid_t loc, const char *name, const char *value) {
   if (space >= 0) H5Sclose(space);
   H5Tclose(type);
   return st;
+}
+
+/* Reads a fixed-length string attribute into a new string (free it). */
+static char *get_str_attr(hid_t loc, const char *name) {
+  hid_t attr = H5Aopen(loc, name, H5P_DEFAULT);
+  if (attr < 0) return NULL;
+  hid_t type = H5Aget_type(attr);
+  size_t size = type >= 0 && H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) == 0
+                    ? H5Tget_size(type)
+                    : 0;
+  char *s = size ? calloc(size + 1, 1) : NULL;
+  if (s && H5Aread(attr, type, s) < 0) {
+    free(s);
+    s = NULL;
+  }
+  if (type >= 0) H5Tclose(type);
+  H5Aclose(attr);
+  return s;
 }
 
 static herr_t set_i64_attr(hid_t loc, const char *name, long long value) {
@@ -150,26 +187,7 @@ static herr_t get_i64_attr(hid_t loc, const char *name, long long *value) {
   return st;
 }
 
-/* Reads a string attribute of any fixed length into buf (truncated to n). */
-static herr_t get_str_attr(hid_t loc, const char *name, char *buf, size_t n) {
-  hid_t attr = H5Aopen(loc, name, H5P_DEFAULT);
-  if (attr < 0) return -1;
-  hid_t ftype = H5Aget_type(attr), mtype = H5I_INVALID_HID;
-  herr_t st = -1;
-  size_t size = ftype >= 0 ? H5Tget_size(ftype) : 0;
-  char *tmp = size && H5Tis_variable_str(ftype) == 0 ? calloc(size + 1, 1) : NULL;
-  if (tmp && (mtype = H5Tcopy(ftype)) >= 0 && H5Aread(attr, mtype, tmp) >= 0) {
-    snprintf(buf, n, "%s", tmp);
-    st = 0;
-  }
-  if (mtype >= 0) H5Tclose(mtype);
-  if (ftype >= 0) H5Tclose(ftype);
-  free(tmp);
-  if (H5Aclose(attr) < 0) st = -1;
-  return st;
-}
-
-/* ---- grid, case and summary-column descriptions -------------------------- */
+/* ---- description of the datasets ------------------------------------------- */
 
 /* Axis names become HDF5 group names and CSV column names. */
 static int check_axis_names(const gs_grid *g, gs_error *err) {
@@ -189,17 +207,38 @@ static void join_axis_names(const gs_grid *g, char *buf, size_t n) {
     len += (size_t)snprintf(buf + len, n - len, "%s%s", k ? "," : "", g->axis[k].name);
 }
 
-static void set_columns(gs_output *o, const gs_grid *g) {
+static void set_series(gs_output *o, int i, const char *name, int rank, const hsize_t *rest) {
+  snprintf(o->sname[i], sizeof o->sname[i], "%s", name);
+  o->rank[i] = rank;
+  o->rowlen[i] = 1;
+  for (int r = 0; r + 1 < rank; r++) {
+    o->rest[i][r] = rest[r];
+    o->rowlen[i] *= (size_t)rest[r];
+  }
+}
+
+/* Names and shapes of every time series, summary columns in CSV order. */
+static void describe_series(gs_output *o, const gs_grid *g) {
   static const char *fixed[NCOL_FIXED] = {"time", "compartment", "M0", "M1",
                                           "M2",   "d10",         "d50", "d90"};
-  size_t len = sizeof o->colname[0];
-  for (int c = 0; c < NCOL_FIXED; c++) snprintf(o->colname[c], len, "%s", fixed[c]);
-  for (int k = 0; k < g->dim; k++) {
-    snprintf(o->colname[NCOL_FIXED + k], len, "mean_%s", g->axis[k].name);
-    snprintf(o->colname[NCOL_FIXED + g->dim + k], len, "total_%s", g->axis[k].name);
-  }
+  hsize_t rest[RANK_MAX - 1] = {g->ncomp}, lrest[2] = {g->ncomp, 2 * (hsize_t)g->dim};
+  for (int k = 0; k < g->dim; k++) rest[1 + k] = g->axis[k].n;
+  set_series(o, S_TIME, "/time", 1, rest);
+  set_series(o, S_NUMBER, "/number", 2 + g->dim, rest);
+  set_series(o, S_LEDGER, "/ledger", 3, lrest);
+  char name[sizeof o->sname[0]];
   o->ncol = NCOL_FIXED + 2 * g->dim;
+  for (int c = 0; c < o->ncol; c++) {
+    if (c < NCOL_FIXED) snprintf(name, sizeof name, "/summary/%s", fixed[c]);
+    else if (c < NCOL_FIXED + g->dim)
+      snprintf(name, sizeof name, "/summary/mean_%s", g->axis[c - NCOL_FIXED].name);
+    else snprintf(name, sizeof name, "/summary/total_%s", g->axis[c - NCOL_FIXED - g->dim].name);
+    set_series(o, S_SUMMARY + c, name, 2, rest);
+  }
+  o->nseries = S_SUMMARY + o->ncol;
 }
+
+/* ---- writing the skeleton: grid, case, empty series ----------------------- */
 
 static herr_t write_vector(hid_t loc, const char *name, const double *v, size_t n) {
   hsize_t dims = n;
@@ -214,11 +253,11 @@ static herr_t write_vector(hid_t loc, const char *name, const double *v, size_t 
 
 static int write_axis(gs_output *o, hid_t grid, const gs_axis *ax, gs_error *err) {
   hid_t g = H5Gcreate2(grid, ax->name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  if (g < 0) return h5_error(err, o->h5_tmp, "create group /grid/%s", ax->name);
+  if (g < 0) return h5_error(err, o->h5_path, "create group /grid/%s", ax->name);
   herr_t st = write_vector(g, "edges", ax->edges, ax->n + 1);
   if (st >= 0) st = write_vector(g, "pivots", ax->pivots, ax->n);
-  int rc = st < 0 ? h5_error(err, o->h5_tmp, "write /grid/%s/edges and pivots", ax->name) : GS_OK;
-  if (H5Gclose(g) < 0 && !rc) rc = h5_error(err, o->h5_tmp, "close group /grid/%s", ax->name);
+  int rc = st < 0 ? h5_error(err, o->h5_path, "write /grid/%s/edges and pivots", ax->name) : GS_OK;
+  if (H5Gclose(g) < 0 && !rc) rc = h5_error(err, o->h5_path, "close group /grid/%s", ax->name);
   return rc;
 }
 
@@ -226,32 +265,31 @@ static int write_grid(gs_output *o, const gs_grid *g, gs_error *err) {
   char names[GS_MAX_DIM * GS_NAME_LEN + 8];
   join_axis_names(g, names, sizeof names);
   hid_t grid = H5Gcreate2(o->file, "grid", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  if (grid < 0) return h5_error(err, o->h5_tmp, "create group /grid");
+  if (grid < 0) return h5_error(err, o->h5_path, "create group /grid");
   int rc = GS_OK;
-  if (set_i64_attr(grid, "dim", g->dim) < 0 || set_i64_attr(grid, "ncomp", (long long)g->ncomp) < 0 ||
+  if (set_i64_attr(grid, "dim", g->dim) < 0 ||
+      set_i64_attr(grid, "ncomp", (long long)g->ncomp) < 0 ||
       set_i64_attr(grid, "ncells", (long long)g->ncells) < 0 ||
       set_str_attr(grid, "axis_names", names) < 0)
-    rc = h5_error(err, o->h5_tmp, "write the attributes of /grid");
+    rc = h5_error(err, o->h5_path, "write the attributes of /grid");
   for (int k = 0; k < g->dim && !rc; k++) rc = write_axis(o, grid, &g->axis[k], err);
-  if (H5Gclose(grid) < 0 && !rc) rc = h5_error(err, o->h5_tmp, "close group /grid");
+  if (H5Gclose(grid) < 0 && !rc) rc = h5_error(err, o->h5_path, "close group /grid");
   return rc;
 }
 
 static int write_case(gs_output *o, const char *text, const char *name, gs_error *err) {
   hid_t c = H5Gcreate2(o->file, "case", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  if (c < 0) return h5_error(err, o->h5_tmp, "create group /case");
+  if (c < 0) return h5_error(err, o->h5_path, "create group /case");
   int rc = GS_OK;
   if (set_str_attr(c, "text", text ? text : "") < 0 || set_str_attr(c, "file", name ? name : "") < 0)
-    rc = h5_error(err, o->h5_tmp, "write the attributes text and file of /case");
-  if (H5Gclose(c) < 0 && !rc) rc = h5_error(err, o->h5_tmp, "close group /case");
+    rc = h5_error(err, o->h5_path, "write the attributes text and file of /case");
+  if (H5Gclose(c) < 0 && !rc) rc = h5_error(err, o->h5_path, "close group /case");
   if (!rc && (set_str_attr(o->file, "gransim_version", GRANSIM_VERSION) < 0 ||
               set_str_attr(o->file, "status", "running") < 0 ||
               set_i64_attr(o->file, "ntimes", 0) < 0))
-    rc = h5_error(err, o->h5_tmp, "write the attributes gransim_version, status, ntimes of /");
+    rc = h5_error(err, o->h5_path, "write the attributes gransim_version, status, ntimes of /");
   return rc;
 }
-
-/* ---- time series datasets -------------------------------------------------- */
 
 /* gzip only where this HDF5 build can actually encode it. */
 static int deflate_usable(void) {
@@ -261,47 +299,35 @@ static int deflate_usable(void) {
          (info & H5Z_FILTER_CONFIG_ENCODE_ENABLED);
 }
 
-/* Creates an empty float64 dataset (0, rest...) extendible along time. */
-static hid_t create_series(gs_output *o, hid_t loc, const char *name, int rank, const hsize_t *rest,
-                           hsize_t chunk_rows, int compress) {
-  hsize_t dims[RANK_MAX] = {0}, maxdims[RANK_MAX] = {H5S_UNLIMITED}, chunk[RANK_MAX] = {chunk_rows};
-  for (int i = 1; i < rank; i++) dims[i] = maxdims[i] = chunk[i] = rest[i - 1];
-  hid_t space = H5Screate_simple(rank, dims, maxdims), d = H5I_INVALID_HID;
+/* Empty float64 series i, extendible along time.  /number is chunked by
+ * single output times (what a reader usually wants), the rest by 64 rows. */
+static int create_series(gs_output *o, int i, gs_error *err) {
+  int rank = o->rank[i];
+  hsize_t dims[RANK_MAX] = {0}, maxdims[RANK_MAX] = {H5S_UNLIMITED}, chunk[RANK_MAX];
+  chunk[0] = i == S_NUMBER ? 1 : i == S_TIME ? 4 * CHUNK_ROWS : CHUNK_ROWS;
+  for (int r = 1; r < rank; r++) dims[r] = maxdims[r] = chunk[r] = o->rest[i][r - 1];
+  hid_t space = H5Screate_simple(rank, dims, maxdims);
   hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
   if (space >= 0 && dcpl >= 0 && H5Pset_chunk(dcpl, rank, chunk) >= 0 &&
-      (!compress || H5Pset_deflate(dcpl, 1) >= 0))
-    d = H5Dcreate2(loc, name, H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+      (i != S_NUMBER || !deflate_usable() || H5Pset_deflate(dcpl, 1) >= 0))
+    o->ds[i] = H5Dcreate2(o->file, o->sname[i], H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl,
+                          H5P_DEFAULT);
   if (dcpl >= 0) H5Pclose(dcpl);
   if (space >= 0) H5Sclose(space);
-  (void)o;
-  return d;
+  return o->ds[i] < 0 ? h5_error(err, o->h5_path, "create dataset %s", o->sname[i]) : GS_OK;
 }
 
-static int create_all_series(gs_output *o, const gs_grid *g, gs_error *err) {
-  hsize_t rest[RANK_MAX] = {g->ncomp};
-  for (int k = 0; k < g->dim; k++) rest[1 + k] = g->axis[k].n;
-  o->d_time = create_series(o, o->file, "time", 1, rest, 4 * CHUNK_ROWS, 0);
-  if (o->d_time < 0) return h5_error(err, o->h5_tmp, "create dataset /time");
-  o->d_number = create_series(o, o->file, "number", 2 + g->dim, rest, 1, deflate_usable());
-  if (o->d_number < 0) return h5_error(err, o->h5_tmp, "create dataset /number");
-  hsize_t lrest[2] = {g->ncomp, 2 * (hsize_t)g->dim};
-  o->d_ledger = create_series(o, o->file, "ledger", 3, lrest, CHUNK_ROWS, 0);
-  if (o->d_ledger < 0) return h5_error(err, o->h5_tmp, "create dataset /ledger");
+static int create_all_series(gs_output *o, gs_error *err) {
   hid_t sg = H5Gcreate2(o->file, "summary", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  if (sg < 0) return h5_error(err, o->h5_tmp, "create group /summary");
-  for (int c = 0; c < o->ncol; c++) {
-    o->d_sum[c] = create_series(o, sg, o->colname[c], 2, rest, CHUNK_ROWS, 0);
-    if (o->d_sum[c] < 0) {
-      H5Gclose(sg);
-      return h5_error(err, o->h5_tmp, "create dataset /summary/%s", o->colname[c]);
-    }
-  }
-  if (H5Gclose(sg) < 0) return h5_error(err, o->h5_tmp, "close group /summary");
-  return GS_OK;
+  if (sg < 0 || H5Gclose(sg) < 0) return h5_error(err, o->h5_path, "create group /summary");
+  int rc = GS_OK;
+  for (int i = 0; i < o->nseries && !rc; i++) rc = create_series(o, i, err);
+  return rc;
 }
 
-/* Selects rows [start, start+count) of d in *fs and a matching flat memory
- * space in *ms; also returns the full extent in dims. */
+/* ---- rows of the time series ------------------------------------------------ */
+
+/* Selects rows [start, start+count) of d in *fs and a flat memory space *ms. */
 static herr_t select_rows(hid_t d, hsize_t start, hsize_t count, hid_t *fs, hid_t *ms) {
   hsize_t dims[RANK_MAX], off[RANK_MAX] = {start}, cnt[RANK_MAX];
   *ms = H5I_INVALID_HID;
@@ -311,10 +337,10 @@ static herr_t select_rows(hid_t d, hsize_t start, hsize_t count, hid_t *fs, hid_
   if (start + count > dims[0]) return -1;
   hsize_t n = count;
   cnt[0] = count;
-  for (int i = 1; i < rank; i++) {
-    off[i] = 0;
-    cnt[i] = dims[i];
-    n *= dims[i];
+  for (int r = 1; r < rank; r++) {
+    off[r] = 0;
+    cnt[r] = dims[r];
+    n *= dims[r];
   }
   if (H5Sselect_hyperslab(*fs, H5S_SELECT_SET, off, NULL, cnt, NULL) < 0) return -1;
   *ms = H5Screate_simple(1, &n, NULL);
@@ -326,37 +352,27 @@ static void close_spaces(hid_t fs, hid_t ms) {
   if (ms >= 0) H5Sclose(ms);
 }
 
-/* Sets the time extent of d to n rows (grows or drops rows). */
-static herr_t set_rows(hid_t d, hsize_t n) {
-  hsize_t dims[RANK_MAX];
-  hid_t fs = H5Dget_space(d);
-  int rank = fs >= 0 ? H5Sget_simple_extent_ndims(fs) : -1;
-  herr_t st = rank >= 1 && rank <= RANK_MAX ? H5Sget_simple_extent_dims(fs, dims, NULL) : -1;
-  if (fs >= 0) H5Sclose(fs);
-  if (st < 0) return -1;
-  dims[0] = n;
-  return H5Dset_extent(d, dims);
+/* Writes rows [start, start+count) of series i and makes it exactly that
+ * long, so rows left over from an earlier failed write are dropped. */
+static int write_rows(gs_output *o, int i, hsize_t start, hsize_t count, const double *buf,
+                      gs_error *err) {
+  hsize_t dims[RANK_MAX] = {start + count};
+  for (int r = 1; r < o->rank[i]; r++) dims[r] = o->rest[i][r - 1];
+  hid_t fs = H5I_INVALID_HID, ms = H5I_INVALID_HID;
+  herr_t st = H5Dset_extent(o->ds[i], dims);
+  if (st >= 0) st = select_rows(o->ds[i], start, count, &fs, &ms);
+  if (st >= 0) st = H5Dwrite(o->ds[i], H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, buf);
+  close_spaces(fs, ms);
+  return st < 0 ? h5_error(err, o->h5_path, "write dataset %s", o->sname[i]) : GS_OK;
 }
 
-/* Writes row `row` of d, making it exactly row+1 long: a row torn by an
- * earlier failed write is simply overwritten. */
-static int write_row(gs_output *o, hid_t d, const char *name, hsize_t row, const double *buf,
+static int read_rows(gs_output *o, int i, hsize_t start, hsize_t count, double *buf,
                      gs_error *err) {
   hid_t fs = H5I_INVALID_HID, ms = H5I_INVALID_HID;
-  herr_t st = set_rows(d, row + 1);
-  if (st >= 0) st = select_rows(d, row, 1, &fs, &ms);
-  if (st >= 0) st = H5Dwrite(d, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, buf);
+  herr_t st = select_rows(o->ds[i], start, count, &fs, &ms);
+  if (st >= 0) st = H5Dread(o->ds[i], H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, buf);
   close_spaces(fs, ms);
-  return st < 0 ? h5_error(err, o->h5_tmp, "write dataset %s", name) : GS_OK;
-}
-
-static int read_rows(gs_output *o, hid_t d, const char *name, hsize_t start, hsize_t count,
-                     double *buf, gs_error *err) {
-  hid_t fs = H5I_INVALID_HID, ms = H5I_INVALID_HID;
-  herr_t st = select_rows(d, start, count, &fs, &ms);
-  if (st >= 0) st = H5Dread(d, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, buf);
-  close_spaces(fs, ms);
-  return st < 0 ? h5_error(err, o->h5_tmp, "read dataset %s", name) : GS_OK;
+  return st < 0 ? h5_error(err, o->h5_path, "read dataset %s", o->sname[i]) : GS_OK;
 }
 
 /* ---- summary.csv ------------------------------------------------------------ */
@@ -367,13 +383,12 @@ static int csv_error(gs_output *o, gs_error *err) {
 
 static int csv_header(gs_output *o, gs_error *err) {
   for (int c = 0; c < o->ncol; c++)
-    if (fprintf(o->csv, "%s%s", c ? "," : "", o->colname[c]) < 0) return csv_error(o, err);
-  if (fputc('\n', o->csv) == EOF) return csv_error(o, err);
-  return GS_OK;
+    if (fprintf(o->csv, "%s%s", c ? "," : "", colname(o, c)) < 0) return csv_error(o, err);
+  return fputc('\n', o->csv) == EOF ? csv_error(o, err) : GS_OK;
 }
 
-/* One row per compartment from sbuf laid out as [column][comp] with
- * column stride `stride` (ncomp for one time, more for a block). */
+/* One row per compartment; value of column c, compartment j is
+ * sbuf[c * stride + first + j]. */
 static int csv_rows(gs_output *o, const double *sbuf, size_t stride, size_t first, gs_error *err) {
   for (size_t j = 0; j < o->ncomp; j++) {
     for (int c = 0; c < o->ncol; c++)
@@ -388,11 +403,19 @@ static int csv_flush(gs_output *o, gs_error *err) {
   return fflush(o->csv) ? csv_error(o, err) : GS_OK;
 }
 
+static int csv_create(gs_output *o, gs_error *err) {
+  o->csv = fopen(o->csv_tmp, "w");
+  if (!o->csv) return gs_error_set(err, GS_EIO, "cannot create %s: %s", o->csv_tmp, strerror(errno));
+  int rc = csv_header(o, err);
+  return rc ? rc : csv_flush(o, err);
+}
+
 /* ---- construction and teardown --------------------------------------------- */
 
 static void output_free(gs_output *o) {
   if (!o) return;
   free(o->dir);
+  free(o->h5_new);
   free(o->h5_tmp);
   free(o->h5_final);
   free(o->csv_tmp);
@@ -406,87 +429,93 @@ static gs_output *output_alloc(const char *dir, const gs_model *m, gs_error *err
   if (check_axis_names(g, err)) return NULL;
   gs_output *o = gs_calloc(1, sizeof *o, err);
   if (!o) return NULL;
-  o->file = o->d_time = o->d_number = o->d_ledger = H5I_INVALID_HID;
-  for (int c = 0; c < NCOL_MAX; c++) o->d_sum[c] = H5I_INVALID_HID;
+  o->file = H5I_INVALID_HID;
+  for (int i = 0; i < NSERIES_MAX; i++) o->ds[i] = H5I_INVALID_HID;
   o->ncomp = g->ncomp;
   o->nstate = g->ncomp * g->ncells;
-  o->nledger = g->ncomp * 2 * (size_t)g->dim;
-  set_columns(o, g);
-  o->dir = gs_malloc(strlen(dir) + 1, err);
-  if (o->dir) strcpy(o->dir, dir);
+  describe_series(o, g);
+  o->dir = path_join(dir, "", err);
+  o->h5_new = path_join(dir, H5_NEW, err);
   o->h5_tmp = path_join(dir, H5_PARTIAL, err);
   o->h5_final = path_join(dir, "result.h5", err);
   o->csv_tmp = path_join(dir, CSV_PARTIAL, err);
   o->csv_final = path_join(dir, "summary.csv", err);
   o->sbuf = gs_malloc((size_t)o->ncol * g->ncomp * sizeof(double), err);
-  if (!o->dir || !o->h5_tmp || !o->h5_final || !o->csv_tmp || !o->csv_final || !o->sbuf) {
+  if (!o->dir || !o->h5_new || !o->h5_tmp || !o->h5_final || !o->csv_tmp || !o->csv_final ||
+      !o->sbuf) {
     output_free(o);
     return NULL;
   }
+  o->h5_path = o->h5_tmp;
   return o;
-}
-
-static herr_t close_id(hid_t *id, herr_t (*fn)(hid_t)) {
-  herr_t st = *id >= 0 ? fn(*id) : 0;
-  *id = H5I_INVALID_HID;
-  return st;
 }
 
 /* Closes every handle; reports the first failure. */
 static int output_close(gs_output *o, gs_error *err) {
-  herr_t st = close_id(&o->d_time, H5Dclose);
-  if (close_id(&o->d_number, H5Dclose) < 0) st = -1;
-  if (close_id(&o->d_ledger, H5Dclose) < 0) st = -1;
-  for (int c = 0; c < NCOL_MAX; c++)
-    if (close_id(&o->d_sum[c], H5Dclose) < 0) st = -1;
-  int rc = GS_OK;
-  if (st < 0) rc = h5_error(err, o->h5_tmp, "close the datasets");
-  if (close_id(&o->file, H5Fclose) < 0 && !rc) rc = h5_error(err, o->h5_tmp, "close the file");
+  int failed = 0;
+  for (int i = 0; i < NSERIES_MAX; i++) {
+    if (o->ds[i] >= 0 && H5Dclose(o->ds[i]) < 0) failed = 1;
+    o->ds[i] = H5I_INVALID_HID;
+  }
+  int rc = failed ? h5_error(err, o->h5_path, "close the datasets") : GS_OK;
+  if (o->file >= 0 && H5Fclose(o->file) < 0 && !rc)
+    rc = h5_error(err, o->h5_path, "close the file");
+  o->file = H5I_INVALID_HID;
   if (o->csv && fclose(o->csv) && !rc) rc = csv_error(o, err);
   o->csv = NULL;
   return rc;
 }
 
-/* HDF5 1.8 object formats: readable by every current tool, and they let the
- * case text attribute exceed 64 KiB (dense attribute storage). */
-static hid_t make_fapl(void) {
-  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-  if (fapl >= 0 && H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18) < 0) {
-    H5Pclose(fapl);
-    return H5I_INVALID_HID;
-  }
-  return fapl;
-}
-
-static int flush_h5(gs_output *o, gs_error *err) {
-  return H5Fflush(o->file, H5F_SCOPE_GLOBAL) < 0 ? h5_error(err, o->h5_tmp, "flush the file")
-                                                  : GS_OK;
-}
-
-/* Abandons a half-built output: closes what is open and removes the partials
- * it created (never those of another run that made H5Fcreate fail). */
-static void output_abort(gs_output *o) {
+/* Gives up on an output that failed to open or resume: the half-built .new
+ * file goes, a published partial stays (it holds the run's data). */
+static void output_discard(gs_output *o) {
   output_close(o, NULL);
-  if (o->created) {
-    unlink(o->h5_tmp);
-    unlink(o->csv_tmp);
-  }
+  if (!o->published) unlink(o->h5_new);
   output_free(o);
 }
 
-/* ---- public API --------------------------------------------------------------- */
+/* HDF5 1.8 object formats: readable by every current tool, and they let the
+ * case text attribute exceed 64 KiB (dense attribute storage). */
+static hid_t h5_open(const char *path, int create) {
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), f = H5I_INVALID_HID;
+  if (fapl >= 0 && H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18) >= 0)
+    f = create ? H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)
+               : H5Fopen(path, H5F_ACC_RDONLY, fapl);
+  if (fapl >= 0) H5Pclose(fapl);
+  return f;
+}
 
-static int open_files(gs_output *o, gs_error *err) {
-  hid_t fapl = make_fapl();
-  if (fapl < 0) return h5_error(err, o->h5_tmp, "set up file access properties");
-  o->file = H5Fcreate(o->h5_tmp, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
-  H5Pclose(fapl);
-  if (o->file < 0) return h5_error(err, o->h5_tmp, "create the file");
-  o->created = 1;
-  o->csv = fopen(o->csv_tmp, "w");
-  if (!o->csv) return gs_error_set(err, GS_EIO, "cannot create %s: %s", o->csv_tmp, strerror(errno));
+static int flush_h5(gs_output *o, gs_error *err) {
+  return H5Fflush(o->file, H5F_SCOPE_GLOBAL) < 0 ? h5_error(err, o->h5_path, "flush the file")
+                                                  : GS_OK;
+}
+
+/* Builds grid, case and empty series in DIR/.result.h5.new. */
+static int build_skeleton(gs_output *o, const gs_model *m, const char *text, const char *name,
+                          gs_error *err) {
+  o->h5_path = o->h5_new;
+  o->file = h5_open(o->h5_new, 1);
+  if (o->file < 0) return h5_error(err, o->h5_path, "create the file");
+  int rc = write_grid(o, &m->grid, err);
+  if (!rc) rc = write_case(o, text, name, err);
+  if (!rc) rc = create_all_series(o, err);
+  return rc;
+}
+
+/* Flushes the finished .new file and renames it to .result.h5.partial (the
+ * open handle follows the rename). */
+static int publish(gs_output *o, gs_error *err) {
+  int rc = flush_h5(o, err);
+  if (rc) return rc;
+  if (rename(o->h5_new, o->h5_tmp))
+    return gs_error_set(err, GS_EIO, "cannot rename %s to %s: %s", o->h5_new, o->h5_tmp,
+                        strerror(errno));
+  o->h5_path = o->h5_tmp;
+  o->published = 1;
   return GS_OK;
 }
+
+/* ---- public API: open, write, finish ------------------------------------------ */
 
 gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_text,
                           const char *case_name, gs_error *err) {
@@ -494,15 +523,11 @@ gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_t
   if (mkdir_p(dir, err)) return NULL;
   gs_output *o = output_alloc(dir, m, err);
   if (!o) return NULL;
-  int rc = open_files(o, err);
-  if (!rc) rc = write_grid(o, &m->grid, err);
-  if (!rc) rc = write_case(o, case_text, case_name, err);
-  if (!rc) rc = create_all_series(o, &m->grid, err);
-  if (!rc) rc = csv_header(o, err);
-  if (!rc) rc = csv_flush(o, err);
-  if (!rc) rc = flush_h5(o, err);
+  int rc = build_skeleton(o, m, case_text, case_name, err);
+  if (!rc) rc = csv_create(o, err);
+  if (!rc) rc = publish(o, err);
   if (rc) {
-    output_abort(o);
+    output_discard(o);
     return NULL;
   }
   return o;
@@ -525,21 +550,20 @@ static void summarize_all(gs_output *o, const gs_model *m, double t, const doubl
   }
 }
 
+/* Writes one row of every series, then commits it (see the top of the file). */
 static int write_h5_time(gs_output *o, double t, const double *y, const double *ledger,
                          gs_error *err) {
-  hsize_t row = o->ntimes;
-  int rc = write_row(o, o->d_number, "/number", row, y, err);
-  if (!rc) rc = write_row(o, o->d_ledger, "/ledger", row, ledger, err);
-  for (int c = 0; c < o->ncol && !rc; c++) {
-    char name[64];
-    snprintf(name, sizeof name, "/summary/%s", o->colname[c]);
-    rc = write_row(o, o->d_sum[c], name, row, o->sbuf + (size_t)c * o->ncomp, err);
+  int rc = GS_OK;
+  for (int i = 0; i < o->nseries && !rc; i++) {
+    const double *row = i == S_TIME     ? &t
+                        : i == S_NUMBER ? y
+                        : i == S_LEDGER ? ledger
+                                        : o->sbuf + (size_t)(i - S_SUMMARY) * o->ncomp;
+    rc = write_rows(o, i, o->ntimes, 1, row, err);
   }
-  if (!rc) rc = write_row(o, o->d_time, "/time", row, &t, err);
   if (!rc) rc = flush_h5(o, err);
-  /* commit only once the rows are on disk (see the top of the file) */
-  if (!rc && put_i64_attr(o->file, "ntimes", (long long)row + 1) < 0)
-    rc = h5_error(err, o->h5_tmp, "write the attribute ntimes of /");
+  if (!rc && put_i64_attr(o->file, "ntimes", (long long)o->ntimes + 1) < 0)
+    rc = h5_error(err, o->h5_path, "write the attribute ntimes of /");
   if (!rc) rc = flush_h5(o, err);
   return rc;
 }
@@ -547,7 +571,7 @@ static int write_h5_time(gs_output *o, double t, const double *y, const double *
 int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
                     const double *ledger, gs_error *err) {
   if (m->nstate != o->nstate || m->grid.ncomp != o->ncomp)
-    return gs_error_set(err, GS_EINPUT, "output to %s: model does not match the open result file",
+    return gs_error_set(err, GS_EINPUT, "output to %s: the model does not match the result file",
                         o->dir);
   summarize_all(o, m, t, y);
   int rc = write_h5_time(o, t, y, ledger, err);
@@ -557,32 +581,38 @@ int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
   return rc ? rc : csv_flush(o, err);
 }
 
+static int rename_final(const char *from, const char *to, gs_error *err) {
+  if (!rename(from, to)) return GS_OK;
+  return gs_error_set(err, GS_EIO, "cannot rename %s to %s: %s", from, to, strerror(errno));
+}
+
+static int remove_partial(const char *path, gs_error *err) {
+  if (!unlink(path) || errno == ENOENT) return GS_OK;
+  return gs_error_set(err, GS_EIO, "cannot remove %s: %s", path, strerror(errno));
+}
+
 int gs_output_finish(gs_output *o, int ok, gs_error *err) {
   if (!o) return GS_OK;
   int rc = GS_OK;
   if (ok && set_str_attr(o->file, "status", "complete") < 0)
-    rc = h5_error(err, o->h5_tmp, "write the attribute status of /");
+    rc = h5_error(err, o->h5_path, "write the attribute status of /");
   int crc = output_close(o, rc ? NULL : err);
   if (!rc) rc = crc;
-  if (ok && !rc && rename(o->h5_tmp, o->h5_final))
-    rc = gs_error_set(err, GS_EIO, "cannot rename %s to %s: %s", o->h5_tmp, o->h5_final,
-                      strerror(errno));
-  if (ok && !rc && rename(o->csv_tmp, o->csv_final))
-    rc = gs_error_set(err, GS_EIO, "cannot rename %s to %s: %s", o->csv_tmp, o->csv_final,
-                      strerror(errno));
-  if (ok && rc) /* keep the partial files: the data may still be recoverable */
-    gs_error_prefix(err, "result files left under their partial names in %s: ", o->dir);
-  if (!ok) {
-    if (unlink(o->h5_tmp) && errno != ENOENT)
-      rc = gs_error_set(err, GS_EIO, "cannot remove %s: %s", o->h5_tmp, strerror(errno));
-    if (unlink(o->csv_tmp) && errno != ENOENT && !rc)
-      rc = gs_error_set(err, GS_EIO, "cannot remove %s: %s", o->csv_tmp, strerror(errno));
+  if (ok) {
+    if (!rc) rc = rename_final(o->h5_tmp, o->h5_final, err);
+    if (!rc) rc = rename_final(o->csv_tmp, o->csv_final, err);
+    /* keep the partial files then: the data may still be recoverable */
+    if (rc) gs_error_prefix(err, "result files left under their partial names in %s: ", o->dir);
+  } else {
+    rc = remove_partial(o->h5_tmp, err);
+    int rc2 = remove_partial(o->csv_tmp, rc ? NULL : err);
+    if (!rc) rc = rc2;
   }
   output_free(o);
   return rc;
 }
 
-/* ---- resume -------------------------------------------------------------------- */
+/* ---- resume: checking the old partial ------------------------------------------ */
 
 static int grid_mismatch(gs_output *o, gs_error *err, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
@@ -599,16 +629,23 @@ static int grid_mismatch(gs_output *o, gs_error *err, const char *fmt, ...) {
 /* Edges are computed the same way on every run, so they agree to round-off;
  * the tolerance only absorbs libm differences between builds. */
 static int same_value(double a, double b) {
-  return fabs(a - b) <= 1e-12 * (fabs(a) > fabs(b) ? fabs(a) : fabs(b));
+  return fabs(a - b) <= 1e-12 * fmax(fabs(a), fabs(b));
 }
 
-static herr_t read_vector(hid_t loc, const char *name, double *v, size_t n) {
+/* Number of elements of dataset loc/name, -1 if unreadable. */
+static hssize_t dataset_size(hid_t loc, const char *name) {
+  hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
+  hid_t fs = d >= 0 ? H5Dget_space(d) : H5I_INVALID_HID;
+  hssize_t n = fs >= 0 ? H5Sget_simple_extent_npoints(fs) : -1;
+  if (fs >= 0) H5Sclose(fs);
+  if (d >= 0) H5Dclose(d);
+  return n;
+}
+
+static herr_t read_vector(hid_t loc, const char *name, double *v) {
   hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
   if (d < 0) return -1;
-  hid_t fs = H5Dget_space(d);
-  hssize_t np = fs >= 0 ? H5Sget_simple_extent_npoints(fs) : -1;
-  herr_t st = np == (hssize_t)n ? H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) : -1;
-  if (fs >= 0) H5Sclose(fs);
+  herr_t st = H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v);
   if (H5Dclose(d) < 0) st = -1;
   return st;
 }
@@ -618,19 +655,15 @@ static int check_axis(gs_output *o, hid_t grid, const gs_axis *ax, gs_error *err
   snprintf(dname, sizeof dname, "%s/edges", ax->name);
   if (H5Lexists(grid, ax->name, H5P_DEFAULT) <= 0)
     return grid_mismatch(o, err, "no axis '%s' in the file", ax->name);
-  hid_t d = H5Dopen2(grid, dname, H5P_DEFAULT);
-  hid_t fs = d >= 0 ? H5Dget_space(d) : H5I_INVALID_HID;
-  hssize_t ne = fs >= 0 ? H5Sget_simple_extent_npoints(fs) : -1;
-  if (fs >= 0) H5Sclose(fs);
-  if (d >= 0) H5Dclose(d);
-  if (ne < 2) return h5_error(err, o->h5_tmp, "read dataset /grid/%s", dname);
+  hssize_t ne = dataset_size(grid, dname);
+  if (ne < 2) return h5_error(err, o->h5_path, "read dataset /grid/%s", dname);
   if ((size_t)ne - 1 != ax->n)
     return grid_mismatch(o, err, "axis '%s' has %lld cells, case has %zu", ax->name,
                          (long long)ne - 1, ax->n);
-  double *e = malloc((size_t)ne * sizeof(double));
-  if (!e) return gs_error_set(err, GS_ENOMEM, "out of memory reading /grid/%s", dname);
-  int rc = read_vector(grid, dname, e, (size_t)ne) < 0
-               ? h5_error(err, o->h5_tmp, "read dataset /grid/%s", dname)
+  double *e = gs_malloc((size_t)ne * sizeof(double), err);
+  if (!e) return GS_ENOMEM;
+  int rc = read_vector(grid, dname, e) < 0
+               ? h5_error(err, o->h5_path, "read dataset /grid/%s", dname)
                : GS_OK;
   for (size_t i = 0; i <= ax->n && !rc; i++)
     if (!same_value(e[i], ax->edges[i]))
@@ -642,152 +675,149 @@ static int check_axis(gs_output *o, hid_t grid, const gs_axis *ax, gs_error *err
 
 static int check_grid_attrs(gs_output *o, hid_t grid, const gs_grid *g, gs_error *err) {
   long long dim, ncomp, ncells;
-  char names[GS_MAX_DIM * GS_NAME_LEN + 8], want[GS_MAX_DIM * GS_NAME_LEN + 8];
   if (get_i64_attr(grid, "dim", &dim) < 0 || get_i64_attr(grid, "ncomp", &ncomp) < 0 ||
-      get_i64_attr(grid, "ncells", &ncells) < 0 ||
-      get_str_attr(grid, "axis_names", names, sizeof names) < 0)
-    return h5_error(err, o->h5_tmp, "read the attributes of /grid");
-  join_axis_names(g, want, sizeof want);
+      get_i64_attr(grid, "ncells", &ncells) < 0)
+    return h5_error(err, o->h5_path, "read the attributes of /grid");
   if (dim != g->dim) return grid_mismatch(o, err, "%lld axes, case has %d", dim, g->dim);
-  if (strcmp(names, want))
-    return grid_mismatch(o, err, "axes '%s', case has '%s'", names, want);
-  if (ncomp != (long long)g->ncomp)
-    return grid_mismatch(o, err, "%lld compartments, case has %zu", ncomp, g->ncomp);
-  for (int k = 0; k < g->dim; k++) {
-    int rc = check_axis(o, grid, &g->axis[k], err);
-    if (rc) return rc;
-  }
-  if (ncells != (long long)g->ncells) /* implied by the axes; a damaged file otherwise */
-    return grid_mismatch(o, err, "%lld cells, case has %zu", ncells, g->ncells);
-  return GS_OK;
+  char *names = get_str_attr(grid, "axis_names"), want[GS_MAX_DIM * GS_NAME_LEN + 8];
+  if (!names) return h5_error(err, o->h5_path, "read the attribute axis_names of /grid");
+  join_axis_names(g, want, sizeof want);
+  int rc = strcmp(names, want) ? grid_mismatch(o, err, "axes '%s', case has '%s'", names, want)
+                               : GS_OK;
+  free(names);
+  if (!rc && ncomp != (long long)g->ncomp)
+    rc = grid_mismatch(o, err, "%lld compartments, case has %zu", ncomp, g->ncomp);
+  for (int k = 0; k < g->dim && !rc; k++) rc = check_axis(o, grid, &g->axis[k], err);
+  if (!rc && ncells != (long long)g->ncells) /* implied by the axes: a damaged file */
+    rc = grid_mismatch(o, err, "%lld cells, case has %zu", ncells, g->ncells);
+  return rc;
 }
 
 static int check_grid(gs_output *o, const gs_grid *g, gs_error *err) {
   hid_t grid = H5Gopen2(o->file, "grid", H5P_DEFAULT);
-  if (grid < 0) return h5_error(err, o->h5_tmp, "open group /grid");
+  if (grid < 0) return h5_error(err, o->h5_path, "open group /grid");
   int rc = check_grid_attrs(o, grid, g, err);
   H5Gclose(grid);
   return rc;
 }
 
-/* Opens an existing series and checks its shape past the time axis, so a
- * damaged file cannot make us read into too small a buffer. */
-static hid_t open_series(gs_output *o, const char *name, int rank, const hsize_t *rest,
-                         hsize_t *rows, gs_error *err) {
+/* Opens series i of the old file and checks its shape (so a damaged file
+ * cannot overrun a buffer) and that it holds every committed row. */
+static int open_series(gs_output *o, int i, gs_error *err) {
   hsize_t dims[RANK_MAX];
-  hid_t d = H5Dopen2(o->file, name, H5P_DEFAULT);
-  hid_t fs = d >= 0 ? H5Dget_space(d) : H5I_INVALID_HID;
-  int ok = fs >= 0 && H5Sget_simple_extent_ndims(fs) == rank &&
+  o->ds[i] = H5Dopen2(o->file, o->sname[i], H5P_DEFAULT);
+  hid_t fs = o->ds[i] >= 0 ? H5Dget_space(o->ds[i]) : H5I_INVALID_HID;
+  int ok = fs >= 0 && H5Sget_simple_extent_ndims(fs) == o->rank[i] &&
            H5Sget_simple_extent_dims(fs, dims, NULL) >= 0;
-  for (int i = 1; ok && i < rank; i++) ok = dims[i] == rest[i - 1];
+  for (int r = 1; ok && r < o->rank[i]; r++) ok = dims[r] == o->rest[i][r - 1];
   if (fs >= 0) H5Sclose(fs);
-  if (!ok) {
-    if (d >= 0) H5Dclose(d);
-    h5_error(err, o->h5_tmp, "open dataset %s with the expected shape", name);
-    return H5I_INVALID_HID;
-  }
-  *rows = dims[0];
-  return d;
-}
-
-/* Opens all series; each must hold at least the committed "ntimes" rows, and
- * rows beyond it (a write the kill interrupted) are dropped. */
-static int open_all_series(gs_output *o, const gs_grid *g, gs_error *err) {
-  hsize_t rest[RANK_MAX] = {g->ncomp}, lrest[2] = {g->ncomp, 2 * (hsize_t)g->dim}, rows;
-  for (int k = 0; k < g->dim; k++) rest[1 + k] = g->axis[k].n;
-  hid_t *ds[NCOL_MAX + 3] = {&o->d_time, &o->d_number, &o->d_ledger};
-  char names[NCOL_MAX + 3][64] = {"/time", "/number", "/ledger"};
-  int ranks[NCOL_MAX + 3] = {1, 2 + g->dim, 3};
-  const hsize_t *rests[NCOL_MAX + 3] = {rest, rest, lrest};
-  for (int c = 0; c < o->ncol; c++) {
-    ds[3 + c] = &o->d_sum[c];
-    snprintf(names[3 + c], sizeof names[0], "/summary/%s", o->colname[c]);
-    ranks[3 + c] = 2;
-    rests[3 + c] = rest;
-  }
-  for (int i = 0; i < o->ncol + 3; i++) {
-    if ((*ds[i] = open_series(o, names[i], ranks[i], rests[i], &rows, err)) < 0) return GS_EIO;
-    if (rows < o->ntimes)
-      return gs_error_set(err, GS_EIO,
-                          "cannot resume from %s: %s has %llu rows but %llu were committed",
-                          o->h5_tmp, names[i], (unsigned long long)rows,
-                          (unsigned long long)o->ntimes);
-    if (rows > o->ntimes && set_rows(*ds[i], o->ntimes) < 0)
-      return h5_error(err, o->h5_tmp, "drop the uncommitted rows of %s", names[i]);
-  }
+  if (!ok) return h5_error(err, o->h5_path, "open dataset %s with the expected shape", o->sname[i]);
+  if (dims[0] < o->ntimes)
+    return gs_error_set(err, GS_EIO, "cannot resume from %s: %s has %llu rows, %llu committed",
+                        o->h5_path, o->sname[i], (unsigned long long)dims[0],
+                        (unsigned long long)o->ntimes);
   return GS_OK;
 }
 
-static int read_committed(gs_output *o, gs_error *err) {
+/* Opens the interrupted run's partial read-only and validates it. */
+static int open_old(gs_output *old, const gs_model *m, gs_error *err) {
+  if (access(old->h5_tmp, F_OK))
+    return gs_error_set(err, GS_EIO, "nothing to resume in %s (no %s)", old->dir, H5_PARTIAL);
+  old->file = h5_open(old->h5_tmp, 0);
+  if (old->file < 0) return h5_error(err, old->h5_path, "open the file for resuming");
   long long n;
-  if (get_i64_attr(o->file, "ntimes", &n) < 0 || n < 0)
-    return h5_error(err, o->h5_tmp, "read the attribute ntimes of /");
-  o->ntimes = (hsize_t)n;
-  return GS_OK;
+  if (get_i64_attr(old->file, "ntimes", &n) < 0 || n < 0)
+    return h5_error(err, old->h5_path, "read the attribute ntimes of /");
+  if (n == 0)
+    return gs_error_set(err, GS_EIO, "nothing to resume in %s (%s holds no output time yet)",
+                        old->dir, H5_PARTIAL);
+  old->ntimes = (hsize_t)n;
+  int rc = check_grid(old, &m->grid, err);
+  for (int i = 0; i < old->nseries && !rc; i++) rc = open_series(old, i, err);
+  return rc;
 }
 
-static int read_last(gs_output *o, double *t, double *y, double *ledger, gs_error *err) {
-  hsize_t last = o->ntimes - 1;
-  int rc = read_rows(o, o->d_time, "/time", last, 1, t, err);
-  if (!rc) rc = read_rows(o, o->d_number, "/number", last, 1, y, err);
-  if (!rc) rc = read_rows(o, o->d_ledger, "/ledger", last, 1, ledger, err);
+/* ---- resume: rebuilding ------------------------------------------------------- */
+
+/* Copies the committed rows of every series, in blocks of whole rows. */
+static int copy_rows(gs_output *old, gs_output *o, gs_error *err) {
+  int rc = GS_OK;
+  for (int i = 0; i < o->nseries && !rc; i++) {
+    hsize_t block = BLOCK_VALUES / o->rowlen[i] ? BLOCK_VALUES / o->rowlen[i] : 1;
+    if (block > old->ntimes) block = old->ntimes;
+    double *buf = gs_malloc((size_t)block * o->rowlen[i] * sizeof(double), err);
+    if (!buf) return GS_ENOMEM;
+    for (hsize_t r0 = 0; r0 < old->ntimes && !rc; r0 += block) {
+      hsize_t n = old->ntimes - r0 < block ? old->ntimes - r0 : block;
+      rc = read_rows(old, i, r0, n, buf, err);
+      if (!rc) rc = write_rows(o, i, r0, n, buf, err);
+    }
+    free(buf);
+  }
+  o->ntimes = old->ntimes;
+  if (!rc && put_i64_attr(o->file, "ntimes", (long long)o->ntimes) < 0)
+    rc = h5_error(err, o->h5_path, "write the attribute ntimes of /");
+  return rc;
+}
+
+/* New skeleton with the old case echo, then the committed rows. */
+static int rebuild_h5(gs_output *old, gs_output *o, const gs_model *m, gs_error *err) {
+  hid_t c = H5Gopen2(old->file, "case", H5P_DEFAULT);
+  char *text = c >= 0 ? get_str_attr(c, "text") : NULL;
+  char *name = c >= 0 ? get_str_attr(c, "file") : NULL;
+  if (c >= 0) H5Gclose(c);
+  int rc = text && name ? GS_OK : h5_error(err, old->h5_path, "read the attributes of /case");
+  if (!rc) rc = build_skeleton(o, m, text, name, err);
+  free(text);
+  free(name);
+  if (!rc) rc = copy_rows(old, o, err);
   return rc;
 }
 
 /* Rewrites the CSV from /summary: whatever the kill left in it (missing or
  * extra rows, a half line), it then matches result.h5 exactly. */
 static int rebuild_csv(gs_output *o, gs_error *err) {
-  o->csv = fopen(o->csv_tmp, "w");
-  if (!o->csv) return gs_error_set(err, GS_EIO, "cannot rewrite %s: %s", o->csv_tmp, strerror(errno));
-  int rc = csv_header(o, err);
-  hsize_t block = CSV_BLOCK / o->ncomp ? CSV_BLOCK / o->ncomp : 1;
+  int rc = csv_create(o, err);
+  hsize_t block = BLOCK_VALUES / o->ncomp ? BLOCK_VALUES / o->ncomp : 1;
   double *buf = rc ? NULL : gs_malloc((size_t)o->ncol * block * o->ncomp * sizeof(double), err);
   if (!rc && !buf) rc = GS_ENOMEM;
   for (hsize_t r0 = 0; r0 < o->ntimes && !rc; r0 += block) {
     hsize_t n = o->ntimes - r0 < block ? o->ntimes - r0 : block;
     size_t stride = (size_t)n * o->ncomp;
-    for (int c = 0; c < o->ncol && !rc; c++) {
-      char name[64];
-      snprintf(name, sizeof name, "/summary/%s", o->colname[c]);
-      rc = read_rows(o, o->d_sum[c], name, r0, n, buf + (size_t)c * stride, err);
-    }
+    for (int c = 0; c < o->ncol && !rc; c++)
+      rc = read_rows(o, S_SUMMARY + c, r0, n, buf + (size_t)c * stride, err);
     for (hsize_t r = 0; r < n && !rc; r++) rc = csv_rows(o, buf, stride, (size_t)r * o->ncomp, err);
   }
   free(buf);
   return rc ? rc : csv_flush(o, err);
 }
 
-static int reopen_files(gs_output *o, gs_error *err) {
-  if (access(o->h5_tmp, F_OK))
-    return gs_error_set(err, GS_EIO, "nothing to resume in %s (no %s)", o->dir, H5_PARTIAL);
-  hid_t fapl = make_fapl();
-  if (fapl < 0) return h5_error(err, o->h5_tmp, "set up file access properties");
-  o->file = H5Fopen(o->h5_tmp, H5F_ACC_RDWR, fapl);
-  H5Pclose(fapl);
-  if (o->file < 0) return h5_error(err, o->h5_tmp, "open the file for resuming");
-  return GS_OK;
+static int read_last(gs_output *o, double *t, double *y, double *ledger, gs_error *err) {
+  hsize_t last = o->ntimes - 1;
+  int rc = read_rows(o, S_TIME, last, 1, t, err);
+  if (!rc) rc = read_rows(o, S_NUMBER, last, 1, y, err);
+  if (!rc) rc = read_rows(o, S_LEDGER, last, 1, ledger, err);
+  return rc;
 }
 
 gs_output *gs_output_resume(const char *dir, const gs_model *m, double *t, double *y,
                             double *ledger, gs_error *err) {
   h5_quiet();
+  gs_output *old = output_alloc(dir, m, err);
+  if (!old) return NULL;
   gs_output *o = output_alloc(dir, m, err);
-  if (!o) return NULL;
-  int rc = reopen_files(o, err);
-  if (!rc) rc = check_grid(o, &m->grid, err);
-  if (!rc) rc = read_committed(o, err);
-  if (!rc) rc = open_all_series(o, &m->grid, err);
-  if (!rc && o->ntimes == 0)
-    rc = gs_error_set(err, GS_EIO, "nothing to resume in %s (%s holds no output time yet)", dir,
-                      H5_PARTIAL);
-  if (!rc) rc = read_last(o, t, y, ledger, err);
+  int rc = o ? open_old(old, m, err) : GS_ENOMEM;
+  if (!rc) rc = rebuild_h5(old, o, m, err);
   if (!rc) rc = flush_h5(o, err);
+  int crc = output_close(old, rc ? NULL : err); /* before its name is reused */
+  if (!rc) rc = crc;
+  output_free(old);
+  if (!rc) rc = publish(o, err);
+  if (!rc) rc = read_last(o, t, y, ledger, err);
   if (!rc) rc = rebuild_csv(o, err);
-  if (rc) {
-    /* keep the partial files: they are the interrupted run's only copy */
-    output_close(o, NULL);
-    output_free(o);
-    return NULL;
+  if (rc && o) {
+    output_discard(o);
+    o = NULL;
   }
   return o;
 }

@@ -146,7 +146,7 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   if (!rc) rc = build_kernel_table(A, limit_mb, err);
   if (!rc) {
     A->nthreads = omp_get_max_threads();
-    A->work_len = 7 * A->ncells;
+    A->work_len = 7 * A->ncells + A->n[2];
     A->work = gs_malloc((size_t)A->nthreads * A->work_len * sizeof(double), err);
     if (!A->work) rc = GS_ENOMEM;
   }
@@ -160,70 +160,141 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
 
 /* Accumulators of one thread. */
 typedef struct {
-  double *death, *births, *vol[3], *fp, *row;
+  double *death, *births, *vol[3], *fp, *row, *wrow;
   double lost_n, lost_v[3];
 } acc_t;
 
 static acc_t thread_acc(const agg_t *A, int tid) {
   double *w = A->work + (size_t)tid * A->work_len;
   size_t n = A->ncells;
-  acc_t acc = {w, w + n, {w + 2 * n, w + 3 * n, w + 4 * n}, w + 5 * n, w + 6 * n, 0, {0, 0, 0}};
+  acc_t acc = {w, w + n, {w + 2 * n, w + 3 * n, w + 4 * n}, w + 5 * n, w + 6 * n, w + 7 * n, 0, {0, 0, 0}};
   memset(w, 0, 6 * n * sizeof(double));
   return acc;
 }
 
-/* All pairs (a, b >= a) of one compartment for a fixed a. */
-static void pairs_of(const agg_t *A, size_t comp, const double *N, size_t a, acc_t *acc) {
+/* All pairs (a, b >= a) of one compartment for a fixed a.  Written once and
+ * specialised by the compiler for each (DIM, FP) through always_inline with
+ * constant arguments; all pointers are local and restrict so the hot loop
+ * keeps them in registers. */
+static inline __attribute__((always_inline)) void
+pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, acc_t *acc,
+              const int DIM, const int FP) {
   const double Na = N[a];
-  const size_t n0 = A->n[0], n1 = A->n[1], n2 = A->n[2], big = A->big;
+  const size_t n0 = A->n[0], n1 = A->n[1], n2 = A->n[2], ncells = A->ncells;
   const size_t a0 = a / (n1 * n2), a1 = (a / n2) % n1, a2 = a % n2;
-  const double *beta;
+  const double *restrict beta;
   if (A->table) {
-    beta = A->table + comp * A->table_size + packed_offset(a, A->ncells) - a;
+    beta = A->table + comp * A->table_size + packed_offset(a, ncells) - a;
   } else {
-    A->kernel.type->row(A->kernel.self, comp, a, a, A->ncells, acc->row);
+    A->kernel.type->row(A->kernel.self, comp, a, a, ncells, acc->row);
     beta = acc->row - a;
   }
-  const size_t *T0 = A->target[0] + a0 * n0, *T1 = A->target[1] + a1 * n1, *T2 = A->target[2] + a2 * n2;
-  double xa[3];
-  for (int q = A->off; q < 3; q++) xa[q] = A->x[q][a];
-  double death_a = 0;
+  const int off = 3 - DIM;
+  double *restrict death = acc->death, *restrict births = acc->births, *restrict fp = acc->fp;
+  double *restrict v0 = acc->vol[off], *restrict v1 = DIM > 1 ? acc->vol[off + 1] : NULL;
+  double *restrict v2 = DIM > 2 ? acc->vol[2] : NULL;
+  const double *restrict x0 = A->x[off], *restrict x1 = DIM > 1 ? A->x[off + 1] : NULL;
+  const double *restrict x2 = DIM > 2 ? A->x[2] : NULL;
+  const double xa0 = x0[a], xa1 = DIM > 1 ? x1[a] : 0, xa2 = DIM > 2 ? x2[a] : 0;
+  const size_t *T0 = A->target[0] + a0 * n0, *T1 = A->target[1] + a1 * n1;
+  const size_t *restrict T2 = A->target[2] + a2 * n2;
+  const size_t *L0 = A->fp_lo[0] + a0 * n0, *L1 = A->fp_lo[1] + a1 * n1;
+  const size_t *restrict L2 = A->fp_lo[2] + a2 * n2;
+  const double *W0 = A->fp_w[0] + a0 * n0, *W1 = A->fp_w[1] + a1 * n1;
+  const double *restrict W2 = A->fp_w[2] + a2 * n2;
+  const size_t s0 = A->stride[0], s1 = A->stride[1], s2 = A->stride[2], big = A->big;
+  double death_a = 0, lost_n = 0, lost0 = 0, lost1 = 0, lost2 = 0;
   for (size_t i0 = a0; i0 < n0; i0++) {
     for (size_t i1 = (i0 == a0 ? a1 : 0); i1 < n1; i1++) {
       const size_t row_start = (i0 == a0 && i1 == a1) ? a2 : 0;
       const size_t bbase = (i0 * n1 + i1) * n2, tbase = T0[i0] + T1[i1];
+      const size_t lbase = L0[i0] + L1[i1];
+      const double w0 = W0[i0], w1 = W1[i1];
+      /* pass 1 (vectorised): event rates of the row and the deaths they cause */
+      const size_t len = n2 - row_start;
+      const double *restrict Nb = N + bbase + row_start, *restrict bb = beta + bbase + row_start;
+      double *restrict wr = acc->wrow;
+      for (size_t j = 0; j < len; j++) wr[j] = Na * bb[j] * Nb[j];
+      if (bbase + row_start == a) wr[0] *= 0.5; /* a self-pair counts once */
+      double *restrict db = death + bbase + row_start;
+      for (size_t j = 0; j < len; j++) {
+        db[j] += wr[j];
+        death_a += wr[j];
+      }
+      /* pass 2: births.  Along a row the target cell never decreases, so runs
+       * with the same target are summed in registers before one store; this
+       * avoids store-to-load chains on the same accumulator. */
+      size_t t_run = (size_t)-1;
+      double rb = 0, r0 = 0, r1 = 0, r2 = 0;
       for (size_t i2 = row_start; i2 < n2; i2++) {
         const size_t b = bbase + i2;
-        double w = Na * beta[b] * N[b];
+        const double w = wr[i2 - row_start];
         if (w == 0.0) continue;
-        if (b == a) w *= 0.5;
-        acc->death[b] += w;
-        death_a += w;
-        if (A->scheme == CELL_AVERAGE) {
+        if (!FP) {
           const size_t t = tbase + T2[i2];
-          if (t < big && t < A->ncells) {
-            acc->births[t] += w;
-            for (int q = A->off; q < 3; q++) acc->vol[q][t] += w * (xa[q] + A->x[q][b]);
+          if (t < ncells) {
+            if (t != t_run) {
+              if (t_run != (size_t)-1) {
+                births[t_run] += rb;
+                v0[t_run] += r0;
+                if (DIM > 1) v1[t_run] += r1;
+                if (DIM > 2) v2[t_run] += r2;
+              }
+              t_run = t;
+              rb = r0 = r1 = r2 = 0;
+            }
+            rb += w;
+            r0 += w * (xa0 + x0[b]);
+            if (DIM > 1) r1 += w * (xa1 + x1[b]);
+            if (DIM > 2) r2 += w * (xa2 + x2[b]);
             continue;
           }
-        } else if (A->fp_lo[0][a0 * n0 + i0] < big && A->fp_lo[1][a1 * n1 + i1] < big &&
-                   A->fp_lo[2][a2 * n2 + i2] < big) {
-          const size_t lo = A->fp_lo[0][a0 * n0 + i0] + A->fp_lo[1][a1 * n1 + i1] + A->fp_lo[2][a2 * n2 + i2];
-          const double w0 = A->fp_w[0][a0 * n0 + i0], w1 = A->fp_w[1][a1 * n1 + i1], w2 = A->fp_w[2][a2 * n2 + i2];
-          for (int c = 0; c < 8; c++) {
-            double f0 = (c & 4) ? w0 : 1 - w0, f1 = (c & 2) ? w1 : 1 - w1, f2 = (c & 1) ? w2 : 1 - w2;
-            double f = f0 * f1 * f2;
-            if (f == 0.0) continue;
-            acc->fp[lo + ((c & 4) ? A->stride[0] : 0) + ((c & 2) ? A->stride[1] : 0) + ((c & 1) ? A->stride[2] : 0)] += w * f;
+        } else {
+          const size_t lo = lbase + L2[i2];
+          if (lo < big) {
+            /* DIM-linear lever; padded axes have weight 0 towards "up" */
+            const double w2 = W2[i2];
+            const double f2[2] = {1 - w2, w2};
+            const double f1[2] = {1 - w1, w1};
+            const double f0[2] = {1 - w0, w0};
+            for (int u0 = 0; u0 < (DIM > 2 ? 2 : 1); u0++)
+              for (int u1 = 0; u1 < (DIM > 1 ? 2 : 1); u1++)
+                for (int u2 = 0; u2 < 2; u2++) {
+                  double f = w * f2[u2] * (DIM > 1 ? f1[u1] : 1.0) * (DIM > 2 ? f0[u0] : 1.0);
+                  if (f != 0.0) fp[lo + (size_t)u2 * s2 + (size_t)u1 * s1 + (size_t)u0 * s0] += f;
+                }
+            continue;
           }
-          continue;
         }
-        acc->lost_n += w; /* the product lies beyond the grid */
-        for (int q = A->off; q < 3; q++) acc->lost_v[q] += w * (xa[q] + A->x[q][b]);
+        lost_n += w; /* the product lies beyond the grid */
+        lost0 += w * (xa0 + x0[b]);
+        if (DIM > 1) lost1 += w * (xa1 + x1[b]);
+        if (DIM > 2) lost2 += w * (xa2 + x2[b]);
+      }
+      if (!FP && t_run != (size_t)-1) {
+        births[t_run] += rb;
+        v0[t_run] += r0;
+        if (DIM > 1) v1[t_run] += r1;
+        if (DIM > 2) v2[t_run] += r2;
       }
     }
   }
-  acc->death[a] += death_a;
+  death[a] += death_a;
+  acc->lost_n += lost_n;
+  acc->lost_v[off] += lost0;
+  if (DIM > 1) acc->lost_v[off + 1] += lost1;
+  if (DIM > 2) acc->lost_v[2] += lost2;
+}
+
+static void pairs_of(const agg_t *A, size_t comp, const double *N, size_t a, acc_t *acc) {
+  switch (A->dim * 2 + A->scheme) {
+  case 2: pairs_generic(A, comp, N, a, acc, 1, 0); break;
+  case 3: pairs_generic(A, comp, N, a, acc, 1, 1); break;
+  case 4: pairs_generic(A, comp, N, a, acc, 2, 0); break;
+  case 5: pairs_generic(A, comp, N, a, acc, 2, 1); break;
+  case 6: pairs_generic(A, comp, N, a, acc, 3, 0); break;
+  default: pairs_generic(A, comp, N, a, acc, 3, 1); break;
+  }
 }
 
 /* Sum the per-thread accumulators into thread 0's. */

@@ -47,7 +47,7 @@ const gs_integrator_type *gs_integrator_lookup(const char *name) {
  * absent, so each integrator can substitute its own default. */
 static int gs_step_key(gs_cfg_node *solver, const char *key, int allow_zero, double *out,
                        gs_error *err) {
-  return gs_cfg_double_range(solver, key, 0, NAN, 0.0, !allow_zero, HUGE_VAL, 0, out, err);
+  return gs_cfg_double_range(solver, key, 0, (double)NAN, 0.0, !allow_zero, HUGE_VAL, 0, out, err);
 }
 
 /* initial_step must lie within [min_step, max_step] when they are given. */

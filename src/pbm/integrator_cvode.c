@@ -52,16 +52,31 @@ typedef struct {
   int needs_reinit;
   double t_last;      /* time of the state in y */
   const gs_ode *ode;  /* the system of the advance() in progress */
-  int rhs_failed;
+  int rhs_failed;     /* 1: f returned an error; 2: f gave a non-finite value */
+  size_t fail_index;
+  double fail_t, fail_value;
   char msg[512];      /* CVODE's last error message */
   gs_integrator_stats base; /* counters accumulated before the last (re)init */
 } gs_cvode;
 
+/* Both a failing callback and a non-finite derivative stop CVODE at once
+ * (negative return = unrecoverable): left to itself, CVODE keeps retrying
+ * NaN steps until max_steps_per_output runs out. */
 static int gs_cvode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *data) {
   gs_cvode *self = data;
-  if (self->ode->f(self->ode->ctx, t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot))) {
+  double *f = N_VGetArrayPointer(ydot);
+  self->fail_t = t;
+  if (self->ode->f(self->ode->ctx, t, N_VGetArrayPointer(y), f)) {
     self->rhs_failed = 1;
-    return -1; /* unrecoverable: CVODE stops instead of retrying */
+    return -1;
+  }
+  for (size_t i = 0; i < self->n; i++) {
+    if (!isfinite(f[i])) {
+      self->rhs_failed = 2;
+      self->fail_index = i;
+      self->fail_value = f[i];
+      return -1;
+    }
   }
   return 0;
 }
@@ -219,9 +234,13 @@ static int gs_cvode_fail(gs_cvode *self, int flag, double t0, double tret, doubl
     memcpy(y, N_VGetArrayPointer(self->y), self->n * sizeof *y);
     *t = tret;
   }
-  if (self->rhs_failed)
-    return gs_error_set(err, GS_ENUMERIC, "integrator cvode: right-hand side failed near t = %.9g",
-                        *t);
+  if (self->rhs_failed == 1)
+    return gs_error_set(err, GS_ENUMERIC, "integrator cvode: right-hand side failed at t = %.9g",
+                        self->fail_t);
+  if (self->rhs_failed == 2)
+    return gs_error_set(err, GS_ENUMERIC,
+                        "integrator cvode: right-hand side gave dydt[%zu] = %g at t = %.9g",
+                        self->fail_index, self->fail_value, self->fail_t);
   char *name = CVodeGetReturnFlagName(flag);
   gs_error_set(err, GS_ENUMERIC, "integrator cvode: %s at t = %.9g (integrating to %.9g)%s%s",
                name ? name : "failure", *t, t_out, self->msg[0] ? ": " : "", self->msg);

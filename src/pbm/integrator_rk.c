@@ -38,7 +38,9 @@ typedef struct {
   double *scale; /* per-component absolute-tolerance scale, as given to GSL */
   double h;      /* step proposed for the next advance; <= 0 until chosen */
   const gs_ode *ode; /* the system of the advance() in progress */
-  int rhs_failed;
+  int rhs_failed; /* 1: f returned an error; 2: f gave a non-finite value */
+  size_t fail_index;
+  double fail_t, fail_value;
   gs_integrator_stats stats;
 } gs_rk;
 
@@ -53,15 +55,34 @@ static const gsl_odeiv2_step_type *gs_rk_step_type(int variant) {
 }
 
 /* GSL calling convention -> gs_ode.  GSL_EBADFUNC makes evolve return at
- * once instead of retrying with a smaller step. */
+ * once instead of retrying with a smaller step.  Non-finite derivatives are
+ * caught here because GSL's error control never rejects NaN. */
 static int gs_rk_rhs(double t, const double y[], double dydt[], void *params) {
   gs_rk *self = params;
   self->stats.rhs_evals++;
+  self->fail_t = t;
   if (self->ode->f(self->ode->ctx, t, y, dydt)) {
     self->rhs_failed = 1;
     return GSL_EBADFUNC;
   }
+  for (size_t i = 0; i < self->n; i++) {
+    if (!isfinite(dydt[i])) {
+      self->rhs_failed = 2;
+      self->fail_index = i;
+      self->fail_value = dydt[i];
+      return GSL_EBADFUNC;
+    }
+  }
   return GSL_SUCCESS;
+}
+
+static int gs_rk_rhs_error(const gs_rk *self, gs_error *err) {
+  if (self->rhs_failed == 2)
+    return gs_error_set(err, GS_ENUMERIC,
+                        "integrator rk: right-hand side gave dydt[%zu] = %g at t = %.9g",
+                        self->fail_index, self->fail_value, self->fail_t);
+  return gs_error_set(err, GS_ENUMERIC, "integrator rk: right-hand side failed at t = %.9g",
+                      self->fail_t);
 }
 
 static void gs_rk_free(void *vself) {
@@ -121,8 +142,7 @@ static int gs_rk_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_e
 static int gs_rk_initial_step(gs_rk *self, double t, double span, const double *y,
                               gs_error *err) {
   double *f = self->evolve->dydt_out; /* scratch: evolve overwrites it anyway */
-  if (gs_rk_rhs(t, y, f, self) != GSL_SUCCESS)
-    return gs_error_set(err, GS_ENUMERIC, "integrator rk: right-hand side failed at t = %.9g", t);
+  if (gs_rk_rhs(t, y, f, self) != GSL_SUCCESS) return gs_rk_rhs_error(self, err);
   double d0 = 0, d1 = 0;
   for (size_t i = 0; i < self->n; i++) {
     if (self->scale[i] >= GS_RK_EXCLUDED_SCALE) continue;
@@ -148,8 +168,7 @@ static int gs_rk_fail(gs_rk *self, int status, double t0, double h, double *t, d
   memcpy(y, self->evolve->y0, self->n * sizeof *y);
   *t = t0;
   gsl_odeiv2_step_reset(self->step); /* required by GSL after GSL_EBADFUNC */
-  if (self->rhs_failed)
-    return gs_error_set(err, GS_ENUMERIC, "integrator rk: right-hand side failed at t = %.9g", t0);
+  if (self->rhs_failed) return gs_rk_rhs_error(self, err);
   if (status == GSL_FAILURE)
     return gs_error_set(err, GS_ENUMERIC,
                         "integrator rk (%s): step size underflow at t = %.9g (h = %g): the "
