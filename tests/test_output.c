@@ -156,7 +156,7 @@ static void check_result(const char *dir, const gs_model *m, int ntimes) {
       CHECK(m0[(size_t)k * g->ncomp + j] == sum.m0);
       CHECK(tot[(size_t)k * g->ncomp + j] == sum.total[g->dim - 1]);
       CHECK(stime[(size_t)k * g->ncomp + j] == time_of(k));
-      CHECK(scomp[(size_t)k * g->ncomp + j] == (double)j);
+      CHECK(scomp[(size_t)k * g->ncomp + j] == (double)(j + 1)); /* 1-based */
     }
   }
   free(num), free(ledger), free(m0), free(tot), free(stime), free(scomp);
@@ -210,7 +210,7 @@ static void check_csv(const char *dir, const char *name, const gs_model *m, int 
   gs_summary s;
   gs_summarize(m, y, m->grid.ncomp - 1, &s);
   CHECK(t == time_of(ntimes - 1));
-  CHECK(comp == (double)(m->grid.ncomp - 1));
+  CHECK(comp == (double)m->grid.ncomp /* 1-based */);
   CHECK_REL(m0, s.m0, 1e-9);
   CHECK_REL(m1, s.m1, 1e-9);
   free(y);

@@ -18,7 +18,8 @@ extern "C" {
 
 typedef struct gs_checks {
   double mass_tolerance;     /* relative error allowed in the volume balance of every axis */
-  double negative_tolerance; /* negative numbers allowed down to -tol * max(N) */
+  double negative_tolerance; /* negative numbers allowed down to -tol * max(N) - negative_floor */
+  double negative_floor;     /* absolute allowance: 100 x the solver's atol (error-control noise) */
   double max_loss;           /* fraction of volume allowed to leave through grid boundaries */
 } gs_checks;
 

@@ -15,7 +15,7 @@ int gs_grid_init(gs_grid *g, gs_axis *axes, int dim, size_t ncomp, gs_error *err
   g->ncells = 1;
   for (int k = 0; k < dim; k++) {
     for (int j = 0; j < k; j++)
-      if (!strcmp(axes[j].name, axes[k].name))
+      if (!strcmp(g->axis[j].name, axes[k].name))
         return gs_error_set(err, GS_EINPUT, "two axes are both named '%s'", axes[k].name);
     g->axis[k] = axes[k];
     memset(&axes[k], 0, sizeof axes[k]);

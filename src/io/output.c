@@ -541,7 +541,7 @@ static void summarize_all(gs_output *o, const gs_model *m, double t, const doubl
     gs_summary s;
     memset(&s, 0, sizeof s);
     gs_summarize(m, y, j, &s);
-    double fixed[NCOL_FIXED] = {t, (double)j, s.m0, s.m1, s.m2, s.d10, s.d50, s.d90};
+    double fixed[NCOL_FIXED] = {t, (double)(j + 1) /* 1-based, as in case files */, s.m0, s.m1, s.m2, s.d10, s.d50, s.d90};
     for (int c = 0; c < NCOL_FIXED; c++) o->sbuf[(size_t)c * nc + j] = fixed[c];
     for (int k = 0; k < dim; k++) {
       o->sbuf[(size_t)(NCOL_FIXED + k) * nc + j] = s.mean[k];

@@ -1,7 +1,9 @@
 /* Breakage selection functions S [1/s], a registry of named types:
  *   power: S = s0 * v^exponent, v the size measure (default granule volume);
  *   shear: S = sqrt(4/(15 pi)) G exp(-B / (G^2 R)), R the volume-equivalent
- *          radius (seed 002 eq. 2.7, after Soos et al. 2006). */
+ *          radius (seed 002 eq. 2.7, after Soos et al. 2006).
+ * Both accept min_volume: particles whose size measure is below it do not
+ * break (e.g. primary particles, whose fragments the grid cannot hold). */
 #include <math.h>
 #include <stdlib.h>
 
@@ -10,6 +12,7 @@
 
 typedef struct {
   double a, b;   /* power: s0, exponent; shear: G, B */
+  double min_volume;
   double *size;  /* per cell size measure */
 } sel_t;
 
@@ -22,6 +25,7 @@ static void sel_free(void *self) {
 static int sel_finish(gs_cfg_node *node, const gs_grid *g, sel_t *s, int rc, void **self,
                       gs_error *err) {
   if (!rc && !(s->size = gs_size_measure(node, g, err))) rc = err->code;
+  if (!rc) rc = gs_cfg_double_range(node, "min_volume", 0, 0, 0, 0, HUGE_VAL, 0, &s->min_volume, err);
   if (!rc) rc = gs_cfg_check_unused(node, err);
   if (rc) {
     sel_free(s);
@@ -42,6 +46,7 @@ static int power_create(gs_cfg_node *node, const gs_grid *g, void **self, gs_err
 static double power_rate(const void *self, const gs_grid *g, size_t cell) {
   (void)g;
   const sel_t *s = self;
+  if (s->size[cell] < s->min_volume) return 0.0;
   return s->a * pow(s->size[cell], s->b);
 }
 
@@ -56,6 +61,7 @@ static int shear_create(gs_cfg_node *node, const gs_grid *g, void **self, gs_err
 static double shear_rate(const void *self, const gs_grid *g, size_t cell) {
   (void)g;
   const sel_t *s = self;
+  if (s->size[cell] < s->min_volume) return 0.0;
   double R = 0.5 * gs_diameter(s->size[cell]);
   if (!(R > 0)) return 0.0;
   return sqrt(4.0 / (15.0 * M_PI)) * s->a * exp(-s->b / (s->a * s->a * R));

@@ -9,7 +9,9 @@
  *  - fixed pivot (Kumar & Ramkrishna 1996, Vale & McKenna 2005 in 2-D):
  *    each pair's product is placed individually by the lever rule.
  * Both conserve number (one per event) and the volume of every coordinate.
- * Products beyond the last pivot are booked as lost (see lever.h).
+ * Products beyond the last edge of an axis are lost; products between the
+ * last pivot and the last edge are clamped to the last pivot (lever.h).
+ * Both go to the ledger's lost volume.
  *
  * Work per right-hand side is one pass over the ncells (ncells+1)/2 pairs.
  * Everything that does not depend on the state is precomputed: the kernel
@@ -40,6 +42,7 @@ typedef struct {
   size_t *target[3];     /* n[q]*n[q]: cell of the pivot sum along q, times stride; >= big if outside */
   size_t *fp_lo[3];      /* fixed pivot: lower node times stride, >= big if above the last pivot */
   double *fp_w[3];       /* fixed pivot: weight of the upper node */
+  double *fp_excess[3];  /* fixed pivot: sum minus last pivot where clamped, else 0 */
   double *table;         /* packed kernel, ncomp * ncells*(ncells+1)/2, or NULL */
   size_t table_size;
   int nthreads;
@@ -58,6 +61,7 @@ static void agg_free(void *self) {
     free(A->target[q]);
     free(A->fp_lo[q]);
     free(A->fp_w[q]);
+    free(A->fp_excess[q]);
   }
   free(A->table);
   free(A->work);
@@ -71,7 +75,8 @@ static int build_axis_maps(agg_t *A, const gs_grid *g, gs_error *err) {
     A->target[q] = gs_malloc(n * n * sizeof(size_t), err);
     A->fp_lo[q] = gs_malloc(n * n * sizeof(size_t), err);
     A->fp_w[q] = gs_calloc(n * n, sizeof(double), err);
-    if (!A->target[q] || !A->fp_lo[q] || !A->fp_w[q]) return GS_ENOMEM;
+    A->fp_excess[q] = gs_calloc(n * n, sizeof(double), err);
+    if (!A->target[q] || !A->fp_lo[q] || !A->fp_w[q] || !A->fp_excess[q]) return GS_ENOMEM;
     if (q < A->off) { /* padding axis: a single cell mapping onto itself */
       A->target[q][0] = 0;
       A->fp_lo[q][0] = 0;
@@ -85,9 +90,13 @@ static int build_axis_maps(agg_t *A, const gs_grid *g, gs_error *err) {
         A->target[q][i * n + j] = t == GS_NOWHERE ? A->big : t * A->stride[q];
         size_t lo;
         double w;
-        if (gs_axis_lever(ax, s, &lo, &w) == 0) {
+        int st = gs_axis_lever(ax, s, &lo, &w);
+        if (st == 0) {
           A->fp_lo[q][i * n + j] = lo * A->stride[q];
           A->fp_w[q][i * n + j] = w;
+        } else if (t != GS_NOWHERE) { /* inside the last cell, above its pivot: clamp */
+          A->fp_lo[q][i * n + j] = (n - 1) * A->stride[q];
+          A->fp_excess[q][i * n + j] = s - ax->pivots[n - 1];
         } else {
           A->fp_lo[q][i * n + j] = A->big;
         }
@@ -202,6 +211,9 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
   const size_t *restrict L2 = A->fp_lo[2] + a2 * n2;
   const double *W0 = A->fp_w[0] + a0 * n0, *W1 = A->fp_w[1] + a1 * n1;
   const double *restrict W2 = A->fp_w[2] + a2 * n2;
+  const double *E0 = A->fp_excess[off] + (off == 0 ? a0 * n0 : off == 1 ? a1 * n1 : a2 * n2);
+  const double *E1 = DIM > 1 ? A->fp_excess[off + 1] + (off == 0 ? a1 * n1 : a2 * n2) : NULL;
+  const double *E2 = DIM > 2 ? A->fp_excess[2] + a2 * n2 : NULL;
   const size_t s0 = A->stride[0], s1 = A->stride[1], s2 = A->stride[2], big = A->big;
   double death_a = 0, lost_n = 0, lost0 = 0, lost1 = 0, lost2 = 0;
   for (size_t i0 = a0; i0 < n0; i0++) {
@@ -210,6 +222,9 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
       const size_t bbase = (i0 * n1 + i1) * n2, tbase = T0[i0] + T1[i1];
       const size_t lbase = L0[i0] + L1[i1];
       const double w0 = W0[i0], w1 = W1[i1];
+      /* clamping excess of the axes that are fixed along this row */
+      const double e_fix0 = FP ? (off == 0 ? E0[i0] : off == 1 ? E0[i1] : 0.0) : 0.0;
+      const double e_fix1 = FP && DIM > 1 ? (off == 0 ? E1[i1] : 0.0) : 0.0;
       /* pass 1 (vectorised): event rates of the row and the deaths they cause */
       const size_t len = n2 - row_start;
       const double *restrict Nb = N + bbase + row_start, *restrict bb = beta + bbase + row_start;
@@ -263,6 +278,10 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
                   double f = w * f2[u2] * (DIM > 1 ? f1[u1] : 1.0) * (DIM > 2 ? f0[u0] : 1.0);
                   if (f != 0.0) fp[lo + (size_t)u2 * s2 + (size_t)u1 * s1 + (size_t)u0 * s0] += f;
                 }
+            /* excess along each real axis: axis off+k is padded index off+k */
+            lost0 += w * (off == 2 ? E0[i2] : e_fix0);
+            if (DIM > 1) lost1 += w * (off == 1 ? E1[i2] : e_fix1);
+            if (DIM > 2) lost2 += w * E2[i2];
             continue;
           }
         }
@@ -311,7 +330,8 @@ static void reduce_threads(const agg_t *A, int nth, acc_t *acc) {
 /* Pair loop of one compartment; result in acc[0]. */
 static void compartment_pairs(const agg_t *A, size_t comp, const double *N, acc_t *acc) {
   int nth = 1;
-#pragma omp parallel
+  /* small grids: a parallel region costs more than the pairs themselves */
+#pragma omp parallel if (A->ncells > 400)
   {
 #pragma omp single
     nth = omp_get_num_threads();
@@ -338,14 +358,11 @@ static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double 
   for (size_t t = 0; t < A->ncells; t++) {
     double B = acc->births[t];
     if (B == 0.0) continue;
-    double vbar[GS_MAX_DIM];
+    double vbar[GS_MAX_DIM], excess[GS_MAX_DIM] = {0};
     for (int k = 0; k < A->dim; k++) vbar[k] = acc->vol[A->off + k][t] / B;
-    if (gs_lever_place(g, t, vbar, B, dydt, NULL)) {
-      placed += B;
-    } else {
-      acc->lost_n += B;
-      for (int k = 0; k < A->dim; k++) acc->lost_v[A->off + k] += acc->vol[A->off + k][t];
-    }
+    gs_lever_place(g, t, vbar, B, dydt, excess);
+    placed += B;
+    for (int k = 0; k < A->dim; k++) acc->lost_v[A->off + k] += excess[k];
   }
   return placed;
 }

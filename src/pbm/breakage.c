@@ -15,7 +15,7 @@
  *    lever weights are linear within a packet).
  * Number of fragments and the volume of every coordinate are conserved;
  * fragments below the first pivot are clamped to it (number conserved, the
- * created volume booked in the ledger as negative loss). */
+ * created volume booked in the ledger as negative loss, see lever.h). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,7 +40,7 @@ typedef struct {
   double *rate;         /* S per cell */
   size_t *first;        /* ncells+1: packets of parent k are [first[k], first[k+1]) */
   packet_t *pk;
-  double *gain;         /* FP: volume created by clamping, per parent and axis */
+  double *excess;       /* FP: volume removed by clamping (lever.h), per parent and axis */
   double *births, *vol; /* CA workspace: ncells and dim*ncells */
 } brk_t;
 
@@ -52,7 +52,7 @@ static void brk_free(void *self) {
   free(B->rate);
   free(B->first);
   free(B->pk);
-  free(B->gain);
+  free(B->excess);
   free(B->births);
   free(B->vol);
   free(B);
@@ -128,7 +128,7 @@ static int parent_packets(brk_t *B, const gs_grid *g, size_t k, double *z, doubl
     double zbar = mass / cnt, v[GS_MAX_DIM];
     for (int d = 0; d < dim; d++) v[d] = zbar * X[d];
     if (B->scheme == FIXED_PIVOT) {
-      gs_lever_place(g, GS_NOWHERE, v, cnt, fp_row, B->gain + k * (size_t)dim);
+      gs_lever_place(g, GS_NOWHERE, v, cnt, fp_row, B->excess + k * (size_t)dim);
       continue;
     }
     packet_t p = {containing_cell(g, v), cnt, {0}};
@@ -147,8 +147,8 @@ static int build_packets(brk_t *B, const gs_grid *g, gs_error *err) {
   double *z = gs_malloc(zcap * sizeof(double), err);
   double *fp_row = gs_calloc(g->ncells, sizeof(double), err);
   B->first = gs_calloc(g->ncells + 1, sizeof(size_t), err);
-  B->gain = gs_calloc(g->ncells * (size_t)g->dim, sizeof(double), err);
-  int rc = (!z || !fp_row || !B->first || !B->gain) ? GS_ENOMEM : GS_OK;
+  B->excess = gs_calloc(g->ncells * (size_t)g->dim, sizeof(double), err);
+  int rc = (!z || !fp_row || !B->first || !B->excess) ? GS_ENOMEM : GS_OK;
   size_t cap = 0, n = 0;
   for (size_t k = 0; !rc && k < g->ncells; k++) {
     B->first[k] = n;
@@ -204,7 +204,7 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
     const double *N = y + comp * B->ncells;
     double *d = dydt ? dydt + comp * B->ncells : NULL;
     double *lost = dledger ? dledger + comp * 2 * (size_t)dim + (size_t)dim : NULL;
-    double born = 0, dead = 0, gain[GS_MAX_DIM] = {0};
+    double born = 0, dead = 0, excess[GS_MAX_DIM] = {0};
     if (B->scheme == CELL_AVERAGE) {
       memset(B->births, 0, B->ncells * sizeof(double));
       memset(B->vol, 0, B->ncells * (size_t)dim * sizeof(double));
@@ -225,18 +225,18 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
         for (int q = 0; q < dim; q++) B->vol[pk->cell * (size_t)dim + (size_t)q] += r * pk->vol[q];
       }
       if (B->scheme == FIXED_PIVOT)
-        for (int q = 0; q < dim; q++) gain[q] += r * B->gain[k * (size_t)dim + (size_t)q];
+        for (int q = 0; q < dim; q++) excess[q] += r * B->excess[k * (size_t)dim + (size_t)q];
     }
     for (size_t t = 0; B->scheme == CELL_AVERAGE && t < B->ncells; t++) {
       double b = B->births[t];
       if (b == 0.0) continue;
       double vbar[GS_MAX_DIM];
       for (int q = 0; q < dim; q++) vbar[q] = B->vol[t * (size_t)dim + (size_t)q] / b;
-      if (d) gs_lever_place(g, t, vbar, b, d, gain); /* fragments never exceed the grid */
+      if (d) gs_lever_place(g, t, vbar, b, d, excess);
       born += b;
     }
     if (lost)
-      for (int q = 0; q < dim; q++) lost[q] -= gain[q];
+      for (int q = 0; q < dim; q++) lost[q] += excess[q];
     if (birth) birth[comp] = born;
     if (death) death[comp] = dead;
   }

@@ -2,7 +2,8 @@
 #include "pbm/lever.h"
 
 int gs_lever_place(const gs_grid *g, size_t cell, const double *v, double count, double *dst,
-                   double *gain) {
+                   double *excess) {
+  int clamped = 0;
   size_t lo[GS_MAX_DIM], idx[GS_MAX_DIM];
   double w[GS_MAX_DIM];
   if (cell != GS_NOWHERE) gs_grid_unindex(g, cell, idx);
@@ -10,13 +11,14 @@ int gs_lever_place(const gs_grid *g, size_t cell, const double *v, double count,
     const gs_axis *ax = &g->axis[k];
     int st = cell != GS_NOWHERE ? gs_lever_near(ax, idx[k], v[k], &lo[k], &w[k])
                                 : gs_axis_lever(ax, v[k], &lo[k], &w[k]);
-    if (st > 0) return 0;
-    if (st < 0) {
-      lo[k] = 0;
+    if (st != 0) {
+      size_t edge = st < 0 ? 0 : ax->n - 1;
+      lo[k] = edge;
       w[k] = 0.0;
-      if (gain) gain[k] += count * (ax->pivots[0] - v[k]);
+      if (excess) excess[k] += count * (v[k] - ax->pivots[edge]);
+      clamped++;
     }
   }
   gs_lever_spread(g, lo, w, count, dst);
-  return 1;
+  return clamped;
 }

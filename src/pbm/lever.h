@@ -3,12 +3,13 @@
  * coordinate (the redistribution step shared by the cell-average and
  * fixed-pivot techniques, for aggregation, breakage and initial data).
  *
- * Boundary rules (documented in docs/models.md):
- *  - above the last pivot of any axis: the packet cannot be represented; it
- *    is not placed and the caller books it as lost (returns 0);
- *  - below the first pivot of an axis: that coordinate is clamped to the
- *    first pivot (number conserved); the volume this creates is returned in
- *    gain[k] so the caller can book it in the ledger. */
+ * Boundary rule (documented in docs/models.md): a coordinate below the first
+ * pivot or above the last pivot of its axis is clamped to that pivot; number
+ * is conserved and the volume this removes, count * (v - clamped v), is added
+ * to excess[k] (negative below, positive above) so the caller books it in the
+ * ledger as lost.  The rule is continuous in v, so rates stay smooth when a
+ * pooled mean crosses the last pivot.  (Products beyond the last edge are
+ * not placed at all: the callers book them as lost.) */
 #ifndef GRANSIM_LEVER_H
 #define GRANSIM_LEVER_H
 
@@ -39,10 +40,10 @@ static inline int gs_lever_near(const gs_axis *ax, size_t t, double v, size_t *l
 }
 
 /* Place `count` particles with mean coordinates v (dim entries) found in
- * cell `cell` (or GS_NOWHERE to search) into dst (one compartment).
- * Returns 1 if placed, 0 if above the grid (nothing written). */
+ * cell `cell` (or GS_NOWHERE to search) into dst (one compartment).  Returns
+ * the number of axes that had to be clamped; excess may be NULL. */
 int gs_lever_place(const gs_grid *g, size_t cell, const double *v, double count, double *dst,
-                   double *gain);
+                   double *excess);
 
 /* Spread count over the 2^dim nodes given per-axis lower nodes and weights. */
 static inline void gs_lever_spread(const gs_grid *g, const size_t *lo, const double *w,

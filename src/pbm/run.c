@@ -48,12 +48,12 @@ static int guarded_rhs(void *ctx, double t, const double *y, double *dydt) {
 }
 
 static int check_state(const gs_case *c, const double *Y, const double *M1_0, double t,
-                       gs_run_report *rep, gs_error *err) {
+                       double *ymax_seen, gs_run_report *rep, gs_error *err) {
   const gs_model *m = &c->model;
   const gs_grid *g = &m->grid;
   const int dim = g->dim;
   char where[512];
-  double ymax = 0;
+  double ymax = *ymax_seen; /* largest number seen so far in the run */
   for (size_t i = 0; i < m->nstate; i++) {
     if (!isfinite(Y[i])) {
       describe_cell(m, i / g->ncells, i % g->ncells, where, sizeof where);
@@ -61,8 +61,11 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
     }
     ymax = fmax(ymax, fabs(Y[i]));
   }
+  *ymax_seen = ymax;
+  /* an absolute floor: a state that is still (nearly) empty has only round-off */
+  const double floor_abs = fmax(1e-30, c->checks.negative_floor);
   for (size_t i = 0; i < m->nstate; i++)
-    if (Y[i] < -c->checks.negative_tolerance * ymax) {
+    if (Y[i] < -c->checks.negative_tolerance * ymax - floor_abs) {
       describe_cell(m, i / g->ncells, i % g->ncells, where, sizeof where);
       return gs_error_set(err, GS_ENUMERIC,
                           "numerical failure at t = %g: %s: number %g is negative beyond round-off "
@@ -71,6 +74,8 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
                           t, where, Y[i], -Y[i] / ymax, ymax, c->checks.negative_tolerance);
     }
   const double *L = Y + m->nstate;
+  double worst_frac = 0;
+  int worst_axis = -1, worst_sign = 0;
   for (int k = 0; k < dim; k++) {
     double scale = 0, lost = 0, held0 = 0;
     double held[g->ncomp];
@@ -96,15 +101,23 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
                             t, g->axis[k].name, comp + 1, held[comp], expect, rel, c->checks.mass_tolerance);
     }
     double frac = fabs(lost) / scale;
-    if (frac > rep->max_loss) rep->max_loss = frac;
-    if (frac > c->checks.max_loss)
-      return gs_error_set(err, GS_ENUMERIC,
-                          "at t = %g, a fraction %.3g of the volume of axis '%s' has crossed the grid "
-                          "boundaries (%s), more than checks.max_loss = %g. Extend axis '%s' (now "
-                          "[%g, %g]) or raise checks.max_loss",
-                          t, frac, g->axis[k].name, lost > 0 ? "lost beyond the last pivot" : "created below the first pivot",
-                          c->checks.max_loss, g->axis[k].name, g->axis[k].edges[0], g->axis[k].edges[g->axis[k].n]);
+    if (frac > worst_frac) {
+      worst_frac = frac;
+      worst_axis = k;
+      worst_sign = lost > 0;
+    }
     (void)held0;
+  }
+  if (worst_frac > rep->max_loss) rep->max_loss = worst_frac;
+  if (worst_axis >= 0 && worst_frac > c->checks.max_loss) {
+    const gs_axis *ax = &g->axis[worst_axis];
+    return gs_error_set(err, GS_ENUMERIC,
+                        "at t = %g, a fraction %.3g of the volume of axis '%s' has crossed the grid "
+                        "boundaries (%s), more than checks.max_loss = %g. Extend axis '%s' (now "
+                        "[%g, %g]) or raise checks.max_loss",
+                        t, worst_frac, ax->name,
+                        worst_sign ? "lost beyond the last pivot" : "created below the first pivot",
+                        c->checks.max_loss, ax->name, ax->edges[0], ax->edges[ax->n]);
   }
   return GS_OK;
 }
@@ -141,7 +154,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   for (size_t i = 0; i < m->nstate; i++)
     for (int k = 0; k < g->dim; k++)
       M1_0[(i / g->ncells) * (size_t)g->dim + (size_t)k] += c->y0[i] * g->x[(i % g->ncells) * (size_t)g->dim + (size_t)k];
-  double t = c->t0;
+  double t = c->t0, ymax_seen = 0;
   int show = opt && opt->progress >= 0 ? opt->progress : isatty(STDERR_FILENO);
   gs_output *out = NULL;
   int rc = GS_OK;
@@ -150,7 +163,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
                       : gs_output_open(opt->out_dir, m, gs_cfg_source(c->cfg), gs_cfg_name(c->cfg), err);
     if (!out) rc = err->code;
   }
-  if (!rc) rc = check_state(c, Y, M1_0, t, &rep, err);
+  if (!rc) rc = check_state(c, Y, M1_0, t, &ymax_seen, &rep, err);
   if (!rc && out && !(opt && opt->resume)) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
   guard_t guard = {c, 0, 0, 0};
   gs_ode ode = c->ode;
@@ -168,7 +181,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
       else snprintf(where, sizeof where, "volume ledger entry %zu", idx - m->nstate);
       rc = gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: the rate of change is not finite (NaN or infinity); check kernel and mechanism parameters", guard.bad_t, where);
     }
-    if (!rc) rc = check_state(c, Y, M1_0, t, &rep, err);
+    if (!rc) rc = check_state(c, Y, M1_0, t, &ymax_seen, &rep, err);
     if (!rc && out) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
     c->integrator.type->get_stats(c->integrator.self, &st);
     if (show) progress(c, t, t_end, &st, now_seconds() - start);

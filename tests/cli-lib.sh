@@ -1,0 +1,127 @@
+# Shared helpers of the command-line tests tests/cli_*.sh (sourced, not a test
+# itself: its name does not match cli_*.sh).
+#
+# Usage at the top of a test:
+#   source "$(dirname "$0")/cli-lib.sh" "$@"     # arguments: BINARY SOURCE_DIR
+# Then: $BIN (the gransim binary), $SRC (source tree), $WORK (a fresh temporary
+# directory removed on exit), and the helpers below.  Every helper fails the
+# test (exit 1) with a message saying what was expected and what happened.
+
+set -euo pipefail
+
+if [ $# -lt 2 ]; then
+  echo "usage: bash $0 GRANSIM_BINARY SOURCE_DIR" >&2
+  exit 2
+fi
+BIN=$1
+SRC=$2
+[ -x "$BIN" ] || { echo "FAIL: $BIN is not an executable" >&2; exit 1; }
+[ -d "$SRC" ] || { echo "FAIL: $SRC is not a directory" >&2; exit 1; }
+TEST_NAME=$(basename "$0" .sh)
+WORK=$(mktemp -d "${TMPDIR:-/tmp}/gransim-$TEST_NAME.XXXXXX")
+BG_PIDS=()
+
+cli_cleanup() {
+  local pid
+  for pid in "${BG_PIDS[@]+"${BG_PIDS[@]}"}"; do
+    kill -9 "$pid" 2>/dev/null || true
+    wait "$pid" 2>/dev/null || true
+  done
+  rm -rf "$WORK"
+}
+trap cli_cleanup EXIT
+
+fail() {
+  echo "FAIL ($TEST_NAME): $*" >&2
+  exit 1
+}
+
+# Last command's output, for messages.
+show_output() {
+  echo "--- stdout:" >&2
+  cat "$WORK/stdout" >&2 || true
+  echo "--- stderr:" >&2
+  cat "$WORK/stderr" >&2 || true
+}
+
+# run_rc EXPECTED_RC CMD...: runs CMD with stdout/stderr in $WORK/stdout and
+# $WORK/stderr and checks its exit status.
+run_rc() {
+  local want=$1 rc=0
+  shift
+  "$@" >"$WORK/stdout" 2>"$WORK/stderr" || rc=$?
+  if [ "$rc" != "$want" ]; then
+    show_output
+    fail "'$*' exited with status $rc, expected $want"
+  fi
+}
+
+# stdout_has / stderr_has FIXED_STRING...: the last command's output contains
+# every given string.
+stdout_has() {
+  local s
+  for s in "$@"; do
+    grep -qF -- "$s" "$WORK/stdout" || { show_output; fail "stdout lacks '$s'"; }
+  done
+}
+stderr_has() {
+  local s
+  for s in "$@"; do
+    grep -qF -- "$s" "$WORK/stderr" || { show_output; fail "stderr lacks '$s'"; }
+  done
+}
+
+# A small valid grid section (one axis), for cases that only vary other keys.
+GRID_1D='grid:
+  axes:
+    - {name: solid, type: linear, min: 0, max: 10, cells: 20}'
+
+# write_case NAME TEXT: writes $WORK/NAME and prints its path.
+write_case() {
+  printf '%s\n' "$2" >"$WORK/$1"
+  printf '%s\n' "$WORK/$1"
+}
+
+# rel_close A B TOL: |A - B| <= TOL * max(|A|, |B|) (numbers as text; nan == nan).
+rel_close() {
+  awk -v a="$1" -v b="$2" -v tol="$3" 'BEGIN {
+    if (a == b) exit 0
+    if (a ~ /nan/ || b ~ /nan/) exit 1
+    x = a + 0; y = b + 0; d = x - y; if (d < 0) d = -d
+    m = (x < 0 ? -x : x); n = (y < 0 ? -y : y); if (n > m) m = n
+    exit !(d <= tol * m)
+  }'
+}
+
+# csv_rows_close FILE_A FILE_B TOL [LINE]: the two CSV files have the same
+# number of lines and, on every line (or only on line LINE, counted from 1),
+# the same number of fields, equal within relative TOL.
+csv_rows_close() {
+  local a=$1 b=$2 tol=$3 line=${4:-0}
+  [ "$(wc -l <"$a")" = "$(wc -l <"$b")" ] ||
+    fail "$a has $(wc -l <"$a") lines, $b has $(wc -l <"$b")"
+  awk -F, -v tol="$tol" -v only="$line" '
+    function abs(v) { return v < 0 ? -v : v }
+    NR == FNR { row[FNR] = $0; next }
+    only && FNR != only { next }
+    {
+      n = split(row[FNR], x, ",")
+      if (n != NF) { printf "line %d: %d fields vs %d\n", FNR, n, NF; bad = 1; next }
+      for (i = 1; i <= NF; i++) {
+        if (x[i] == $i) continue
+        if (x[i] ~ /[a-z]/ || $i ~ /[a-z]/) { printf "line %d field %d: %s vs %s\n", FNR, i, x[i], $i; bad = 1; continue }
+        m = abs(x[i] + 0); if (abs($i + 0) > m) m = abs($i + 0)
+        if (abs(x[i] - $i) > tol * m) { printf "line %d field %d: %s vs %s\n", FNR, i, x[i], $i; bad = 1 }
+      }
+    }
+    END { exit bad }' "$a" "$b" >"$WORK/csvdiff" ||
+    { cat "$WORK/csvdiff" >&2; fail "$a and $b differ by more than $tol relative"; }
+}
+
+# no_result_files DIR: DIR holds neither results nor partial files.
+no_result_files() {
+  local f
+  for f in result.h5 summary.csv .result.h5.partial .summary.csv.partial .result.h5.new; do
+    [ ! -e "$1/$f" ] || fail "$1/$f exists but should not"
+  done
+}

@@ -1,0 +1,252 @@
+# gransim check: a valid case passes; invalid cases fail with exit status 1 and
+# a message naming the file, the line, the key and the offending value.
+source "$(dirname "$0")/cli-lib.sh" "$@"
+
+# ---- a valid case exercising most sections --------------------------------
+cat >"$WORK/kernel.csv" <<'EOF'
+# DEM collision frequencies
+edges, 0, 1, 100
+1, 0.5
+0.5, 0.25
+EOF
+valid=$(write_case valid.yaml "title: everything
+description: >
+  a case touching most keys
+grid:
+  compartments: 2
+  axes:
+    - {name: solid, type: geometric, min: 0.01, max: 50, cells: 20, zero_first: true}
+    - {name: liquid, type: edges, edges: [0, 0.01, 0.1, 1, 10], pivots: [0.005, 0.05, 0.5, 5]}
+  size_axes: [solid]
+initial:
+  - {type: gamma, number: 100, mean: [0.5, 0.3], shape: [3, 2], coverage: 1e-3}
+  - {type: point, number: 5, at: [1, 0.5], compartment: 2}
+  - {type: cell, number: 1, index: [3, 2]}
+mechanisms:
+  - type: aggregation
+    redistribution: fixed_pivot
+    table_limit_mb: 10
+    kernel: {type: table, file: kernel.csv, beta0: 0.01, measure: volume, axes: [solid, liquid]}
+  - type: aggregation
+    kernel: {type: madec, beta0: 1e-4, alpha: 1, delta: 1, liquid_content: fraction, liquid_axis: liquid}
+  - type: breakage
+    selection: {type: shear, shear_rate: 10, b: 0.5, axes: [solid]}
+    daughters: {type: beta, fragments: 3, shape: 2}
+  - type: breakage
+    redistribution: fixed_pivot
+    selection: {type: power, s0: 0.01, exponent: 0.5}
+    daughters: {type: power, exponent: 1}
+  - {type: growth, axis: solid, constant: 0.001, linear: 0.01, start: 0, end: 5}
+  - {type: liquid_addition, rate: [0.1, 0], start: 1, end: 4, solid_axes: [solid]}
+  - type: feed
+    compartment: 1
+    start: 0
+    end: 3
+    distribution: {type: exponential, number: 2, mean: [0.5, 0.2], coverage: 1e-3}
+  - {type: transfer, velocity: [1, 2], length: 10}
+solver: {method: cvode, rtol: 1e-5, atol: 1e-10, linear_solver: dense, max_order: 4, max_step: 1}
+output: {start: 0, end: 10, count: 6, spacing: log, first: 0.5}
+checks: {mass_tolerance: 1e-8, negative_tolerance: 1e-6, max_loss: 1e-3}")
+run_rc 0 "$BIN" check "$valid"
+stdout_has "valid.yaml: valid" "2 axes" "compartments" "8 mechanisms" "6 output times" "integrator cvode"
+
+# the smallest valid case: a grid and output times
+minimal=$(write_case minimal.yaml "$GRID_1D
+output: {end: 1}")
+run_rc 0 "$BIN" check "$minimal"
+stdout_has "11 output times from 0 to 1" "integrator rk"
+
+# ---- invalid cases ------------------------------------------------------------
+# bad NAME EXPECTED_LINE TEXT FRAGMENT...: `gransim check` of TEXT (written to
+# NAME) exits 1 and stderr holds "NAME:LINE:" and every FRAGMENT.
+bad() {
+  local name=$1 line=$2 text=$3 f
+  shift 3
+  f=$(write_case "$name" "$text")
+  run_rc 1 "$BIN" check "$f"
+  stderr_has "$name:$line:" "$@"
+  [ ! -s "$WORK/stdout" ] || { show_output; fail "check of $name printed on stdout"; }
+}
+
+# unknown keys, with the list of expected ones
+bad unknown-key.yaml 4 "$GRID_1D
+output: {end: 1, cont: 5}" \
+  "unknown key 'cont' in output" "expected one of: start, times, end, count, spacing"
+bad unknown-axis-key.yaml 9 "grid:
+  axes:
+    - name: solid
+      type: linear
+      min: 0
+      max: 1
+      cells: 10
+      # a comment line
+      ratoi: 2
+output: {end: 1}" \
+  "unknown key 'ratoi' in grid.axes[0]" "expected one of: name, type, min, max, cells"
+bad unknown-top.yaml 5 "$GRID_1D
+output: {end: 1}
+outptu: {end: 2}" \
+  "unknown key 'outptu' in the top level" "expected one of: title, description, grid"
+bad unknown-kernel-key.yaml 9 "$GRID_1D
+mechanisms:
+  - type: aggregation
+    kernel:
+      type: constant
+      beta0: 1
+      beta1: 2
+output: {end: 1}" \
+  "unknown key 'beta1' in mechanisms[0].kernel" "expected one of: type, beta0"
+bad unknown-solver-key.yaml 5 "$GRID_1D
+output: {end: 1}
+solver: {method: cvode, variant: rkf45}" \
+  "unknown key 'variant' in solver" "linear_solver, max_order"
+
+# wrong types
+bad type-number.yaml 4 "$GRID_1D
+output: {end: abc}" \
+  "output.end = 'abc': expected a number"
+bad type-integer.yaml 3 "grid:
+  axes:
+    - {name: solid, type: linear, min: 0, max: 10, cells: 1e2}
+output: {end: 1}" \
+  "grid.axes[0].cells = '1e2': expected an integer"
+bad type-list.yaml 5 "$GRID_1D
+output: {end: 1}
+mechanisms: {type: growth, axis: solid}" \
+  "mechanisms: expected a list"
+bad type-bool.yaml 3 "grid:
+  axes:
+    - {name: solid, type: geometric, min: 1, ratio: 2, cells: 5, zero_first: maybe}
+output: {end: 1}" \
+  "grid.axes[0].zero_first = 'maybe': expected true or false"
+bad type-enum.yaml 8 "$GRID_1D
+output: {end: 1}
+mechanisms:
+  - type: aggregation
+    kernel: {type: constant, beta0: 1}
+    redistribution: cell_avg" \
+  "mechanisms[0].redistribution = 'cell_avg': expected one of: cell_average, fixed_pivot"
+bad type-nonfinite.yaml 4 "$GRID_1D
+output: {end: .inf}" \
+  "output.end = '.inf': expected a finite number"
+
+# out of range
+bad negative-min.yaml 3 "grid:
+  axes:
+    - {name: solid, type: linear, min: -1, max: 10, cells: 10}
+output: {end: 1}" \
+  "grid.axes[0].min = '-1': expected a number >= 0"
+bad geometric-min.yaml 3 "grid:
+  axes:
+    - {name: solid, type: geometric, min: 0, ratio: 2, cells: 10}
+output: {end: 1}" \
+  "grid.axes[0].min = '0': expected a number > 0"
+bad rtol-range.yaml 5 "$GRID_1D
+output: {end: 1}
+solver: {rtol: 2}" \
+  "solver.rtol = '2': expected a number > 0 and < 1"
+bad cell-index.yaml 4 "$GRID_1D
+initial: {type: cell, index: 0, number: 1}
+output: {end: 1}" \
+  "initial.index" "index 0 on axis 'solid' must be an integer from 1 to 20"
+bad compartment-range.yaml 4 "$GRID_1D
+initial: {type: point, at: 1, number: 1, compartment: 2}
+output: {end: 1}" \
+  "initial.compartment = '2': expected an integer between 1 and 1"
+bad point-outside.yaml 4 "$GRID_1D
+initial: {type: point, at: 10, number: 1}
+output: {end: 1}" \
+  "initial.at = '10': coordinate 10 on axis 'solid' lies outside the pivots [0.25, 9.75]"
+bad times-order.yaml 4 "$GRID_1D
+output: {times: [1, 3, 2]}" \
+  "output.times" "times must increase" "entry 2 is 2"
+bad log-first.yaml 4 "$GRID_1D
+output: {start: -5, end: 10, spacing: log, first: -1}" \
+  "output.first = '-1': expected a number > 0 and < 10"
+bad same-axis-names.yaml 3 "grid:
+  axes:
+    - {name: solid, type: linear, min: 0, max: 10, cells: 10}
+    - {name: solid, type: linear, min: 0, max: 10, cells: 10}
+output: {end: 1}" \
+  "two axes are both named 'solid'"
+
+# grid not covering the initial distribution
+bad coverage.yaml 4 "$GRID_1D
+initial: {type: gamma, number: 1, mean: 8, shape: 2}
+output: {end: 1}" \
+  "initial: grid axis 'solid' [0, 10] does not cover this distribution" "coverage"
+
+# unknown types
+bad unknown-mechanism.yaml 6 "$GRID_1D
+output: {end: 1}
+mechanisms:
+  - type: agregation" \
+  "mechanisms[0].type = 'agregation': unknown mechanism" \
+  "expected one of: aggregation, breakage, growth, liquid_addition, consolidation, feed, transfer"
+bad unknown-kernel.yaml 7 "$GRID_1D
+output: {end: 1}
+mechanisms:
+  - type: aggregation
+    kernel: {type: constnat, beta0: 1}" \
+  "mechanisms[0].kernel.type = 'constnat': unknown kernel type" \
+  "expected one of: constant, sum, product, madec, table"
+bad unknown-method.yaml 5 "$GRID_1D
+output: {end: 1}
+solver: {method: rk45}" \
+  "solver.method = 'rk45': unknown integrator method; expected one of: rk"
+
+# missing keys
+bad missing-beta0.yaml 7 "$GRID_1D
+output: {end: 1}
+mechanisms:
+  - type: aggregation
+    kernel: {type: constant}" \
+  "missing key 'beta0' in mechanisms[0].kernel"
+bad missing-output.yaml 1 "$GRID_1D" "missing key 'output' in the top level"
+bad missing-madec-axis.yaml 8 "$GRID_1D
+output: {end: 1}
+mechanisms:
+  - type: aggregation
+    kernel:
+      type: madec
+      beta0: 1" \
+  "mechanisms[0].kernel" "needs a grid axis named 'liquid'"
+bad missing-table.yaml 9 "$GRID_1D
+output: {end: 1}
+mechanisms:
+  - type: aggregation
+    kernel:
+      type: table
+      file: no-such-table.csv" \
+  "mechanisms[0].kernel.file" "no-such-table.csv" "cannot open kernel table"
+
+# YAML-level errors
+bad syntax.yaml 5 "$GRID_1D
+output: {end: 1
+  count: [3" \
+  "YAML syntax error"
+bad duplicate.yaml 5 "$GRID_1D
+output: {end: 1}
+output: {end: 2}" \
+  "duplicate key 'output' in the top level (first given on line 4)"
+bad anchor.yaml 3 "grid:
+  axes:
+    - &ax {name: solid, type: linear, min: 0, max: 10, cells: 20}
+output: {end: 1}" \
+  "YAML anchors (&ax) are not supported"
+
+# empty and missing files
+f=$(write_case empty.yaml "# nothing but a comment")
+run_rc 1 "$BIN" check "$f"
+stderr_has "empty.yaml: the case file is empty"
+run_rc 1 "$BIN" check "$WORK/no-such-case.yaml"
+stderr_has "cannot open case file '$WORK/no-such-case.yaml'" "No such file or directory"
+
+# run refuses an invalid case the same way and creates nothing
+f=$(write_case run-bad.yaml "$GRID_1D
+output: {end: -1}")
+run_rc 1 "$BIN" run "$f" --out "$WORK/out-bad"
+stderr_has "run-bad.yaml:4: output.end = '-1': expected a number > 0"
+[ ! -e "$WORK/out-bad" ] || fail "run of an invalid case created $WORK/out-bad"
+
+echo "cli_check: ok"

@@ -1,0 +1,123 @@
+# gransim run: a small case writes result.h5 and summary.csv with the
+# documented layout; a run that fails numerically exits 1 and leaves no result
+# and no partial files.
+source "$(dirname "$0")/cli-lib.sh" "$@"
+
+# ---- a small successful run: 2 axes, 2 compartments, 5 output times --------
+ok=$(write_case small.yaml "title: small run
+grid:
+  compartments: 2
+  axes:
+    - {name: solid, type: geometric, min: 0.01, ratio: 1.5, cells: 16, zero_first: true}
+    - {name: liquid, type: linear, min: 0, max: 2, cells: 8}
+initial: {type: point, number: 100, at: [0.1, 0.3]}
+mechanisms:
+  - type: aggregation
+    kernel: {type: constant, beta0: 1e-3}
+  - type: transfer
+    rate: 0.5
+output: {times: [0.5, 1, 1.5, 2]}")
+out=$WORK/out
+run_rc 0 "$BIN" run "$ok" --out "$out" --threads 1
+stderr_has "done to t = 2" "$out/result.h5" "$out/summary.csv"
+[ -f "$out/result.h5" ] || fail "no $out/result.h5"
+[ -f "$out/summary.csv" ] || fail "no $out/summary.csv"
+for f in .result.h5.partial .summary.csv.partial .result.h5.new; do
+  [ ! -e "$out/$f" ] || fail "partial file $out/$f left after a successful run"
+done
+
+ntimes=5 ncomp=2
+csv=$out/summary.csv
+header=$(head -n 1 "$csv")
+want="time,compartment,M0,M1,M2,d10,d50,d90,mean_solid,mean_liquid,total_solid,total_liquid"
+[ "$header" = "$want" ] || fail "summary.csv header is '$header', expected '$want'"
+rows=$(($(wc -l <"$csv") - 1))
+[ "$rows" -eq $((ntimes * ncomp)) ] ||
+  fail "summary.csv has $rows rows, expected $((ntimes * ncomp)) (output times x compartments)"
+# every row has every column; time-major order; compartments 1-based
+awk -F, -v n=12 'NR > 1 && NF != n { exit 1 }' "$csv" || fail "a summary.csv row does not have 12 columns"
+times=$(awk -F, 'NR > 1 { printf "%s/%s ", $1, $2 }' "$csv")
+want_times="0/1 0/2 0.5/1 0.5/2 1/1 1/2 1.5/1 1.5/2 2/1 2/2 "
+[ "$times" = "$want_times" ] || fail "summary.csv (time/compartment) columns are '$times', expected '$want_times'"
+# the initial state: 100 particles in compartment 1 (row 0), none in compartment 2
+first=$(sed -n 2p "$csv" | cut -d, -f3)
+rel_close "$first" 100 1e-12 || fail "M0 at t = 0 in compartment 1 is $first, expected 100"
+second=$(sed -n 3p "$csv" | cut -d, -f3)
+[ "$second" = 0 ] || fail "M0 at t = 0 in compartment 2 is $second, expected 0"
+# transfer moves particles into compartment 2: its M0 grows
+last=$(tail -n 1 "$csv" | cut -d, -f3)
+awk -v v="$last" 'BEGIN { exit !(v > 0) }' || fail "compartment 2 is still empty at t = 2"
+# volume of solid: all that left compartment 1 is in compartment 2 or discharged, so the
+# total over both compartments never exceeds the initial 100 * 0.1 (pivots are not exact)
+awk -F, 'NR > 1 && $1 == 2 { s += $11 } END { exit !(s > 0 && s <= 10 * (1 + 1e-9)) }' "$csv" ||
+  fail "total_solid at t = 2 is not within (0, 10]"
+
+# ---- result.h5 layout (needs hdf5-tools) ---------------------------------------
+if command -v h5ls >/dev/null 2>&1; then
+  h5ls -r "$out/result.h5" >"$WORK/h5ls" 2>&1 || { cat "$WORK/h5ls" >&2; fail "h5ls cannot read result.h5"; }
+  h5_has() {
+    grep -Eq "$1" "$WORK/h5ls" || { cat "$WORK/h5ls" >&2; fail "result.h5 lacks $2"; }
+  }
+  h5_has '^/time +Dataset \{5(/Inf)?\}' "/time (5)"
+  h5_has '^/number +Dataset \{5(/Inf)?, 2, 16, 8\}' "/number (5, 2, 16, 8)"
+  h5_has '^/ledger +Dataset \{5(/Inf)?, 2, 4\}' "/ledger (5, 2, 4)"
+  h5_has '^/grid +Group' "the group /grid"
+  h5_has '^/grid/solid/edges +Dataset \{17\}' "/grid/solid/edges (17)"
+  h5_has '^/grid/solid/pivots +Dataset \{16\}' "/grid/solid/pivots (16)"
+  h5_has '^/grid/liquid/edges +Dataset \{9\}' "/grid/liquid/edges (9)"
+  h5_has '^/case +Group' "the group /case"
+  for col in time compartment M0 M1 M2 d10 d50 d90 mean_solid mean_liquid total_solid total_liquid; do
+    h5_has "^/summary/$col +Dataset \\{5(/Inf)?, 2\\}" "/summary/$col (5, 2)"
+  done
+  if command -v h5dump >/dev/null 2>&1; then
+    h5dump -a /status "$out/result.h5" >"$WORK/h5attr" 2>&1 || fail "h5dump cannot read /status"
+    grep -q '"complete"' "$WORK/h5attr" || { cat "$WORK/h5attr" >&2; fail "status of result.h5 is not complete"; }
+    h5dump -a /case/file "$out/result.h5" >"$WORK/h5attr" 2>&1 || fail "h5dump cannot read /case/file"
+    grep -q 'small.yaml' "$WORK/h5attr" || { cat "$WORK/h5attr" >&2; fail "/case attribute file does not name small.yaml"; }
+    h5dump -a /grid/axis_names "$out/result.h5" >"$WORK/h5attr" 2>&1 || fail "h5dump cannot read /grid/axis_names"
+    grep -q '"solid,liquid"' "$WORK/h5attr" || { cat "$WORK/h5attr" >&2; fail "/grid axis_names is not solid,liquid"; }
+  fi
+else
+  echo "cli_run: h5ls not found (install hdf5-tools); result.h5 layout not checked" >&2
+fi
+
+# running again into the same directory replaces the results
+run_rc 0 "$BIN" run "$ok" --out "$out" --threads 1 --quiet
+[ "$(wc -l <"$csv")" -eq $((1 + ntimes * ncomp)) ] || fail "a second run did not rewrite summary.csv"
+
+# ---- a run that fails numerically: aggregates leave a too small grid ----------
+lossy=$(write_case lossy.yaml "grid:
+  axes:
+    - {name: solid, type: linear, min: 0, max: 4, cells: 4}
+initial: {type: cell, index: 1, number: 10}
+mechanisms:
+  # fixed pivot: with cell_average this case takes ~1e5 steps (the pooled
+  # births of the last cell switch between kept and lost)
+  - type: aggregation
+    redistribution: fixed_pivot
+    kernel: {type: constant, beta0: 1}
+output: {end: 5, count: 6}")
+run_rc 0 "$BIN" check "$lossy"
+fout=$WORK/failed
+run_rc 1 "$BIN" run "$lossy" --out "$fout" --threads 1
+stderr_has "checks.max_loss" "axis 'solid'" "t = 1"
+[ -d "$fout" ] || fail "the output directory $fout was not created"
+no_result_files "$fout"
+[ -z "$(ls -A "$fout")" ] || fail "the failed run left files in $fout: $(ls -A "$fout")"
+
+# the same case passes when the loss is allowed
+tolerant=$(write_case tolerant.yaml "$(cat "$lossy")
+checks: {max_loss: 1}")
+run_rc 0 "$BIN" run "$tolerant" --out "$WORK/tolerant" --threads 1 --quiet
+[ -f "$WORK/tolerant/summary.csv" ] || fail "no summary.csv with checks.max_loss = 1"
+
+# ---- an unwritable output directory: exit 1, clear message ---------------------
+touch "$WORK/a-file"
+run_rc 1 "$BIN" run "$ok" --out "$WORK/a-file" --threads 1
+stderr_has "cannot create output directory $WORK/a-file"
+
+# ---- --resume with nothing to resume -------------------------------------------
+run_rc 1 "$BIN" run "$ok" --out "$WORK/empty-dir" --resume --threads 1
+stderr_has "nothing to resume"
+
+echo "cli_run: ok"
