@@ -88,14 +88,6 @@ TL_FN double tl_mom(const gs_case *c, const double *y, size_t comp, int p0, int 
   return gs_moment(&c->model, y, comp, p);
 }
 
-/* Granule-volume moment sum N V^p (V = sum of all axes) of compartment comp. */
-TL_FN double tl_vmom(const gs_case *c, const double *y, size_t comp, double p) {
-  const gs_grid *g = &c->model.grid;
-  double s = 0;
-  for (size_t i = 0; i < g->ncells; i++) s += y[comp * g->ncells + i] * pow(g->volume[i], p);
-  return s;
-}
-
 TL_FN double tl_relerr(double got, double want) { return fabs(got - want) / fabs(want); }
 
 /* Fixed-seed generator (64-bit LCG, Knuth's MMIX constants), uniform in (0, 1). */
