@@ -11,7 +11,7 @@
  * the difference-quotient Jacobian perturbs them by amounts scaled with the
  * tolerance (the mass ledger, which nothing reads, is the intended use).
  *
- * CVODE is set up once in create() with a placeholder initial state and
+ * CVODE is set up once in create() with a zero initial state and
  * re-initialised whenever advance() is called with a state other than the one
  * it last returned, so consecutive calls keep the BDF history. */
 #include <math.h>
