@@ -1,0 +1,163 @@
+/* gransim — embedded discrete element method (DEM) for granulators.
+ *
+ * Spheres with translation and rotation (velocity Verlet), gravity, the
+ * Hertz–Mindlin contact with tangential history, Coulomb limit, viscous damping
+ * derived from the coefficient of restitution and constant-directional-torque
+ * rolling friction (the model family of LIGGGHTS `pair gran model hertz
+ * tangential history rolling_friction cdt`), against other spheres and
+ * against walls: planes, cylinders and triangle meshes (STL) that may rotate
+ * and translate.  Particles come in types; each type has a material and a
+ * size class (the PBM class its collisions are booked under).
+ *
+ * The simulation counts collision *events* (a contact that begins) per pair of
+ * size classes and impacts per wall and class, which is what the PBM's
+ * aggregation and breakage kernels need; src/dem/stats.c turns them into
+ * tables (see docs/case-files.md, section "DEM cases").
+ *
+ * Units are SI throughout.  All functions return GS_OK or an error code and
+ * fill a caller-owned gs_error. */
+#ifndef GRANSIM_DEM_H
+#define GRANSIM_DEM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "gransim/error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct gs_dem gs_dem;
+typedef struct gs_dem_mesh gs_dem_mesh;
+
+/* Material of a particle type or of a wall.  For a pair, E and nu combine to
+ * the effective moduli; e, mu_s and mu_r of the pair are the means of the two
+ * materials' values (identical materials give exactly the values given). */
+typedef struct {
+  double E;       /* Young's modulus [Pa] */
+  double nu;      /* Poisson's ratio */
+  double e;       /* coefficient of restitution, (0, 1] */
+  double mu_s;    /* sliding friction */
+  double mu_r;    /* rolling friction (CDT) */
+  double density; /* [kg/m^3]; ignored for walls */
+} gs_dem_material;
+
+/* How the damping coefficient follows from e (see docs/models.md, DEM):
+ *  EXACT    - solve the damped Hertz impact once so that a head-on collision
+ *             rebounds with exactly e (default);
+ *  LIGGGHTS - c = 2 sqrt(5/6) beta, beta = -ln e / sqrt(ln^2 e + pi^2), the
+ *             closed form LIGGGHTS uses (realises e to within about 1 %,
+ *             e.g. 0.3995 for 0.4); chosen for side-by-side comparisons. */
+enum { GS_DEM_DAMPING_EXACT = 0, GS_DEM_DAMPING_LIGGGHTS = 1 };
+
+typedef struct {
+  double dt;          /* time step [s] */
+  double gravity[3];  /* [m/s^2] */
+  double skin;        /* Verlet skin [m]; lists are rebuilt when a particle moved skin/2 */
+  double lo[3], hi[3];/* simulation box; particles leaving it are removed and counted lost */
+  int damping;        /* GS_DEM_DAMPING_* */
+  int nclass;         /* size classes for statistics (>= 1) */
+  double impact_dv;   /* bin width of impact speed histograms [m/s] (0: 0.25) */
+} gs_dem_params;
+
+/* ---- setup ------------------------------------------------------------- */
+gs_dem *gs_dem_alloc(const gs_dem_params *p, gs_error *err);
+void gs_dem_free(gs_dem *d);
+
+/* A particle type: material and size class (0-based).  Returns the type index
+ * (>= 0) or -1 with err set. */
+int gs_dem_add_type(gs_dem *d, const gs_dem_material *m, int size_class, gs_error *err);
+
+/* Walls.  Each returns the wall index (>= 0) or -1.  name labels outputs. */
+int gs_dem_add_plane(gs_dem *d, const char *name, const double point[3], const double normal[3],
+                     const gs_dem_material *m, gs_error *err);
+/* Cylinder about axis through point; inside != 0: particles are kept inside. */
+int gs_dem_add_cylinder(gs_dem *d, const char *name, const double point[3], const double axis[3],
+                        double radius, int inside, const gs_dem_material *m, gs_error *err);
+/* Triangle mesh; the simulation takes ownership of mesh (also on failure). */
+int gs_dem_add_mesh(gs_dem *d, const char *name, gs_dem_mesh *mesh, const gs_dem_material *m,
+                    gs_error *err);
+/* Prescribed rigid motion of a wall: rotation at omega [rad/s] about the axis
+ * through origin (right-hand rule), plus translation at velocity. */
+int gs_dem_wall_set_motion(gs_dem *d, int wall, const double origin[3], const double axis[3],
+                           double omega, const double velocity[3], gs_error *err);
+size_t gs_dem_nwalls(const gs_dem *d);
+const char *gs_dem_wall_name(const gs_dem *d, size_t wall);
+
+/* ---- meshes (src/dem/mesh_stl.c) ---------------------------------------- */
+/* Read an ASCII or binary STL file, multiplying coordinates by scale. */
+gs_dem_mesh *gs_dem_mesh_read_stl(const char *path, double scale, gs_error *err);
+/* A mesh from ntri triangles given as 9 coordinates each (copied). */
+gs_dem_mesh *gs_dem_mesh_from_triangles(const double *xyz, size_t ntri, gs_error *err);
+size_t gs_dem_mesh_ntri(const gs_dem_mesh *m);
+void gs_dem_mesh_bounds(const gs_dem_mesh *m, double lo[3], double hi[3]);
+void gs_dem_mesh_free(gs_dem_mesh *m);
+
+/* ---- particles ----------------------------------------------------------- */
+/* Add a sphere of type at x with velocity v and angular velocity w (NULL =
+ * zero).  Returns its id (>= 0, never reused) or -1.  Particles added between
+ * steps enter at the next step; overlaps are not checked here (insertion.c). */
+long gs_dem_add_particle(gs_dem *d, int type, double radius, const double x[3], const double v[3],
+                         const double w[3], gs_error *err);
+
+/* ---- running ------------------------------------------------------------ */
+/* Advance nsteps time steps.  Fails on non-finite positions. */
+int gs_dem_run(gs_dem *d, long nsteps, gs_error *err);
+/* Remove every particle whose centre satisfies pred (applied at the next step). */
+void gs_dem_remove_if(gs_dem *d, int (*pred)(const double x[3], void *ctx), void *ctx);
+
+/* ---- state (read-only views, valid until the next step) ----------------- */
+typedef struct {
+  size_t n;
+  const double *x, *y, *z, *vx, *vy, *vz, *wx, *wy, *wz, *r, *m;
+  const int *type;
+  const long *id;
+  const double *t_in; /* time each particle entered */
+} gs_dem_view;
+void gs_dem_get_view(const gs_dem *d, gs_dem_view *v);
+double gs_dem_time(const gs_dem *d);
+long gs_dem_step_count(const gs_dem *d);
+int gs_dem_type_class(const gs_dem *d, int type);
+size_t gs_dem_ntypes(const gs_dem *d);
+/* Smallest Rayleigh time over the particle types present in the type table. */
+double gs_dem_rayleigh_time(const gs_dem *d);
+
+/* Counters accumulated since the last gs_dem_counters_reset (for rates). */
+typedef struct {
+  int nclass;
+  size_t nwalls;
+  const uint64_t *pair_events;   /* nclass*nclass, [i*nclass+j] with i <= j (upper triangle) */
+  const uint64_t *wall_impacts;  /* nwalls*nclass */
+  const double *wall_vn_sum;     /* sum of normal impact speeds, nwalls*nclass */
+  const double *wall_vn2_sum;    /* sum of squared normal impact speeds */
+  const double *wall_vt_sum;     /* sum of tangential impact speeds */
+  uint64_t lost;                 /* particles that left the box */
+  uint64_t rebuilds;             /* neighbour list rebuilds */
+  double t0;                     /* time of the last reset */
+} gs_dem_counters;
+void gs_dem_get_counters(const gs_dem *d, gs_dem_counters *c);
+void gs_dem_counters_reset(gs_dem *d);
+/* Impact speed histogram of wall w, class c: nbins bins of width dv from 0
+ * (the last bin takes everything above). */
+const uint64_t *gs_dem_impact_histogram(const gs_dem *d, size_t wall, int cls, int *nbins,
+                                        double *dv);
+
+/* Number of particle-particle contacts currently active. */
+size_t gs_dem_ncontacts(const gs_dem *d);
+/* Kinetic energy: translational and rotational [J]. */
+void gs_dem_kinetic_energy(const gs_dem *d, double *trans, double *rot);
+/* Current world-frame triangle coordinates of a mesh wall (9 per triangle),
+ * written to out (caller provides 9*ntri doubles); returns ntri, 0 if not a mesh. */
+size_t gs_dem_wall_triangles(const gs_dem *d, size_t wall, double *out);
+
+/* Coefficient c of the damping law gamma = c * sqrt(S m*) for restitution e
+ * under the given damping mode (exposed for tests and documentation). */
+double gs_dem_damping_coefficient(double e, int mode);
+/* Restitution a head-on Hertz impact with damping coefficient c realises. */
+double gs_dem_restitution_of(double c);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

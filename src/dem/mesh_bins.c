@@ -1,0 +1,115 @@
+/* Mesh preprocessing: welding vertices (so triangles know which edges and
+ * vertices they share) and binning triangles on a grid in the mesh's body
+ * frame.  A cell lists every triangle that comes within `reach` of some point
+ * of the cell, so a sphere of radius <= reach needs only the cell of its
+ * centre. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "dem/dem_internal.h"
+
+typedef struct {
+  double c[3];
+  int i;
+} corner;
+
+static int cmp_corner(const void *a, const void *b) {
+  const corner *p = a, *q = b;
+  for (int k = 0; k < 3; k++) {
+    if (p->c[k] < q->c[k]) return -1;
+    if (p->c[k] > q->c[k]) return 1;
+  }
+  return 0;
+}
+
+/* Identical coordinates get one id (STL stores each corner once per facet). */
+void gs_dem_mesh_weld(gs_dem_mesh *m) {
+  size_t nc = 3 * m->ntri;
+  corner *cs = malloc((nc ? nc : 1) * sizeof *cs);
+  if (!cs) {
+    for (size_t k = 0; k < nc; k++) m->vid[k] = (int)k; /* no welding: still correct, less dedup */
+    m->nvert = nc;
+    return;
+  }
+  for (size_t k = 0; k < nc; k++) {
+    memcpy(cs[k].c, m->v + 3 * k, 3 * sizeof(double));
+    cs[k].i = (int)k;
+  }
+  qsort(cs, nc, sizeof *cs, cmp_corner);
+  int id = -1;
+  for (size_t k = 0; k < nc; k++) {
+    if (k == 0 || cmp_corner(&cs[k - 1], &cs[k])) id++;
+    m->vid[cs[k].i] = id;
+  }
+  m->nvert = (size_t)id + 1;
+  free(cs);
+}
+
+int gs_dem_mesh_build_bins(gs_dem_mesh *m, double reach, gs_error *err) {
+  double lo[3], hi[3];
+  gs_dem_mesh_bounds(m, lo, hi);
+  double ext = 0;
+  for (int a = 0; a < 3; a++) {
+    lo[a] -= reach;
+    hi[a] += reach;
+    if (hi[a] - lo[a] > ext) ext = hi[a] - lo[a];
+  }
+  /* cells about two radii wide keep the triangle lists short; cap the grid */
+  double h = fmax(2 * reach, ext / 400);
+  while (((hi[0] - lo[0]) / h + 1) * ((hi[1] - lo[1]) / h + 1) * ((hi[2] - lo[2]) / h + 1) > 4e6)
+    h *= 1.25;
+  m->bh = h;
+  size_t ncell = 1;
+  for (int a = 0; a < 3; a++) {
+    m->blo[a] = lo[a];
+    m->bdim[a] = (int)((hi[a] - lo[a]) / h) + 1;
+    ncell *= (size_t)m->bdim[a];
+  }
+  free(m->bfirst);
+  free(m->btri);
+  m->btri = NULL;
+  m->bfirst = calloc(ncell + 1, sizeof(int));
+  if (!m->bfirst) return gs_error_set(err, GS_ENOMEM, "out of memory binning a mesh");
+  const double half_diag = 0.5 * sqrt(3.0) * h;
+  /* two passes: count, then fill */
+  for (int pass = 0; pass < 2; pass++) {
+    int *fill = NULL;
+    if (pass == 1) {
+      for (size_t c = 0; c < ncell; c++) m->bfirst[c + 1] += m->bfirst[c];
+      m->btri = malloc(((size_t)m->bfirst[ncell] + 1) * sizeof(int));
+      fill = malloc((ncell + 1) * sizeof(int));
+      if (!m->btri || !fill) {
+        free(fill);
+        return gs_error_set(err, GS_ENOMEM, "out of memory binning a mesh");
+      }
+      memcpy(fill, m->bfirst, (ncell + 1) * sizeof(int));
+    }
+    for (size_t t = 0; t < m->ntri; t++) {
+      const double *v = m->v + 9 * t, *nr = m->nrm + 3 * t;
+      int c0[3], c1[3];
+      for (int a = 0; a < 3; a++) {
+        double mn = fmin(v[a], fmin(v[3 + a], v[6 + a])) - reach;
+        double mx = fmax(v[a], fmax(v[3 + a], v[6 + a])) + reach;
+        c0[a] = (int)floor((mn - m->blo[a]) / h);
+        c1[a] = (int)floor((mx - m->blo[a]) / h);
+        if (c0[a] < 0) c0[a] = 0;
+        if (c1[a] >= m->bdim[a]) c1[a] = m->bdim[a] - 1;
+      }
+      for (int iz = c0[2]; iz <= c1[2]; iz++)
+        for (int iy = c0[1]; iy <= c1[1]; iy++)
+          for (int ix = c0[0]; ix <= c1[0]; ix++) {
+            double cc[3] = {m->blo[0] + (ix + 0.5) * h, m->blo[1] + (iy + 0.5) * h,
+                            m->blo[2] + (iz + 0.5) * h};
+            double s = (cc[0] - v[0]) * nr[0] + (cc[1] - v[1]) * nr[1] + (cc[2] - v[2]) * nr[2];
+            if (fabs(s) > half_diag + reach) continue;
+            size_t cell = ((size_t)iz * m->bdim[1] + iy) * m->bdim[0] + ix;
+            if (pass == 0) m->bfirst[cell + 1]++;
+            else m->btri[fill[cell]++] = (int)t;
+          }
+    }
+    free(fill);
+  }
+  m->bin_reach = reach;
+  return GS_OK;
+}
