@@ -42,6 +42,12 @@ typedef struct gs_case {
 int gs_case_load(const char *path, gs_case *c, gs_error *err);
 int gs_case_from_cfg(gs_cfg *cfg, gs_case *c, gs_error *err);
 void gs_case_free(gs_case *c);
+/* The `grid` and `output` sections alone (also used by the SWA solver).
+ * gs_case_read_grid initialises m (free with gs_model_free); *times is
+ * malloc'ed. */
+int gs_case_read_grid(gs_cfg_node *root, gs_model *m, gs_error *err);
+int gs_case_read_times(gs_cfg_node *root, double *t0, double **times, size_t *ntimes,
+                       gs_error *err);
 
 /* ---- running ------------------------------------------------------------ */
 typedef struct gs_run_options {

@@ -7,6 +7,7 @@
 #include "cli/commands.h"
 #include "gransim/case.h"
 #include "gransim/kernel.h"
+#include "gransim/swa.h"
 
 #ifndef GRANSIM_VERSION
 #define GRANSIM_VERSION "unknown"
@@ -67,7 +68,10 @@ static int cmd_run(int argc, char **argv) {
   opt.out_dir = out;
   gs_error err = {0};
   gs_case c;
-  if (gs_case_load(path, &c, &err)) {
+  gs_cfg *cfg = gs_cfg_load_file(path, &err);
+  if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_run_swa(cfg, path, out, opt.progress, opt.resume);
+  memset(&c, 0, sizeof c);
+  if (!cfg || gs_case_from_cfg(cfg, &c, &err)) {
     fprintf(stderr, "gransim: %s\n", err.msg);
     gs_case_free(&c);
     return 1;
@@ -93,7 +97,10 @@ static int cmd_check(int argc, char **argv) {
   }
   gs_error err = {0};
   gs_case c;
-  int rc = gs_case_load(argv[0], &c, &err);
+  gs_cfg *cfg = gs_cfg_load_file(argv[0], &err);
+  if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_check_swa(cfg, argv[0]);
+  memset(&c, 0, sizeof c);
+  int rc = cfg ? gs_case_from_cfg(cfg, &c, &err) : err.code;
   if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
   else {
     const gs_grid *g = &c.model.grid;
@@ -117,6 +124,8 @@ static int cmd_list(void) {
   for (const gs_daughter_type *const *t = gs_daughter_types(); *t; t++) printf("  %-16s %s\n", (*t)->name, (*t)->summary);
   printf("integrators (solver.method):\n");
   for (const gs_integrator_type *const *t = gs_integrator_types(); *t; t++) printf("  %-16s %s\n", (*t)->name, (*t)->summary);
+  printf("swa solver processes (the mechanisms of cases with solver.method: swa):\n");
+  for (const gs_swa_process_type *const *t = gs_swa_process_types(); *t; t++) printf("  %-20s %s\n", (*t)->name, (*t)->summary);
   return 0;
 }
 

@@ -253,6 +253,23 @@ static void negative_floor(gs_cfg_node *root, gs_case *c) {
   c->checks.negative_floor = 100 * atol;
 }
 
+/* Shared with the SWA solver (src/swa/case.c), which reads the same grid and
+ * output sections of a case file. */
+int gs_case_read_grid(gs_cfg_node *root, gs_model *m, gs_error *err) {
+  return read_grid(root, m, err);
+}
+
+int gs_case_read_times(gs_cfg_node *root, double *t0, double **times, size_t *ntimes,
+                       gs_error *err) {
+  gs_case tmp;
+  memset(&tmp, 0, sizeof tmp);
+  int rc = read_output(root, &tmp, err);
+  *t0 = tmp.t0;
+  *times = tmp.times;
+  *ntimes = tmp.ntimes;
+  return rc;
+}
+
 int gs_case_from_cfg(gs_cfg *cfg, gs_case *c, gs_error *err) {
   memset(c, 0, sizeof *c);
   c->cfg = cfg;

@@ -1,0 +1,201 @@
+/* gransim — the stochastic weighted-particle solver (SWA, seed 001).
+ *
+ * A run is a Markov jump process on computational particles.  Particle i of
+ * compartment z has a type-space vector x_i (one value per coordinate, e.g.
+ * solid, external liquid, internal liquid, pores) and a statistical weight
+ * w_i.  Compartment z has a sample volume V_z: particle i stands for w_i / V_z
+ * real particles.  gransim counts particles (the sectional state is a count,
+ * not a density), so V_z is dimensionless: the fraction of the real
+ * compartment that the ensemble samples, and every rate constant keeps the
+ * units it has in the sectional engine (a kernel is a rate per particle pair).
+ *
+ * Jump processes (coagulation, breakage, feed, transport, immersion
+ * nucleation) and continuous processes (liquid penetration, deferred with
+ * LPDA) are registered types.  Rates come from Fenwick-tree caches of
+ * per-particle properties (O(log N) selection and update); a process may
+ * return a majorant rate and reject (fictitious jump) with the ratio of the
+ * true to the majorant rate.
+ *
+ * Independent runs (per-run GSL seeds) run in parallel with OpenMP; the
+ * ensemble mean and the 90 % confidence half-width 1.64 sqrt(sum (M_r - mean)^2)
+ * / n_runs (seed 001 eq. 65) of every output are written like the sectional
+ * outputs (summary.csv with ci_* columns, result.h5). */
+#ifndef GRANSIM_SWA_H
+#define GRANSIM_SWA_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "gransim/cfg.h"
+#include "gransim/pbm.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define GS_SWA_MAX_COORD 8 /* coordinates of the particle type space */
+#define GS_SWA_MAX_PROP 12 /* cached per-particle properties (column 0 is the weight) */
+
+typedef struct gs_swa_model gs_swa_model;
+typedef struct gs_swa_sim gs_swa_sim; /* the state of one run (opaque) */
+
+/* ---- processes (registered types) ----------------------------------------
+ * A process must not modify its self during a run: runs share it across
+ * threads; per-run state lives in the sim. */
+typedef struct gs_swa_process_type {
+  const char *name;    /* case-file `type` in an SWA case's mechanisms */
+  const char *summary; /* one line for `gransim list` */
+  /* Read keys from node ("type" consumed), register the particle properties
+   * the process needs (gs_swa_model_add_prop) and call gs_cfg_check_unused. */
+  int (*create)(gs_cfg_node *node, gs_swa_model *m, void **self, gs_error *err);
+  /* Jump processes: total (majorant) rate of the process in compartment comp,
+   * events per unit time, from cached sums. */
+  double (*rate)(const void *self, const gs_swa_sim *s, size_t comp);
+  /* Perform one event in comp (possibly fictitious: then change nothing). */
+  int (*jump)(const void *self, gs_swa_sim *s, size_t comp, gs_error *err);
+  /* Continuous processes (rate and jump NULL): advance one particle's vector
+   * x by dt (LPDA; must keep the particle's mass). */
+  void (*advance)(const void *self, size_t comp, double *x, double dt);
+  void (*free)(void *self);
+} gs_swa_process_type;
+
+const gs_swa_process_type *const *gs_swa_process_types(void); /* NULL-terminated */
+
+/* A cached per-particle property: f(x, w).  Must be >= 0 and finite. */
+typedef double (*gs_swa_prop_fn)(const void *ctx, const double *x, double w);
+
+typedef struct gs_swa_process {
+  const gs_swa_process_type *type;
+  void *self;
+  char label[64]; /* "mechanisms[i] (type)" */
+} gs_swa_process;
+
+struct gs_swa_model {
+  int ncoord;
+  char coord[GS_SWA_MAX_COORD][GS_NAME_LEN];
+  double density[GS_SWA_MAX_COORD]; /* mass m(x) = sum density_k x_k (weight transfers) */
+  unsigned size_mask;               /* coordinates summed into the granule volume */
+  size_t ncomp;
+  size_t nmax;          /* computational particles per compartment (capacity) */
+  double nmin_fraction; /* doubling below nmin_fraction * nmax (3/8, Lee et al. 2015) */
+  double fill_fraction; /* initial ensemble: fill_fraction * nmax particles (0.75) */
+  double reference_number; /* physical count that fill_fraction*nmax weight-1 particles stand
+                              for in a compartment that starts empty (0: none given) */
+  double lpda_interval; /* deferment checkpoint spacing (0: output times only) */
+  gs_swa_process *proc;
+  size_t nproc;
+  int nprop;
+  gs_swa_prop_fn prop_fn[GS_SWA_MAX_PROP];
+  const void *prop_ctx[GS_SWA_MAX_PROP];
+  int has_continuous; /* some process defers (LPDA) */
+};
+
+/* Register a cached property; returns its column (>= 1) or -1 when full. */
+int gs_swa_model_add_prop(gs_swa_model *m, gs_swa_prop_fn fn, const void *ctx);
+int gs_swa_coord_by_name(const gs_swa_model *m, const char *name); /* -1 if absent */
+double gs_swa_mass(const gs_swa_model *m, const double *x);
+double gs_swa_size(const gs_swa_model *m, const double *x); /* granule volume */
+/* Read a coordinate name key (default def if absent) into its index. */
+int gs_swa_coord_key(gs_cfg_node *node, const char *key, const gs_swa_model *m,
+                     const char *def, int *out, gs_error *err);
+/* Read an optional list of coordinate names into a bit mask (def if absent). */
+int gs_swa_coord_mask(gs_cfg_node *node, const char *key, const gs_swa_model *m, unsigned def,
+                      unsigned *out, gs_error *err);
+/* A number or a list of one number per compartment; out has m->ncomp entries. */
+int gs_swa_per_comp(gs_cfg_node *node, const char *key, int required, double def, double lo,
+                    int lo_strict, const gs_swa_model *m, double *out, gs_error *err);
+
+/* ---- one run: the particle ensemble, used by processes and tests ---------- */
+gs_swa_sim *gs_swa_sim_alloc(const gs_swa_model *m, uint64_t seed, gs_error *err);
+void gs_swa_sim_free(gs_swa_sim *s);
+const gs_swa_model *gs_swa_sim_model(const gs_swa_sim *s);
+void *gs_swa_rng(gs_swa_sim *s);                   /* the run's gsl_rng */
+double gs_swa_time(const gs_swa_sim *s);
+size_t gs_swa_count(const gs_swa_sim *s, size_t comp);
+double gs_swa_sum(const gs_swa_sim *s, size_t comp, int prop); /* sum of a property */
+double gs_swa_vsamp(const gs_swa_sim *s, size_t comp);
+void gs_swa_set_vsamp(gs_swa_sim *s, size_t comp, double v);
+/* Particle i, brought up to the current time first (LPDA).  The pointer is
+ * valid until the next add/remove in comp. */
+double *gs_swa_x(gs_swa_sim *s, size_t comp, size_t i);
+double gs_swa_w(const gs_swa_sim *s, size_t comp, size_t i);
+double gs_swa_prop(const gs_swa_sim *s, size_t comp, size_t i, int prop); /* cached value */
+/* After changing x (through gs_swa_x) and/or the weight: refresh the caches. */
+void gs_swa_update(gs_swa_sim *s, size_t comp, size_t i, double w);
+/* Add a particle (copied, time stamp now).  A full compartment first drops a
+ * uniformly chosen particle and scales V by (nmax-1)/nmax (contraction). */
+int gs_swa_add(gs_swa_sim *s, size_t comp, const double *x, double w, gs_error *err);
+/* Remove particle i (the last particle takes its index). */
+void gs_swa_remove(gs_swa_sim *s, size_t comp, size_t i);
+/* Index of a particle chosen with probability proportional to property
+ * prop (uniformly when prop < 0); GS_NOWHERE if the compartment is empty. */
+size_t gs_swa_select(gs_swa_sim *s, size_t comp, int prop);
+double gs_swa_uniform01(gs_swa_sim *s);
+/* Count one fictitious (rejected) event, for statistics. */
+void gs_swa_fictitious(gs_swa_sim *s);
+/* Fill the compartments from an SWA case's `initial` entries is done by the
+ * case; this places n particles directly (tests, initial sampling). */
+int gs_swa_sim_place(gs_swa_sim *s, size_t comp, const double *x, double w, gs_error *err);
+
+typedef struct gs_swa_stats {
+  uint64_t jumps;      /* accepted events */
+  uint64_t fictitious; /* rejected (fictitious) events */
+  uint64_t doublings, contractions;
+} gs_swa_stats;
+
+/* Advance the run to time t_end (jumps, LPDA checkpoints, ensemble control). */
+int gs_swa_sim_advance(gs_swa_sim *s, double t_end, gs_error *err);
+/* Bring every particle up to the current time (LPDA checkpoint). */
+void gs_swa_sim_sync(gs_swa_sim *s);
+gs_swa_stats gs_swa_sim_stats(const gs_swa_sim *s);
+
+/* ---- cases: `solver: {method: swa, ...}` ---------------------------------- */
+typedef struct gs_swa_case {
+  gs_cfg *cfg;
+  char title[256];
+  gs_model grid_model; /* grid (output bins, compartments, axis names), as in sectional cases */
+  gs_swa_model model;
+  int *bin_coord;      /* coordinate of each grid axis */
+  double t0;
+  double *times;
+  size_t ntimes;
+  size_t runs;
+  uint64_t seed;
+  /* initial ensemble, per compartment: sampled particle specs (owned) */
+  void *initial;
+} gs_swa_case;
+
+/* True (1) if the case file's solver.method is "swa". */
+int gs_swa_case_wanted(gs_cfg *cfg);
+int gs_swa_case_from_cfg(gs_cfg *cfg, gs_swa_case *c, gs_error *err);
+void gs_swa_case_free(gs_swa_case *c);
+/* Sample the initial ensemble of the case into a fresh run. */
+int gs_swa_case_init_run(const gs_swa_case *c, gs_swa_sim *s, gs_error *err);
+
+/* Per-output statistics of a compartment, from the particles. */
+typedef struct gs_swa_summary {
+  double m0, m1, m2, d10, d50, d90;
+  double mean[GS_SWA_MAX_COORD], total[GS_SWA_MAX_COORD];
+} gs_swa_summary;
+void gs_swa_summarize(gs_swa_sim *s, size_t comp, gs_swa_summary *out);
+
+typedef struct gs_swa_report {
+  double wall_seconds;
+  gs_swa_stats stats; /* summed over runs */
+  size_t runs;
+} gs_swa_report;
+
+/* Run all runs (OpenMP over runs), write DIR/result.h5 and DIR/summary.csv
+ * (out_dir NULL: no files).  mean/ci (may be NULL) receive the ensemble mean
+ * and CI half-width of every summary column: [time][comp][col], columns as
+ * gs_swa_columns() lists. */
+int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *mean,
+                    double *ci, gs_swa_report *rep, gs_error *err);
+/* Number of summary columns (M0..d90, mean_*, total_*) and their names. */
+int gs_swa_ncolumns(const gs_swa_model *m);
+void gs_swa_column_name(const gs_swa_model *m, int col, char *buf, size_t n);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,164 @@
+/* SWA result files: see output.h. */
+#include "swa/output.h"
+
+#include <errno.h>
+#include <hdf5.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#ifndef GRANSIM_VERSION
+#define GRANSIM_VERSION "unknown"
+#endif
+
+static int mkdir_p(const char *dir, gs_error *err) {
+  char buf[4096];
+  snprintf(buf, sizeof buf, "%s", dir);
+  for (char *p = buf + 1; *p; p++) {
+    if (*p != '/') continue;
+    *p = '\0';
+    if (mkdir(buf, 0777) && errno != EEXIST) return gs_error_set(err, GS_EIO, "cannot create directory %s: %s", buf, strerror(errno));
+    *p = '/';
+  }
+  if (mkdir(buf, 0777) && errno != EEXIST) return gs_error_set(err, GS_EIO, "cannot create directory %s: %s", buf, strerror(errno));
+  struct stat st;
+  if (stat(buf, &st) || !S_ISDIR(st.st_mode)) return gs_error_set(err, GS_EIO, "%s is not a directory", buf);
+  return GS_OK;
+}
+
+static int put(hid_t loc, const char *name, int rank, const hsize_t *dims, const double *data) {
+  hid_t sp = H5Screate_simple(rank, dims, NULL);
+  hid_t ds = H5Dcreate2(loc, name, H5T_IEEE_F64LE, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  herr_t e = ds < 0 ? -1 : H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+  if (ds >= 0) H5Dclose(ds);
+  H5Sclose(sp);
+  return e < 0 ? -1 : 0;
+}
+
+static int attr_str(hid_t loc, const char *name, const char *value) {
+  hid_t t = H5Tcopy(H5T_C_S1);
+  H5Tset_size(t, strlen(value) + 1);
+  hid_t sp = H5Screate(H5S_SCALAR);
+  hid_t a = H5Acreate2(loc, name, t, sp, H5P_DEFAULT, H5P_DEFAULT);
+  herr_t e = a < 0 ? -1 : H5Awrite(a, t, value);
+  if (a >= 0) H5Aclose(a);
+  H5Sclose(sp);
+  H5Tclose(t);
+  return e < 0 ? -1 : 0;
+}
+
+static int attr_num(hid_t loc, const char *name, double value) {
+  hid_t sp = H5Screate(H5S_SCALAR);
+  hid_t a = H5Acreate2(loc, name, H5T_IEEE_F64LE, sp, H5P_DEFAULT, H5P_DEFAULT);
+  herr_t e = a < 0 ? -1 : H5Awrite(a, H5T_NATIVE_DOUBLE, &value);
+  if (a >= 0) H5Aclose(a);
+  H5Sclose(sp);
+  return e < 0 ? -1 : 0;
+}
+
+static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results *r) {
+  const gs_grid *g = &c->grid_model.grid;
+  const gs_swa_model *m = &c->model;
+  size_t nt = c->ntimes, nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m);
+  hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (f < 0) return -1;
+  int bad = 0;
+  hid_t grid = H5Gcreate2(f, "grid", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  for (int a = 0; a < g->dim; a++) {
+    hid_t ax = H5Gcreate2(grid, g->axis[a].name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    hsize_t ne = g->axis[a].n + 1, np = g->axis[a].n;
+    bad |= put(ax, "edges", 1, &ne, g->axis[a].edges) | put(ax, "pivots", 1, &np, g->axis[a].pivots);
+    H5Gclose(ax);
+  }
+  bad |= attr_num(grid, "dim", g->dim) | attr_num(grid, "ncomp", (double)nz) | attr_num(grid, "ncells", (double)g->ncells);
+  H5Gclose(grid);
+  hsize_t d1 = nt;
+  bad |= put(f, "time", 1, &d1, c->times);
+  hsize_t dims[2 + GS_MAX_DIM] = {nt, nz};
+  for (int a = 0; a < g->dim; a++) dims[2 + a] = g->axis[a].n;
+  bad |= put(f, "number", 2 + g->dim, dims, r->hist) | put(f, "number_ci", 2 + g->dim, dims, r->hist_ci);
+  bad |= put(f, "outside", 2, dims, r->outside) | put(f, "particles", 2, dims, r->particles);
+  hid_t sm = H5Gcreate2(f, "summary", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  hid_t sc = H5Gcreate2(f, "summary_ci", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  double *col = malloc(nt * nz * sizeof(double)), *cic = malloc(nt * nz * sizeof(double));
+  for (size_t k = 0; col && cic && k < ncol; k++) {
+    char name[GS_NAME_LEN + 16];
+    gs_swa_column_name(m, (int)k, name, sizeof name);
+    for (size_t i = 0; i < nt * nz; i++) {
+      col[i] = r->mean[i * ncol + k];
+      cic[i] = r->ci[i * ncol + k];
+    }
+    bad |= put(sm, name, 2, dims, col) | put(sc, name, 2, dims, cic);
+  }
+  bad |= !col || !cic;
+  free(col);
+  free(cic);
+  H5Gclose(sm);
+  H5Gclose(sc);
+  hid_t cs = H5Gcreate2(f, "case", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  bad |= attr_str(cs, "text", gs_cfg_source(c->cfg)) | attr_str(cs, "file", gs_cfg_name(c->cfg));
+  H5Gclose(cs);
+  bad |= attr_str(f, "gransim_version", GRANSIM_VERSION) | attr_str(f, "solver", "swa");
+  bad |= attr_num(f, "runs", (double)c->runs) | attr_num(f, "particles", (double)m->nmax);
+  bad |= attr_num(f, "seed", (double)c->seed) | attr_num(f, "jumps", (double)r->stats.jumps);
+  bad |= attr_num(f, "fictitious", (double)r->stats.fictitious) | attr_num(f, "ntimes", (double)nt);
+  bad |= attr_str(f, "status", "complete");
+  if (H5Fclose(f) < 0) bad = 1;
+  return bad ? -1 : 0;
+}
+
+static int write_csv(const gs_swa_case *c, const char *path, const gs_swa_results *r) {
+  const gs_swa_model *m = &c->model;
+  size_t nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m);
+  FILE *fp = fopen(path, "w");
+  if (!fp) return -1;
+  char name[GS_NAME_LEN + 16];
+  fprintf(fp, "time,compartment");
+  for (size_t k = 0; k < ncol; k++) {
+    gs_swa_column_name(m, (int)k, name, sizeof name);
+    fprintf(fp, ",%s", name);
+  }
+  for (size_t k = 0; k < ncol; k++) {
+    gs_swa_column_name(m, (int)k, name, sizeof name);
+    fprintf(fp, ",ci_%s", name);
+  }
+  fprintf(fp, "\n");
+  for (size_t t = 0; t < c->ntimes; t++)
+    for (size_t z = 0; z < nz; z++) {
+      const double *mu = r->mean + (t * nz + z) * ncol, *ci = r->ci + (t * nz + z) * ncol;
+      fprintf(fp, "%.10g,%zu", c->times[t], z + 1);
+      for (size_t k = 0; k < ncol; k++) fprintf(fp, ",%.10g", mu[k]);
+      for (size_t k = 0; k < ncol; k++) fprintf(fp, ",%.10g", ci[k]);
+      fprintf(fp, "\n");
+    }
+  return fclose(fp) ? -1 : 0;
+}
+
+int gs_swa_write(const gs_swa_case *c, const char *dir, const gs_swa_results *r, gs_error *err) {
+  int rc = mkdir_p(dir, err);
+  if (rc) return rc;
+  char h5tmp[4200], h5[4200], csvtmp[4200], csv[4200];
+  snprintf(h5tmp, sizeof h5tmp, "%s/.result.h5.partial", dir);
+  snprintf(h5, sizeof h5, "%s/result.h5", dir);
+  snprintf(csvtmp, sizeof csvtmp, "%s/.summary.csv.partial", dir);
+  snprintf(csv, sizeof csv, "%s/summary.csv", dir);
+  H5E_auto2_t fn;
+  void *data;
+  H5Eget_auto2(H5E_DEFAULT, &fn, &data);
+  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+  int bad = write_h5(c, h5tmp, r);
+  H5Eset_auto2(H5E_DEFAULT, fn, data);
+  if (bad) {
+    remove(h5tmp);
+    return gs_error_set(err, GS_EIO, "cannot write %s", h5tmp);
+  }
+  if (write_csv(c, csvtmp, r)) {
+    remove(h5tmp);
+    remove(csvtmp);
+    return gs_error_set(err, GS_EIO, "cannot write %s: %s", csvtmp, strerror(errno));
+  }
+  if (rename(h5tmp, h5) || rename(csvtmp, csv))
+    return gs_error_set(err, GS_EIO, "cannot rename the results into %s: %s", dir, strerror(errno));
+  return GS_OK;
+}

@@ -1,0 +1,180 @@
+/* Independent runs in parallel (OpenMP over runs, per-run seeds), ensemble
+ * means and 90 % confidence half-widths c = 1.64 sqrt(sum_r (M_r - mean)^2)
+ * / n_runs (seed 001 eqs. 64-65), and the result files.  Every run keeps its
+ * own observations and they are reduced in run order, so the results do not
+ * depend on the number of threads. */
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "swa/output.h"
+#include "swa/sim.h"
+
+#define CI_FACTOR 1.64
+
+/* splitmix64: decorrelated 32-bit seeds for the runs of one case seed */
+static unsigned long run_seed(uint64_t seed, size_t run) {
+  uint64_t z = seed * 0x9E3779B97F4A7C15ull + (uint64_t)run + 1;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  unsigned long s = (unsigned long)(z & 0xffffffffu);
+  return s ? s : 1;
+}
+
+/* Bin compartment z of a run on the case grid: numbers per cell and outside. */
+static void bin(const gs_swa_case *c, gs_swa_sim *s, size_t z, double *hist, double *outside) {
+  const gs_grid *g = &c->grid_model.grid;
+  const swa_comp *cp = &s->comp[z];
+  size_t nc = (size_t)c->model.ncoord;
+  for (size_t i = 0; i < cp->n; i++) {
+    const double *x = cp->x + i * nc;
+    double n = cp->w[i] / cp->vsamp;
+    size_t idx[GS_MAX_DIM];
+    int in = 1;
+    for (int a = 0; a < g->dim && in; a++) {
+      idx[a] = gs_axis_locate(&g->axis[a], x[c->bin_coord[a]]);
+      in = idx[a] != GS_NOWHERE;
+    }
+    if (in) hist[gs_grid_index(g, idx)] += n;
+    else *outside += n;
+  }
+}
+
+static void summary_row(const gs_swa_model *m, const gs_swa_summary *s, double *row) {
+  row[0] = s->m0;
+  row[1] = s->m1;
+  row[2] = s->m2;
+  row[3] = s->d10;
+  row[4] = s->d50;
+  row[5] = s->d90;
+  for (int k = 0; k < m->ncoord; k++) {
+    row[6 + k] = s->mean[k];
+    row[6 + m->ncoord + k] = s->total[k];
+  }
+}
+
+/* One run: obs [time][comp][col], hist [time][comp][cell], extra [time][comp][2]. */
+static int one_run(const gs_swa_case *c, size_t r, double *obs, double *hist, double *extra,
+                   gs_swa_stats *stats, gs_error *err) {
+  const gs_swa_model *m = &c->model;
+  size_t nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid_model.grid.ncells;
+  gs_swa_sim *s = gs_swa_sim_alloc(m, run_seed(c->seed, r), err);
+  if (!s) return err->code;
+  int rc = gs_swa_case_init_run(c, s, err);
+  for (size_t t = 0; !rc && t < c->ntimes; t++) {
+    rc = gs_swa_sim_advance(s, c->times[t], err);
+    if (rc) break;
+    gs_swa_sim_sync(s);
+    for (size_t z = 0; z < nz; z++) {
+      gs_swa_summary sm;
+      gs_swa_summarize(s, z, &sm);
+      summary_row(m, &sm, obs + (t * nz + z) * ncol);
+      double *e = extra + (t * nz + z) * 2;
+      bin(c, s, z, hist + (t * nz + z) * ncells, &e[0]);
+      e[1] = (double)gs_swa_count(s, z);
+    }
+  }
+  if (rc) gs_error_prefix(err, "run %zu: ", r + 1);
+  *stats = gs_swa_sim_stats(s);
+  gs_swa_sim_free(s);
+  return rc;
+}
+
+/* mean and CI over runs of n values laid out run-major */
+static void reduce(const double *v, size_t runs, size_t n, double *mean, double *ci) {
+  for (size_t i = 0; i < n; i++) {
+    double mu = 0, ss = 0;
+    for (size_t r = 0; r < runs; r++) mu += v[r * n + i];
+    mu /= (double)runs;
+    for (size_t r = 0; r < runs; r++) ss += (v[r * n + i] - mu) * (v[r * n + i] - mu);
+    mean[i] = mu;
+    if (ci) ci[i] = CI_FACTOR * sqrt(ss) / (double)runs;
+  }
+}
+
+int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *mean_out,
+                    double *ci_out, gs_swa_report *rep, gs_error *err) {
+  const gs_swa_model *m = &c->model;
+  size_t runs = c->runs, nz = m->ncomp, nt = c->ntimes;
+  size_t ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid_model.grid.ncells;
+  size_t nobs = nt * nz * ncol, nhist = nt * nz * ncells, nextra = nt * nz * 2;
+  if ((double)runs * (double)nhist > 5e7)
+    return gs_error_set(err, GS_EINPUT,
+                        "%s: %zu runs x %zu output times x %zu compartments x %zu grid cells is too many "
+                        "binned values to keep (limit 5e7): use a coarser grid or fewer output times",
+                        gs_cfg_name(c->cfg), runs, nt, nz, ncells);
+  double *obs = gs_calloc(runs * nobs, sizeof(double), err);
+  double *hist = gs_calloc(runs * nhist, sizeof(double), err);
+  double *extra = gs_calloc(runs * nextra, sizeof(double), err);
+  gs_swa_stats *st = gs_calloc(runs, sizeof *st, err);
+  double *mean = gs_calloc(nobs, sizeof(double), err), *ci = gs_calloc(nobs, sizeof(double), err);
+  double *hm = gs_calloc(nhist, sizeof(double), err), *hc = gs_calloc(nhist, sizeof(double), err);
+  double *em = gs_calloc(nextra, sizeof(double), err);
+  int rc = (!obs || !hist || !extra || !st || !mean || !ci || !hm || !hc || !em) ? GS_ENOMEM : GS_OK;
+  double wall0 = omp_get_wtime();
+  size_t done = 0;
+  gs_error first = {0};
+  if (!rc) {
+#pragma omp parallel for schedule(dynamic, 1)
+    for (size_t r = 0; r < runs; r++) {
+      gs_error e = {0};
+      int failed;
+#pragma omp atomic read
+      failed = first.code;
+      if (failed) continue;
+      int code = one_run(c, r, obs + r * nobs, hist + r * nhist, extra + r * nextra, &st[r], &e);
+#pragma omp critical(gs_swa_runs)
+      {
+        if (code && !first.code) first = e;
+        done++;
+        if (progress)
+          fprintf(stderr, "\rgransim: swa run %zu/%zu done (%.1f s)%s", done, runs, omp_get_wtime() - wall0,
+                  done == runs ? "\n" : "");
+      }
+    }
+    if (first.code) {
+      *err = first;
+      rc = first.code;
+    }
+  }
+  gs_swa_report R = {0};
+  if (!rc) {
+    reduce(obs, runs, nobs, mean, ci);
+    reduce(hist, runs, nhist, hm, hc);
+    double *parts = gs_calloc(nt * nz, sizeof(double), err), *outs = gs_calloc(nt * nz, sizeof(double), err);
+    reduce(extra, runs, nextra, em, NULL);
+    for (size_t i = 0; parts && outs && i < nt * nz; i++) {
+      outs[i] = em[2 * i];
+      parts[i] = em[2 * i + 1];
+    }
+    for (size_t r = 0; r < runs; r++) {
+      R.stats.jumps += st[r].jumps;
+      R.stats.fictitious += st[r].fictitious;
+      R.stats.doublings += st[r].doublings;
+      R.stats.contractions += st[r].contractions;
+    }
+    R.runs = runs;
+    gs_swa_results res = {mean, ci, hm, hc, outs, parts, R.stats};
+    if (!parts || !outs) rc = GS_ENOMEM;
+    else if (out_dir) rc = gs_swa_write(c, out_dir, &res, err);
+    free(parts);
+    free(outs);
+    if (mean_out) memcpy(mean_out, mean, nobs * sizeof(double));
+    if (ci_out) memcpy(ci_out, ci, nobs * sizeof(double));
+  }
+  R.wall_seconds = omp_get_wtime() - wall0;
+  if (rep) *rep = R;
+  free(obs);
+  free(hist);
+  free(extra);
+  free(st);
+  free(mean);
+  free(ci);
+  free(hm);
+  free(hc);
+  free(em);
+  return rc;
+}
