@@ -79,4 +79,14 @@ output: {end: 1}")
 run_rc 1 "$BIN" check "$empty"
 stderr_has "set solver.reference_number"
 
+# the bundled twin-screw example (seed 001) is valid and runs
+run_rc 0 "$BIN" check "$SRC/examples/twin-screw.yaml"
+stdout_has "valid. swa solver, 4 coordinates, 3 compartments, 6 mechanisms"
+run_rc 0 "$BIN" run "$SRC/examples/twin-screw.yaml" --out "$WORK/ts" --quiet
+[ "$(wc -l <"$WORK/ts/summary.csv")" = 31 ] || fail "twin-screw: expected 1 + 10 times x 3 compartments lines"
+h5ls -r "$WORK/ts/result.h5" >"$WORK/h5" || fail "h5ls failed"
+for d in /sieve/edges /sieve/mass_fraction /sieve/mass_fraction_ci; do
+  grep -q "^$d " "$WORK/h5" || fail "twin-screw result.h5 lacks $d"
+done
+
 echo "cli_swa: ok"

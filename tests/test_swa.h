@@ -104,6 +104,7 @@ SW_FN void sw_free(sw_result *r) {
   free(r->ci);
   free(r->hist);
   free(r->hist_ci);
+  gs_swa_report_free(&r->rep);
 }
 
 SW_FN double sw_col(const gs_swa_case *c, const sw_result *r, const double *v, size_t t, size_t z,

@@ -163,6 +163,8 @@ typedef struct gs_swa_case {
   uint64_t seed;
   /* initial ensemble, per compartment: sampled particle specs (owned) */
   void *initial;
+  double *sieves; /* solver.sieves: nsieve + 1 diameter edges, or NULL */
+  size_t nsieve;  /* classes */
 } gs_swa_case;
 
 /* True (1) if the case file's solver.method is "swa". */
@@ -178,12 +180,19 @@ typedef struct gs_swa_summary {
   double mean[GS_SWA_MAX_COORD], total[GS_SWA_MAX_COORD];
 } gs_swa_summary;
 void gs_swa_summarize(gs_swa_sim *s, size_t comp, gs_swa_summary *out);
+/* Mass fraction of compartment comp in each diameter class [edges[k], edges[k+1])
+ * (diameter of the granule volume; mass = sum density * x), over the total mass. */
+void gs_swa_sieve(gs_swa_sim *s, size_t comp, const double *edges, size_t nclass, double *frac);
 
 typedef struct gs_swa_report {
   double wall_seconds;
   gs_swa_stats stats; /* summed over runs */
   size_t runs;
+  /* with solver.sieves: mass fraction per sieve class, [time][comp][class],
+   * ensemble mean and CI (malloc'ed; gs_swa_report_free) */
+  double *sieve_mean, *sieve_ci;
 } gs_swa_report;
+void gs_swa_report_free(gs_swa_report *r);
 
 /* Run all runs (OpenMP over runs), write DIR/result.h5 and DIR/summary.csv
  * (out_dir NULL: no files).  mean/ci (may be NULL) receive the ensemble mean

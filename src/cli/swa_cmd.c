@@ -14,7 +14,7 @@ int gs_cmd_run_swa(gs_cfg *cfg, const char *path, const char *out, int progress,
     return 2;
   }
   int rc = gs_swa_case_from_cfg(cfg, &c, &err);
-  gs_swa_report rep;
+  gs_swa_report rep = {0};
   if (!rc) rc = gs_swa_case_run(&c, out, progress < 0 ? isatty(2) : progress, NULL, NULL, &rep, &err);
   if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
   else
@@ -24,6 +24,7 @@ int gs_cmd_run_swa(gs_cfg *cfg, const char *path, const char *out, int progress,
             path, rep.runs, c.model.nmax, c.times[c.ntimes - 1], rep.wall_seconds,
             (unsigned long long)rep.stats.jumps, (unsigned long long)rep.stats.fictitious,
             (unsigned long long)rep.stats.doublings, (unsigned long long)rep.stats.contractions, out, out);
+  gs_swa_report_free(&rep);
   gs_swa_case_free(&c);
   return rc ? 1 : 0;
 }

@@ -100,6 +100,15 @@ static int read_solver(gs_cfg_node *root, gs_swa_case *c, gs_error *err) {
     free(d);
     if (rc) return rc;
   }
+  if (gs_cfg_get(n, "sieves")) {
+    size_t ne = 0;
+    if ((rc = gs_cfg_doubles_req(n, "sieves", 0, &c->sieves, &ne, err))) return rc;
+    if (ne < 2) return gs_cfg_fail(gs_cfg_get(n, "sieves"), err, "expected at least 2 sieve diameters");
+    for (size_t k = 0; k < ne; k++)
+      if (!(c->sieves[k] > 0) || (k && !(c->sieves[k] > c->sieves[k - 1])))
+        return gs_cfg_fail(gs_cfg_get(n, "sieves"), err, "expected increasing diameters > 0 (entry %zu is %g)", k, c->sieves[k]);
+    c->nsieve = ne - 1;
+  }
   m->nprop = 1; /* column 0: the weight */
   return gs_cfg_check_unused(n, err);
 }
@@ -192,6 +201,7 @@ void gs_swa_case_free(gs_swa_case *c) {
     free(set);
   }
   free(c->bin_coord);
+  free(c->sieves);
   free(c->times);
   gs_model_free(&c->grid_model);
   gs_cfg_free(c->cfg);

@@ -96,6 +96,13 @@ static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results
   free(cic);
   H5Gclose(sm);
   H5Gclose(sc);
+  if (c->nsieve) {
+    hid_t sg = H5Gcreate2(f, "sieve", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    hsize_t ne = c->nsieve + 1, sd[3] = {nt, nz, c->nsieve};
+    bad |= put(sg, "edges", 1, &ne, c->sieves) | put(sg, "mass_fraction", 3, sd, r->sieve) |
+           put(sg, "mass_fraction_ci", 3, sd, r->sieve_ci);
+    H5Gclose(sg);
+  }
   hid_t cs = H5Gcreate2(f, "case", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   bad |= attr_str(cs, "text", gs_cfg_source(c->cfg)) | attr_str(cs, "file", gs_cfg_name(c->cfg));
   H5Gclose(cs);

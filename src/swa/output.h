@@ -8,7 +8,8 @@
  *   cells...) ensemble-mean number per grid cell (particles binned by the
  *   coordinates the grid axes name), /number_ci, /outside (numbers outside
  *   the grid), /summary/<col>, /summary_ci/<col>, /particles (mean count of
- *   computational particles), /case (attributes text, file), and root
+ *   computational particles), with solver.sieves /sieve/edges and
+ *   /sieve/mass_fraction[_ci] (ntimes, ncomp, classes), /case (attributes text, file), and root
  *   attributes gransim_version, solver = "swa", runs, particles, seed,
  *   jumps, fictitious, status = "complete". */
 #ifndef GS_SWA_OUTPUT_H
@@ -20,6 +21,7 @@ typedef struct gs_swa_results {
   const double *mean, *ci;           /* [time][comp][col] */
   const double *hist, *hist_ci;      /* [time][comp][cell] */
   const double *outside, *particles; /* [time][comp] */
+  const double *sieve, *sieve_ci;    /* [time][comp][class], with solver.sieves */
   gs_swa_stats stats;
 } gs_swa_results;
 

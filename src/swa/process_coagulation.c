@@ -14,8 +14,12 @@
  * terms are summed over all ordered pairs including i = j, which is then
  * a fictitious jump, and the majorant may be inflated by majorant_factor
  * (accepting with its inverse), which exercises the fictitious-jump path.
- * Optional: a coalescence efficiency (a collision that does not coalesce
- * only compacts i) and compaction of the product (seed 001 eqs. 16-21). */
+ * Optional: a coalescence rule and efficiency (a collision that does not
+ * coalesce only compacts i, eq. 49) and compaction of the product (seed 001
+ * eqs. 16-21).  `coalescence: wet_surface` stands in for the Stokes criterion
+ * of Braumann et al. (2010), whose formula seed 001 does not give: only a
+ * collision in which a partner has external (surface) liquid can coalesce,
+ * as with a dry pair the criterion's liquid layer thickness is zero. */
 #include <gsl/gsl_rng.h>
 #include <math.h>
 #include <stdlib.h>
@@ -34,6 +38,7 @@ typedef struct coag {
   unsigned axes;   /* size measure u of the kernel */
   double factor;   /* majorant factor >= 1 */
   double efficiency;
+  int wet_surface, ext; /* coalesce only if a partner has external liquid */
   int col_u, col_uw;
   gs_swa_compaction comp;
 } coag;
@@ -75,6 +80,9 @@ static int coag_create(gs_cfg_node *node, gs_swa_model *m, void **self, gs_error
   if (!rc) rc = gs_cfg_check_unused(k, err);
   if (!rc) rc = gs_cfg_enum_opt(node, "scheme", schemes, S_SWA, &c->scheme, err);
   if (!rc) rc = gs_cfg_double_range(node, "efficiency", 0, 1, 0, 0, 1, 0, &c->efficiency, err);
+  static const char *const rules[] = {"always", "wet_surface", NULL};
+  if (!rc) rc = gs_cfg_enum_opt(node, "coalescence", rules, 0, &c->wet_surface, err);
+  if (!rc && c->wet_surface) rc = gs_swa_coord_key(node, "external_liquid", m, "external_liquid", &c->ext, err);
   if (!rc) rc = gs_swa_compaction_read(node, m, &c->comp, err);
   if (!rc && c->kernel != K_CONSTANT) {
     c->col_u = gs_swa_model_add_prop(m, prop_u, c);
@@ -129,7 +137,8 @@ static int coag_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
   }
   double *xi = gs_swa_x(s, z, i), *xj = gs_swa_x(s, z, j);
   double wi = gs_swa_w(s, z, i), wj = gs_swa_w(s, z, j);
-  if (c->efficiency < 1 && gs_swa_uniform01(s) >= c->efficiency) {
+  int rebound = c->wet_surface && !(xi[c->ext] > 0 || xj[c->ext] > 0);
+  if (rebound || (c->efficiency < 1 && gs_swa_uniform01(s) >= c->efficiency)) {
     gs_swa_compact(&c->comp, z, xi); /* rebound: compaction only (eq. 49) */
     gs_swa_update(s, z, i, wi);
     return GS_OK;

@@ -56,9 +56,10 @@ static void summary_row(const gs_swa_model *m, const gs_swa_summary *s, double *
   }
 }
 
-/* One run: obs [time][comp][col], hist [time][comp][cell], extra [time][comp][2]. */
+/* One run: obs [time][comp][col], hist [time][comp][cell], extra [time][comp][2],
+ * sieve [time][comp][class]. */
 static int one_run(const gs_swa_case *c, size_t r, double *obs, double *hist, double *extra,
-                   gs_swa_stats *stats, gs_error *err) {
+                   double *sieve, gs_swa_stats *stats, gs_error *err) {
   const gs_swa_model *m = &c->model;
   size_t nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid_model.grid.ncells;
   gs_swa_sim *s = gs_swa_sim_alloc(m, run_seed(c->seed, r), err);
@@ -75,6 +76,7 @@ static int one_run(const gs_swa_case *c, size_t r, double *obs, double *hist, do
       double *e = extra + (t * nz + z) * 2;
       bin(c, s, z, hist + (t * nz + z) * ncells, &e[0]);
       e[1] = (double)gs_swa_count(s, z);
+      if (c->nsieve) gs_swa_sieve(s, z, c->sieves, c->nsieve, sieve + (t * nz + z) * c->nsieve);
     }
   }
   if (rc) gs_error_prefix(err, "run %zu: ", r + 1);
@@ -101,6 +103,7 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
   size_t runs = c->runs, nz = m->ncomp, nt = c->ntimes;
   size_t ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid_model.grid.ncells;
   size_t nobs = nt * nz * ncol, nhist = nt * nz * ncells, nextra = nt * nz * 2;
+  size_t nsv = nt * nz * c->nsieve;
   if ((double)runs * (double)nhist > 5e7)
     return gs_error_set(err, GS_EINPUT,
                         "%s: %zu runs x %zu output times x %zu compartments x %zu grid cells is too many "
@@ -113,7 +116,12 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
   double *mean = gs_calloc(nobs, sizeof(double), err), *ci = gs_calloc(nobs, sizeof(double), err);
   double *hm = gs_calloc(nhist, sizeof(double), err), *hc = gs_calloc(nhist, sizeof(double), err);
   double *em = gs_calloc(nextra, sizeof(double), err);
-  int rc = (!obs || !hist || !extra || !st || !mean || !ci || !hm || !hc || !em) ? GS_ENOMEM : GS_OK;
+  double *sv = gs_calloc(runs * nsv, sizeof(double), err);
+  gs_swa_report R = {0};
+  R.sieve_mean = gs_calloc(nsv, sizeof(double), err);
+  R.sieve_ci = gs_calloc(nsv, sizeof(double), err);
+  int rc = (!obs || !hist || !extra || !st || !mean || !ci || !hm || !hc || !em || !sv || !R.sieve_mean ||
+            !R.sieve_ci) ? GS_ENOMEM : GS_OK;
   double wall0 = omp_get_wtime();
   size_t done = 0;
   gs_error first = {0};
@@ -125,7 +133,7 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
 #pragma omp atomic read
       failed = first.code;
       if (failed) continue;
-      int code = one_run(c, r, obs + r * nobs, hist + r * nhist, extra + r * nextra, &st[r], &e);
+      int code = one_run(c, r, obs + r * nobs, hist + r * nhist, extra + r * nextra, sv + r * nsv, &st[r], &e);
 #pragma omp critical(gs_swa_runs)
       {
         if (code && !first.code) first = e;
@@ -140,9 +148,9 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
       rc = first.code;
     }
   }
-  gs_swa_report R = {0};
   if (!rc) {
     reduce(obs, runs, nobs, mean, ci);
+    reduce(sv, runs, nsv, R.sieve_mean, R.sieve_ci);
     reduce(hist, runs, nhist, hm, hc);
     double *parts = gs_calloc(nt * nz, sizeof(double), err), *outs = gs_calloc(nt * nz, sizeof(double), err);
     reduce(extra, runs, nextra, em, NULL);
@@ -157,7 +165,7 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
       R.stats.contractions += st[r].contractions;
     }
     R.runs = runs;
-    gs_swa_results res = {mean, ci, hm, hc, outs, parts, R.stats};
+    gs_swa_results res = {mean, ci, hm, hc, outs, parts, R.sieve_mean, R.sieve_ci, R.stats};
     if (!parts || !outs) rc = GS_ENOMEM;
     else if (out_dir) rc = gs_swa_write(c, out_dir, &res, err);
     free(parts);
@@ -167,6 +175,8 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
   }
   R.wall_seconds = omp_get_wtime() - wall0;
   if (rep) *rep = R;
+  else gs_swa_report_free(&R);
+  free(sv);
   free(obs);
   free(hist);
   free(extra);
@@ -177,4 +187,10 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
   free(hc);
   free(em);
   return rc;
+}
+
+void gs_swa_report_free(gs_swa_report *r) {
+  free(r->sieve_mean);
+  free(r->sieve_ci);
+  r->sieve_mean = r->sieve_ci = NULL;
 }

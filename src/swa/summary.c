@@ -74,3 +74,25 @@ void gs_swa_summarize(gs_swa_sim *s, size_t z, gs_swa_summary *o) {
   o->d90 = d[2];
   free(pts);
 }
+
+void gs_swa_sieve(gs_swa_sim *s, size_t z, const double *edges, size_t nclass, double *frac) {
+  const gs_swa_model *m = s->m;
+  const swa_comp *c = &s->comp[z];
+  size_t nc = (size_t)m->ncoord;
+  double total = 0;
+  memset(frac, 0, nclass * sizeof(double));
+  for (size_t i = 0; i < c->n; i++) {
+    const double *x = c->x + i * nc;
+    double mass = c->w[i] * gs_swa_mass(m, x), d = gs_diameter(gs_swa_size(m, x));
+    total += mass;
+    if (d < edges[0] || d >= edges[nclass]) continue;
+    size_t lo = 0, hi = nclass; /* edges[lo] <= d < edges[hi] */
+    while (hi - lo > 1) {
+      size_t mid = (lo + hi) / 2;
+      if (d >= edges[mid]) lo = mid;
+      else hi = mid;
+    }
+    frac[lo] += mass;
+  }
+  for (size_t k = 0; k < nclass; k++) frac[k] = total > 0 ? frac[k] / total : NAN;
+}
