@@ -101,10 +101,50 @@ void gs_dem_mesh_free(gs_dem_mesh *m);
 long gs_dem_add_particle(gs_dem *d, int type, double radius, const double x[3], const double v[3],
                          const double w[3], gs_error *err);
 
+/* ---- regions, insertion, removal (src/dem/region.c, insertion.c) --------- */
+typedef struct {
+  int kind;          /* 0 box, 1 cylinder */
+  double lo[3], hi[3];           /* box */
+  double p[3], a[3], R, Rin, s0, s1; /* cylinder: axis through p along unit a, radii
+                                         Rin..R (an annulus if Rin > 0), axial extent
+                                         s0..s1 measured from p */
+} gs_dem_region;
+enum { GS_DEM_REGION_BOX = 0, GS_DEM_REGION_CYLINDER = 1 };
+int gs_dem_region_contains(const gs_dem_region *g, const double x[3]);
+/* Uniform random point of the region; u are three numbers in [0,1). */
+void gs_dem_region_point(const gs_dem_region *g, const double u[3], double x[3]);
+double gs_dem_region_volume(const gs_dem_region *g);
+
+/* A size distribution over particle types: entry k inserts type[k] with a
+ * radius uniform in [rmin[k], rmax[k]], with number or mass fraction frac[k]. */
+typedef struct {
+  size_t n;
+  const int *type;
+  const double *rmin, *rmax, *frac;
+  int by_mass;
+} gs_dem_psd;
+
+/* Insert up to `count` particles and at most `mass` kg (either may be
+ * infinite, not both) at random points of the region, none overlapping a
+ * particle (present or pending) or a wall; each drawn particle gets 50 tries
+ * at a free spot, and insertion stops after 20 particles in a row found none.
+ * v: initial velocity (NULL = 0).  rng_state: a caller-held seed updated in
+ * place.  *n_out, *m_out: what was inserted (may be less: region full). */
+int gs_dem_insert(gs_dem *d, const gs_dem_region *reg, const gs_dem_psd *psd, long count,
+                  double mass, const double v[3], uint64_t *rng_state, long *n_out, double *m_out,
+                  gs_error *err);
+/* 1 if a sphere at x of radius r overlaps a wall (as placed now). */
+int gs_dem_touches_wall(gs_dem *d, const double x[3], double r);
+
 /* ---- running ------------------------------------------------------------ */
 /* Advance nsteps time steps.  Fails on non-finite positions. */
 int gs_dem_run(gs_dem *d, long nsteps, gs_error *err);
-/* Remove every particle whose centre satisfies pred (applied at the next step). */
+/* Remove every particle whose centre satisfies pred (applied at list rebuilds,
+ * at least every 200 steps).  Removed particles are recorded (class,
+ * residence time since they entered, mass) until taken with
+ * gs_dem_take_removed, which returns their number and empties the record. */
+size_t gs_dem_take_removed(gs_dem *d, const int **cls, const double **residence,
+                           const double **mass);
 void gs_dem_remove_if(gs_dem *d, int (*pred)(const double x[3], void *ctx), void *ctx);
 
 /* ---- state (read-only views, valid until the next step) ----------------- */
@@ -147,8 +187,11 @@ const uint64_t *gs_dem_impact_histogram(const gs_dem *d, size_t wall, int cls, i
 size_t gs_dem_ncontacts(const gs_dem *d);
 /* Kinetic energy: translational and rotational [J]. */
 void gs_dem_kinetic_energy(const gs_dem *d, double *trans, double *rot);
+/* Torque of the particles on a wall about its rotation axis (last step) [N m]. */
+double gs_dem_wall_axial_torque(const gs_dem *d, size_t wall);
 /* Current world-frame triangle coordinates of a mesh wall (9 per triangle),
- * written to out (caller provides 9*ntri doubles); returns ntri, 0 if not a mesh. */
+ * written to out (caller provides 9*ntri doubles; NULL: only count); returns
+ * ntri, 0 if not a mesh. */
 size_t gs_dem_wall_triangles(const gs_dem *d, size_t wall, double *out);
 
 /* Coefficient c of the damping law gamma = c * sqrt(S m*) for restitution e
@@ -156,6 +199,17 @@ size_t gs_dem_wall_triangles(const gs_dem *d, size_t wall, double *out);
 double gs_dem_damping_coefficient(double e, int mode);
 /* Restitution a head-on Hertz impact with damping coefficient c realises. */
 double gs_dem_restitution_of(double c);
+
+/* ---- DEM case files (src/dem/case_dem.c, run_dem.c; docs/case-files.md) -- */
+typedef struct gs_dem_case_s gs_dem_case;
+/* Read and validate a DEM case; builds the simulation (meshes read, walls
+ * placed) but inserts nothing yet. */
+gs_dem_case *gs_dem_case_load(const char *path, gs_error *err);
+/* One line describing the case (for `gransim dem --check`). */
+void gs_dem_case_describe(const gs_dem_case *c, char *buf, size_t n);
+/* Run it, writing the tables, time series and VTK files into out_dir. */
+int gs_dem_case_run(gs_dem_case *c, const char *out_dir, int progress, gs_error *err);
+void gs_dem_case_free(gs_dem_case *c);
 
 #ifdef __cplusplus
 }

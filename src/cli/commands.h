@@ -2,6 +2,7 @@
 #ifndef GRANSIM_CLI_COMMANDS_H
 #define GRANSIM_CLI_COMMANDS_H
 int gs_cmd_validate(int argc, char **argv);
+int gs_cmd_dem(int argc, char **argv);
 /* Cases with solver.method = swa (src/cli/swa_cmd.c); both take over cfg. */
 typedef struct gs_cfg gs_cfg;
 int gs_cmd_run_swa(gs_cfg *cfg, const char *path, const char *out, int progress, int resume);

@@ -23,7 +23,8 @@ static void usage(FILE *fp) {
           "  list                   list mechanisms, kernels, selection functions, daughter\n"
           "                         distributions and integrators\n"
           "  validate [--out FILE]  grid-refinement study against analytical solutions;\n"
-          "                         writes a markdown report (default docs/validation.md)\n\n"
+          "                         writes a markdown report (default docs/validation.md)\n"
+          "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM)\n\n"
           "options: --help, --version; `gransim <command> --help` for details.\n"
           "Case file format: docs/case-files.md\n",
           GRANSIM_VERSION);
@@ -142,6 +143,7 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "check")) return cmd_check(argc - 2, argv + 2);
   if (!strcmp(argv[1], "list")) return cmd_list();
   if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 2, argv + 2);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;

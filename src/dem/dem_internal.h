@@ -120,6 +120,10 @@ struct gs_dem {
   double impact_dv;
   uint64_t lost, rebuilds;
   double t_reset;
+  /* particles removed by the predicate since the last gs_dem_take_removed */
+  int *rm_cls;
+  double *rm_rt, *rm_m;
+  size_t nrm, rm_cap, rm_taken;
   /* removal predicate */
   int (*remove_pred)(const double x[3], void *ctx);
   void *remove_ctx;
@@ -136,6 +140,9 @@ void gs_dem_particles_copy(gs_dem_particles *dst, size_t dst_i, const gs_dem_par
 void gs_dem_pair_constants(const gs_dem_material *a, const gs_dem_material *b, int damping,
                            gs_dem_pair *out);
 int gs_dem_update_pairs(gs_dem *d, gs_error *err);
+
+/* sim.c: pair tables and mesh bins for the current types, walls and radii */
+int gs_dem_prepare(gs_dem *d, gs_error *err);
 
 /* neighbour.c */
 int gs_dem_rebuild(gs_dem *d, gs_error *err);

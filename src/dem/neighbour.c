@@ -44,6 +44,25 @@ static int out_of_box(const gs_dem *d, const gs_dem_particles *p, size_t i) {
            p->y[i] <= d->prm.hi[1] && p->z[i] >= d->prm.lo[2] && p->z[i] <= d->prm.hi[2]);
 }
 
+static int record_removed(gs_dem *d, const gs_dem_particles *p, size_t k) {
+  if (d->nrm == d->rm_cap) {
+    size_t nc = d->rm_cap ? 2 * d->rm_cap : 256;
+    int *c = realloc(d->rm_cls, nc * sizeof(int));
+    if (c) d->rm_cls = c;
+    double *r = realloc(d->rm_rt, nc * sizeof(double));
+    if (r) d->rm_rt = r;
+    double *m = realloc(d->rm_m, nc * sizeof(double));
+    if (m) d->rm_m = m;
+    if (!c || !r || !m) return -1;
+    d->rm_cap = nc;
+  }
+  d->rm_cls[d->nrm] = d->types[p->type[k]].cls;
+  d->rm_rt[d->nrm] = d->t - p->t_in[k];
+  d->rm_m[d->nrm] = p->m[k];
+  d->nrm++;
+  return 0;
+}
+
 /* Touching pairs of the old list, by new particle index, to carry over. */
 typedef struct {
   int i, j;
@@ -74,7 +93,10 @@ int gs_dem_rebuild(gs_dem *d, gs_error *err) {
       dead = 1;
       d->lost++;
     }
-    if (!dead && d->remove_pred && d->remove_pred(xs, d->remove_ctx)) dead = 1;
+    if (!dead && d->remove_pred && d->remove_pred(xs, d->remove_ctx)) {
+      dead = 1;
+      if (s < nold && record_removed(d, src, k)) return gs_error_set(err, GS_ENOMEM, "out of memory");
+    }
     d->cellof[s] = dead ? -1
                         : (cell_coord(d, xs[2], 2) * d->cdim[1] + cell_coord(d, xs[1], 1)) * d->cdim[0] +
                               cell_coord(d, xs[0], 0);

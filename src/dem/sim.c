@@ -69,6 +69,9 @@ void gs_dem_free(gs_dem *d) {
   free(d->wall_vn2_sum);
   free(d->wall_vt_sum);
   free(d->impact_hist);
+  free(d->rm_cls);
+  free(d->rm_rt);
+  free(d->rm_m);
   free(d);
 }
 
@@ -209,7 +212,7 @@ void gs_dem_remove_if(gs_dem *d, int (*pred)(const double x[3], void *ctx), void
 }
 
 /* Everything that depends on the set of types, walls and the largest radius. */
-static int prepare(gs_dem *d, gs_error *err) {
+int gs_dem_prepare(gs_dem *d, gs_error *err) {
   if (d->pairs_dirty) {
     int rc = gs_dem_update_pairs(d, err);
     if (rc) return rc;
@@ -233,12 +236,12 @@ static void compute_forces(gs_dem *d) {
 }
 
 int gs_dem_run(gs_dem *d, long nsteps, gs_error *err) {
-  int rc = prepare(d, err);
+  int rc = gs_dem_prepare(d, err);
   if (rc) return rc;
   const double dt = d->prm.dt, hdt = 0.5 * dt;
   const double lim = 0.25 * d->prm.skin * d->prm.skin;
   const double g0 = d->prm.gravity[0], g1 = d->prm.gravity[1], g2 = d->prm.gravity[2];
-  if (d->step == 0 && nsteps > 0 && gs_dem_needs_rebuild(d)) {
+  if (d->step == 0 && nsteps >= 0 && gs_dem_needs_rebuild(d)) {
     /* the very first step needs the initial contact forces for its first kick */
     if ((rc = gs_dem_rebuild(d, err))) return rc;
     compute_forces(d);
@@ -276,7 +279,7 @@ int gs_dem_run(gs_dem *d, long nsteps, gs_error *err) {
     if (maxd2 > lim || !(maxd2 == maxd2) || gs_dem_needs_rebuild(d) ||
         (d->remove_pred && d->since_rebuild >= 200)) {
       if (d->pend.n) {
-        if ((rc = prepare(d, err))) return rc;
+        if ((rc = gs_dem_prepare(d, err))) return rc;
       }
       if ((rc = gs_dem_rebuild(d, err))) return rc;
       d->since_rebuild = 0;
@@ -370,9 +373,25 @@ void gs_dem_kinetic_energy(const gs_dem *d, double *trans, double *rot) {
 size_t gs_dem_wall_triangles(const gs_dem *d, size_t wall, double *out) {
   const gs_dem_wall *w = &d->walls[wall];
   if (w->kind != GS_DEM_WALL_MESH) return 0;
+  if (!out) return w->mesh->ntri;
   gs_dem_wall tmp = *w;
   gs_dem_wall_frame(&tmp, d->t);
   for (size_t k = 0; k < 3 * w->mesh->ntri; k++)
     gs_dem_wall_point_to_world(&tmp, w->mesh->v + 3 * k, out + 3 * k);
   return w->mesh->ntri;
+}
+
+size_t gs_dem_take_removed(gs_dem *d, const int **cls, const double **residence,
+                           const double **mass) {
+  size_t n = d->nrm;
+  *cls = d->rm_cls;
+  *residence = d->rm_rt;
+  *mass = d->rm_m;
+  d->nrm = 0; /* the arrays stay valid until the next rebuild */
+  return n;
+}
+
+double gs_dem_wall_axial_torque(const gs_dem *d, size_t wall) {
+  const gs_dem_wall *w = &d->walls[wall];
+  return w->torque[0] * w->axis[0] + w->torque[1] * w->axis[1] + w->torque[2] * w->axis[2];
 }

@@ -291,3 +291,20 @@ void gs_dem_wall_forces(gs_dem *d) {
     free(acc);
   }
 }
+
+int gs_dem_touches_wall(gs_dem *d, const double x[3], double r) {
+  cand c[MAXC];
+  int nc = 0;
+  for (size_t w = 0; w < d->nwalls; w++) {
+    gs_dem_wall *wl = &d->walls[w];
+    gs_dem_wall_frame(wl, d->t);
+    if (wl->kind == GS_DEM_WALL_MESH) {
+      if (wl->mesh->bin_reach < r) continue; /* cannot happen after gs_dem_prepare */
+      mesh_candidates(wl, (int)w, x, r, c, &nc);
+    } else {
+      analytic_candidate(wl, (int)w, x, r, c, &nc);
+    }
+    if (nc) return 1;
+  }
+  return 0;
+}

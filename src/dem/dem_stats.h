@@ -1,0 +1,35 @@
+/* Statistics of a DEM run for the PBM (stats.c): numbers per class,
+ * velocities per class and compartment, hold-up, residence times, and the
+ * tables written from them and from the engine's event counters. */
+#ifndef GRANSIM_DEM_STATS_H
+#define GRANSIM_DEM_STATS_H
+#include "dem/dem_case.h"
+
+typedef struct {
+  int ncl;
+  size_t ncmp;
+  double t0;
+  long nsamples;
+  double *num_sum;                    /* per class */
+  double *cv_n, *cv_s, *cv_s2, *cv_a; /* per class x compartment */
+  double hold_n_sum, hold_m_sum;
+  double *rt;                         /* residence times of removed particles */
+  int *rt_cls;
+  size_t nrt, rt_cap;
+  double out_mass;                    /* mass removed since t0 */
+} gs_dem_stats;
+
+int gs_dem_stats_init(gs_dem_stats *s, const gs_dem_case *c, gs_error *err);
+void gs_dem_stats_free(gs_dem_stats *s);
+/* Forget everything and restart the window at time t (also resets the
+ * engine's event counters). */
+void gs_dem_stats_reset(gs_dem_stats *s, gs_dem_case *c, double t);
+/* Hold-up of the case (number and mass in the hold-up region, or all). */
+void gs_dem_holdup(const gs_dem_case *c, double *n, double *m);
+/* One sample of the state; takes the removed particles' residence times. */
+int gs_dem_stats_sample(gs_dem_stats *s, gs_dem_case *c, gs_error *err);
+/* Write collisions.csv, collision_kernel.csv, impacts.csv,
+ * impact_velocity.csv, velocity.csv, residence.csv into dir. */
+int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *dir, double t_end,
+                       double t_steady, gs_error *err);
+#endif

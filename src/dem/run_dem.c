@@ -1,0 +1,243 @@
+/* The DEM run driver: initial fill, feeds at a rate, outlets, sampling,
+ * the steady-state detector, time series, VTK files and the progress line.
+ *
+ * The engine advances in chunks up to the next event (output, sample, VTK
+ * frame, feed); events are evaluated between chunks, so they happen on step
+ * boundaries. */
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "dem/dem_internal.h"
+#include "dem/dem_stats.h"
+#include "dem/dem_vtk.h"
+
+static int in_outlet(const double x[3], void *ctx) {
+  const gs_dem_case *c = ctx;
+  for (size_t k = 0; k < c->noutlets; k++)
+    if (gs_dem_region_contains(&c->outlets[k], x)) return 1;
+  return 0;
+}
+
+static int insert(gs_dem_case *c, gs_dem_inserter *in, long count, double mass, uint64_t *rng,
+                  long *n, double *m, gs_error *err) {
+  int types[GS_DEM_MAX_CLASSES];
+  double rmin[GS_DEM_MAX_CLASSES], rmax[GS_DEM_MAX_CLASSES];
+  for (size_t k = 0; k < c->nclass; k++) {
+    types[k] = c->cls[k].type;
+    rmin[k] = c->cls[k].rmin;
+    rmax[k] = c->cls[k].rmax;
+  }
+  gs_dem_psd psd = {c->nclass, types, rmin, rmax, in->frac, in->by_mass};
+  return gs_dem_insert(c->dem, &in->reg, &psd, count, mass, in->v, rng, n, m, err);
+}
+
+static double wall_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* Steady when, over the last `window` samples, hold-up mass and collision rate
+ * each stay within tol of their window mean (seed 000's criterion). */
+static int is_steady(const double *a, const double *b, long n, long w, double tol) {
+  if (n < w) return 0;
+  const double *s[2] = {a + n - w, b + n - w};
+  for (int q = 0; q < 2; q++) {
+    double mean = 0;
+    for (long k = 0; k < w; k++) mean += s[q][k];
+    mean /= (double)w;
+    if (!(mean > 0)) return 0;
+    for (long k = 0; k < w; k++)
+      if (fabs(s[q][k] - mean) > tol * mean) return 0;
+  }
+  return 1;
+}
+
+int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err) {
+  if (mkdir(dir, 0777) && errno != EEXIST)
+    return gs_error_set(err, GS_EIO, "%s: cannot create output folder: %s", dir, strerror(errno));
+  char path[8400], vdir[4200];
+  snprintf(vdir, sizeof vdir, "%s/vtk", dir);
+  if (c->vtk_every > 0 && mkdir(vdir, 0777) && errno != EEXIST)
+    return gs_error_set(err, GS_EIO, "%s: cannot create: %s", vdir, strerror(errno));
+  gs_dem *d = c->dem;
+  const double dt = c->prm.dt;
+  uint64_t rng = c->seed;
+  int rc = GS_OK;
+  gs_dem_stats st;
+  if ((rc = gs_dem_stats_init(&st, c, err))) return rc;
+  long cap = 1024, ns = 0;
+  double *ser_m = malloc(cap * sizeof(double)), *ser_c = malloc(cap * sizeof(double));
+  if (!ser_m || !ser_c) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+
+  /* initial fill */
+  for (size_t k = 0; k < c->nfill && !rc; k++) {
+    long n;
+    double m;
+    rc = insert(c, &c->fill[k], c->fill[k].count, c->fill[k].mass, &rng, &n, &m, err);
+    if (!rc && n < c->fill[k].count && !isfinite(c->fill[k].mass))
+      fprintf(stderr, "gransim: warning: fill[%zu]: region full after %ld of %ld particles\n", k, n,
+              c->fill[k].count);
+    if (!rc && isfinite(c->fill[k].mass) && m < 0.99 * c->fill[k].mass)
+      fprintf(stderr, "gransim: warning: fill[%zu]: region full after %.4g of %.4g kg\n", k, m,
+              c->fill[k].mass);
+    if (!rc && progress) fprintf(stderr, "gransim dem: fill[%zu]: %ld particles, %.4g kg\n", k, n, m);
+  }
+  if (c->noutlets) gs_dem_remove_if(d, in_outlet, c);
+  if (!rc && gs_dem_rayleigh_time(d) < HUGE_VAL && dt > 0.2 * gs_dem_rayleigh_time(d))
+    fprintf(stderr, "gransim: warning: time step %g s is %.0f %% of the Rayleigh time\n", dt,
+            100 * dt / gs_dem_rayleigh_time(d));
+
+  snprintf(path, sizeof path, "%s/timeseries.csv", dir);
+  FILE *ts = rc ? NULL : fopen(path, "w");
+  if (!rc && !ts) rc = gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  if (ts) {
+    fprintf(ts, "time,particles,holdup_number,holdup_mass,kinetic_energy,rotational_energy,contacts,"
+            "collisions_per_s");
+    for (size_t w = 0; w < gs_dem_nwalls(d); w++) fprintf(ts, ",impacts_per_s_%s", gs_dem_wall_name(d, w));
+    for (size_t w = 0; w < gs_dem_nwalls(d); w++) fprintf(ts, ",torque_axis_%s", gs_dem_wall_name(d, w));
+    fprintf(ts, ",lost,steady\n");
+  }
+
+  const long nsteps = (long)ceil(c->duration / dt - 1e-9);
+  const long out_k = (long)fmax(1, round(c->out_every / dt));
+  const long smp_k = (long)fmax(1, round(c->sample_every / dt));
+  const long vtk_k = c->vtk_every > 0 ? (long)fmax(1, round(c->vtk_every / dt)) : 0;
+  const long start_k = (long)round(c->stats_start / dt);
+  long step = 0, frame = 0;
+  int steady = 0, stats_on = !c->start_steady && start_k == 0;
+  double t_steady = -1, t0wall = wall_seconds();
+  uint64_t prev_events = 0, out_events = 0, out_imp[GS_DEM_MAX_WALLS] = {0};
+  double psteps = 0;
+  long prev_out_step = 0;
+  if (!rc) rc = gs_dem_run(d, 0, err); /* place the fill so that t = 0 is reported */
+  if (!rc) gs_dem_stats_reset(&st, c, 0);
+  while (!rc && step <= nsteps) {
+    /* events at this step */
+    if (!c->start_steady && !stats_on && step >= start_k) {
+      gs_dem_stats_reset(&st, c, gs_dem_time(d));
+      prev_events = 0;
+      stats_on = 1;
+    }
+    for (size_t k = 0; k < c->nfeed && !rc; k++) {
+      gs_dem_inserter *f = &c->feed[k];
+      double t = gs_dem_time(d);
+      if (t + 0.5 * dt < f->next_t || t >= f->end) continue;
+      /* insert one interval's worth at the start of each interval */
+      double span = fmin(t + f->every, f->end) - f->start;
+      long n;
+      double m;
+      if (f->mass_rate > 0) rc = insert(c, f, LONG_MAX, f->mass_rate * span - f->done_m, &rng, &n, &m, err);
+      else rc = insert(c, f, (long)floor(f->number_rate * span - f->done_n + 0.5), HUGE_VAL, &rng, &n, &m, err);
+      f->done_n += (double)n;
+      f->done_m += m;
+      f->next_t += f->every;
+    }
+    if (!rc && step % smp_k == 0 && step > 0) {
+      gs_dem_counters k;
+      gs_dem_get_counters(d, &k);
+      uint64_t ev = 0;
+      for (int i = 0; i < k.nclass * k.nclass; i++) ev += k.pair_events[i];
+      double hn, hm;
+      gs_dem_holdup(c, &hn, &hm);
+      if (ns == cap) {
+        cap *= 2;
+        double *a = realloc(ser_m, cap * sizeof(double)), *b = realloc(ser_c, cap * sizeof(double));
+        if (a) ser_m = a;
+        if (b) ser_c = b;
+        if (!a || !b) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+      }
+      if (!rc) {
+        ser_m[ns] = hm;
+        ser_c[ns] = (double)(ev - (ev >= prev_events ? prev_events : ev)) / (smp_k * dt);
+        ns++;
+        prev_events = ev;
+      }
+      if (!rc && !steady && is_steady(ser_m, ser_c, ns, c->steady_window, c->steady_tol)) {
+        steady = 1;
+        t_steady = gs_dem_time(d);
+        if (progress) fprintf(stderr, "gransim dem: steady state at t = %.6g s\n", t_steady);
+        if (c->start_steady) {
+          gs_dem_stats_reset(&st, c, t_steady);
+          prev_events = 0;
+          stats_on = 1;
+        }
+      }
+      if (!rc && stats_on) rc = gs_dem_stats_sample(&st, c, err);
+    }
+    if (!rc && step % out_k == 0) {
+      gs_dem_counters k;
+      gs_dem_get_counters(d, &k);
+      double span = (step - prev_out_step) * dt, et, er, hn, hm;
+      gs_dem_kinetic_energy(d, &et, &er);
+      gs_dem_holdup(c, &hn, &hm);
+      gs_dem_view v;
+      gs_dem_get_view(d, &v);
+      uint64_t ev = 0;
+      for (int i = 0; i < k.nclass * k.nclass; i++) ev += k.pair_events[i];
+      if (ev < out_events) out_events = 0; /* counters were reset for the statistics window */
+      fprintf(ts, "%.9g,%zu,%.0f,%.9g,%.9g,%.9g,%zu,%.9g", gs_dem_time(d), v.n, hn, hm, et, er,
+              gs_dem_ncontacts(d), span > 0 ? (double)(ev - out_events) / span : 0);
+      out_events = ev;
+      for (size_t w = 0; w < k.nwalls; w++) {
+        uint64_t im = 0;
+        for (int i = 0; i < k.nclass; i++) im += k.wall_impacts[w * (size_t)k.nclass + i];
+        if (im < out_imp[w]) out_imp[w] = 0;
+        fprintf(ts, ",%.9g", span > 0 ? (double)(im - out_imp[w]) / span : 0);
+        out_imp[w] = im;
+      }
+      for (size_t w = 0; w < k.nwalls; w++) fprintf(ts, ",%.9g", gs_dem_wall_axial_torque(d, w));
+      fprintf(ts, ",%llu,%d\n", (unsigned long long)k.lost, steady);
+      prev_out_step = step;
+      if (progress) {
+        double el = wall_seconds() - t0wall;
+        fprintf(stderr, "gransim dem: t = %.5f / %.5f s, %zu particles, %zu contacts, %.3g particle-steps/s\n",
+                gs_dem_time(d), c->duration, v.n, gs_dem_ncontacts(d), el > 0 ? psteps / el : 0);
+      }
+    }
+    if (!rc && vtk_k && step % vtk_k == 0) {
+      snprintf(path, sizeof path, "%s/particles_%06ld.vtk", vdir, frame);
+      rc = gs_dem_write_vtk_particles(d, path, err);
+      for (size_t w = 0; w < gs_dem_nwalls(d) && !rc; w++) {
+        snprintf(path, sizeof path, "%s/%s_%06ld.vtk", vdir, gs_dem_wall_name(d, w), frame);
+        rc = gs_dem_write_vtk_wall(d, w, path, err);
+      }
+      frame++;
+    }
+    if (step == nsteps) break;
+    /* advance to the next event */
+    long next = nsteps;
+    long cand[4] = {(step / out_k + 1) * out_k, (step / smp_k + 1) * smp_k,
+                    vtk_k ? (step / vtk_k + 1) * vtk_k : nsteps, start_k > step ? start_k : nsteps};
+    for (int q = 0; q < 4; q++)
+      if (cand[q] < next) next = cand[q];
+    for (size_t k = 0; k < c->nfeed; k++) {
+      long fk = (long)ceil(c->feed[k].next_t / dt - 1e-9);
+      if (fk > step && fk < next && c->feed[k].next_t < c->feed[k].end) next = fk;
+    }
+    {
+      gs_dem_view v;
+      gs_dem_get_view(d, &v);
+      psteps += (double)v.n * (double)(next - step);
+    }
+    rc = gs_dem_run(d, next - step, err);
+    step = next;
+  }
+  if (!rc && progress) {
+    double el = wall_seconds() - t0wall;
+    fprintf(stderr, "gransim dem: %ld steps in %.2f s, %.4g particle-steps/s%s\n", nsteps, el,
+            el > 0 ? psteps / el : 0, t_steady >= 0 ? "" : "; steady state not reached");
+  }
+  if (ts) fclose(ts);
+  if (!rc) rc = gs_dem_stats_write(&st, c, dir, gs_dem_time(d), t_steady, err);
+  gs_dem_stats_free(&st);
+  free(ser_m);
+  free(ser_c);
+  return rc;
+}

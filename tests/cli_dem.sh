@@ -1,0 +1,80 @@
+# `gransim dem`: the CoriMix example runs and writes its tables; the collision
+# table is one the PBM's `table` kernel reads; case-file errors name
+# file:line, key and value; --check validates the DEM examples of
+# docs/case-files.md (blocks starting "# dem-example: NAME").
+source "$(dirname "$0")/cli-lib.sh" "$@"
+
+run_rc 0 "$BIN" dem --help
+stdout_has "collision_kernel.csv"
+
+# the example, shortened to 2000 steps
+sed 's/duration: 0.02/duration: 0.01/; s/vtk_every: 0.01/vtk_every: 0.005/' \
+  "$SRC/examples/dem-corimix.yaml" | sed "s|\.\./\.\./shared|$SRC/../shared|" > "$WORK/corimix.yaml"
+if [ -f "$SRC/../shared/data/corimix/shell.stl" ]; then
+  run_rc 0 "$BIN" dem "$WORK/corimix.yaml" --out "$WORK/out" --quiet
+  for f in timeseries.csv collisions.csv collision_kernel.csv impacts.csv impact_velocity.csv \
+           velocity.csv residence.csv vtk/particles_000001.vtk vtk/impeller_000001.vtk; do
+    [ -s "$WORK/out/$f" ] || fail "missing $f"
+  done
+  # collisions happened between every pair of classes, and impacts on the impeller
+  awk -F, 'NR > 2 && $5 <= 0 { bad = 1 } END { exit bad }' "$WORK/out/collisions.csv" ||
+    fail "a class pair without collisions: $(cat "$WORK/out/collisions.csv")"
+  grep -q '^impeller,1,fine,[1-9]' "$WORK/out/impacts.csv" || fail "no impeller impacts"
+  # the PBM reads the collision table as its aggregation kernel
+  cp "$WORK/out/collision_kernel.csv" "$WORK/C.csv"
+  cat > "$WORK/pbm.yaml" <<'YAML'
+title: DEM collision frequencies as the aggregation kernel
+grid:
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-11, max: 1.0e-6, cells: 20, zero_first: true}
+initial:
+  type: exponential
+  number: 1
+  mean: 4.0e-9
+mechanisms:
+  - type: aggregation
+    kernel: {type: table, file: C.csv, measure: diameter, beta0: 1.0e-3}
+output: {end: 1, count: 2}
+YAML
+  if "$BIN" check "$WORK/pbm.yaml" > "$WORK/pbm.out" 2>&1; then :; else
+    cat "$WORK/pbm.out" >&2
+    fail "the PBM does not accept collision_kernel.csv"
+  fi
+else
+  echo "cli_dem: shared CoriMix meshes not present; skipping the example run"
+fi
+
+# errors name file, line, key and value
+cat > "$WORK/bad.yaml" <<'YAML'
+dem:
+  time_step: 1.0e-6
+  duration: 0.001
+  box: {lo: [0, 0, 0], hi: [0.1, 0.1, 0.1]}
+materials:
+  - {name: g, E: -5, nu: 0.2, e: 0.4, mu_s: 0.5, density: 500}
+classes:
+  - {name: a, radius: 1.0e-3, material: g}
+YAML
+run_rc 1 "$BIN" dem "$WORK/bad.yaml" --out "$WORK/bad"
+stderr_has "bad.yaml:6: materials[0].E = '-5'"
+sed -i 's/E: -5/E: 8.0e6/; s/radius: 1.0e-3/radius: 1.0e-3, colour: red/' "$WORK/bad.yaml"
+run_rc 1 "$BIN" dem "$WORK/bad.yaml" --out "$WORK/bad"
+stderr_has "unknown key 'colour'"
+
+# DEM examples of the case-file documentation
+ex=$WORK/doc
+mkdir -p "$ex"
+awk -v dir="$ex" '
+  /^```/ { if (inblock) { if (out) close(out); out = ""; inblock = 0 } else { inblock = 1; first = 1 }; next }
+  inblock && first { first = 0; if ($0 ~ /^# dem-example: [A-Za-z0-9._-]+$/) out = dir "/" $3 }
+  out { print > out }' "$SRC/docs/case-files.md"
+n=0
+for f in "$ex"/*.yaml; do
+  [ -e "$f" ] || break
+  sed -i "s|\.\./\.\./shared|$SRC/../shared|" "$f"
+  run_rc 0 "$BIN" dem --check "$f"
+  stdout_has "valid"
+  n=$((n + 1))
+done
+[ "$n" -ge 1 ] || fail "no '# dem-example:' blocks in docs/case-files.md"
+echo "cli_dem: ok ($n documented examples)"
