@@ -138,7 +138,7 @@ void gs_swa_fictitious(gs_swa_sim *s);
 int gs_swa_sim_place(gs_swa_sim *s, size_t comp, const double *x, double w, gs_error *err);
 
 typedef struct gs_swa_stats {
-  uint64_t jumps;      /* accepted events */
+  uint64_t jumps;      /* events performed (accepted and fictitious) */
   uint64_t fictitious; /* rejected (fictitious) events */
   uint64_t doublings, contractions;
 } gs_swa_stats;
