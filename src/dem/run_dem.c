@@ -102,7 +102,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
             "collisions_per_s");
     for (size_t w = 0; w < gs_dem_nwalls(d); w++) fprintf(ts, ",impacts_per_s_%s", gs_dem_wall_name(d, w));
     for (size_t w = 0; w < gs_dem_nwalls(d); w++) fprintf(ts, ",torque_axis_%s", gs_dem_wall_name(d, w));
-    fprintf(ts, ",lost,steady\n");
+    fprintf(ts, ",lost,steady,wall_seconds\n");
   }
 
   const long nsteps = (long)ceil(c->duration / dt - 1e-9);
@@ -193,7 +193,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
         out_imp[w] = im;
       }
       for (size_t w = 0; w < k.nwalls; w++) fprintf(ts, ",%.9g", gs_dem_wall_axial_torque(d, w));
-      fprintf(ts, ",%llu,%d\n", (unsigned long long)k.lost, steady);
+      fprintf(ts, ",%llu,%d,%.6f\n", (unsigned long long)k.lost, steady, wall_seconds() - t0wall);
       prev_out_step = step;
       if (progress) {
         double el = wall_seconds() - t0wall;
