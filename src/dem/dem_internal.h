@@ -51,6 +51,7 @@ struct gs_dem_mesh {
   int bdim[3];
   int *bfirst;      /* CSR over cells */
   int *btri;
+  uint64_t *bmask;  /* one bit per cell: has triangles (small enough to stay in cache) */
   double bin_reach; /* particle radius the bins were built for */
 };
 

@@ -55,9 +55,10 @@ int gs_dem_mesh_build_bins(gs_dem_mesh *m, double reach, gs_error *err) {
     hi[a] += reach;
     if (hi[a] - lo[a] > ext) ext = hi[a] - lo[a];
   }
-  /* cells about two radii wide keep the triangle lists short; cap the grid */
-  double h = fmax(2 * reach, ext / 400);
-  while (((hi[0] - lo[0]) / h + 1) * ((hi[1] - lo[1]) / h + 1) * ((hi[2] - lo[2]) / h + 1) > 4e6)
+  /* cells about two radii wide keep the triangle lists short (the contact
+   * search walks the list of one cell per particle every step); cap the grid */
+  double h = fmax(2 * reach, ext / 1000);
+  while (((hi[0] - lo[0]) / h + 1) * ((hi[1] - lo[1]) / h + 1) * ((hi[2] - lo[2]) / h + 1) > 1.6e7)
     h *= 1.25;
   m->bh = h;
   size_t ncell = 1;
@@ -103,6 +104,12 @@ int gs_dem_mesh_build_bins(gs_dem_mesh *m, double reach, gs_error *err) {
                             m->blo[2] + (iz + 0.5) * h};
             double s = (cc[0] - v[0]) * nr[0] + (cc[1] - v[1]) * nr[1] + (cc[2] - v[2]) * nr[2];
             if (fabs(s) > half_diag + reach) continue;
+            /* exact bound: some point of the cell is within reach of the triangle
+             * only if the cell centre is within reach + half diagonal of it */
+            double q[3];
+            gs_dem_closest_on_triangle(cc, v, v + 3, v + 6, q);
+            double e0 = cc[0] - q[0], e1 = cc[1] - q[1], e2 = cc[2] - q[2];
+            if (e0 * e0 + e1 * e1 + e2 * e2 > (half_diag + reach) * (half_diag + reach)) continue;
             size_t cell = ((size_t)iz * m->bdim[1] + iy) * m->bdim[0] + ix;
             if (pass == 0) m->bfirst[cell + 1]++;
             else m->btri[fill[cell]++] = (int)t;
@@ -110,6 +117,13 @@ int gs_dem_mesh_build_bins(gs_dem_mesh *m, double reach, gs_error *err) {
     }
     free(fill);
   }
+  /* Most particles sit in cells without triangles; testing a bit first keeps
+   * the big CSR array out of the cache for them. */
+  free(m->bmask);
+  m->bmask = calloc(ncell / 64 + 1, sizeof(uint64_t));
+  if (!m->bmask) return gs_error_set(err, GS_ENOMEM, "out of memory binning a mesh");
+  for (size_t c = 0; c < ncell; c++)
+    if (m->bfirst[c + 1] > m->bfirst[c]) m->bmask[c / 64] |= 1ull << (c % 64);
   m->bin_reach = reach;
   return GS_OK;
 }

@@ -177,5 +177,6 @@ void gs_dem_mesh_free(gs_dem_mesh *m) {
   free(m->vid);
   free(m->bfirst);
   free(m->btri);
+  free(m->bmask);
   free(m);
 }

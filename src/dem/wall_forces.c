@@ -52,6 +52,7 @@ static void mesh_candidates(const gs_dem_wall *w, int wi, const double xw[3], do
     ic[a] = (int)f;
   }
   size_t cell = ((size_t)ic[2] * m->bdim[1] + ic[1]) * m->bdim[0] + ic[0];
+  if (!(m->bmask[cell / 64] >> (cell % 64) & 1)) return;
   for (int k = m->bfirst[cell]; k < m->bfirst[cell + 1]; k++) {
     int t = m->btri[k];
     const double *v = m->v + 9 * (size_t)t, *nr = m->nrm + 3 * (size_t)t;
