@@ -1,4 +1,5 @@
 /* `gransim run` and `gransim check` for cases with solver.method = swa. */
+#include <math.h>
 #include <stdio.h>
 #include <unistd.h>
 
@@ -19,10 +20,11 @@ int gs_cmd_run_swa(gs_cfg *cfg, const char *path, const char *out, int progress,
   if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
   else
     fprintf(stderr,
-            "gransim: %s: swa, %zu runs of %zu particles done to t = %g in %.3f s (%llu jumps, %llu "
-            "fictitious, %llu doublings, %llu contractions); results in %s/result.h5 and %s/summary.csv\n",
+            "gransim: %s: swa, %zu runs of %zu particles done to t = %g in %.3f s (%llu jumps, %.3g per "
+            "second, %llu fictitious, %llu doublings, %llu contractions); results in %s/result.h5 and "
+            "%s/summary.csv\n",
             path, rep.runs, c.model.nmax, c.times[c.ntimes - 1], rep.wall_seconds,
-            (unsigned long long)rep.stats.jumps, (unsigned long long)rep.stats.fictitious,
+            (unsigned long long)rep.stats.jumps, (double)rep.stats.jumps / fmax(rep.wall_seconds, 1e-9), (unsigned long long)rep.stats.fictitious,
             (unsigned long long)rep.stats.doublings, (unsigned long long)rep.stats.contractions, out, out);
   gs_swa_report_free(&rep);
   gs_swa_case_free(&c);

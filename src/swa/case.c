@@ -177,10 +177,8 @@ int gs_swa_case_from_cfg(gs_cfg *cfg, gs_swa_case *c, gs_error *err) {
   if (!rc) {
     /* every compartment needs a sample volume: from its initial particles,
      * from reference_number, or from the first filled compartment */
-    int any = 0;
     const initial_set *set = c->initial;
-    for (size_t i = 0; i < set->n; i++) any = 1;
-    if (!any && !(c->model.reference_number > 0))
+    if (set->n == 0 && !(c->model.reference_number > 0))
       rc = gs_error_set(err, GS_EINPUT,
                         "%s: every compartment starts empty: set solver.reference_number (the physical "
                         "number of particles that fill_fraction * particles computational particles stand for)",
