@@ -37,6 +37,15 @@ static int insert(gs_dem_case *c, gs_dem_inserter *in, long count, double mass, 
   return gs_dem_insert(c->dem, &in->reg, &psd, count, mass, in->v, rng, n, m, err);
 }
 
+/* Add the engine's current event and impact counts to running totals. */
+static void add_totals(const gs_dem *d, uint64_t *events, uint64_t *impacts) {
+  gs_dem_counters k;
+  gs_dem_get_counters(d, &k);
+  for (int i = 0; i < k.nclass * k.nclass; i++) *events += k.pair_events[i];
+  for (size_t w = 0; w < k.nwalls; w++)
+    for (int i = 0; i < k.nclass; i++) impacts[w] += k.wall_impacts[w * (size_t)k.nclass + i];
+}
+
 static double wall_seconds(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -114,6 +123,9 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   int steady = 0, stats_on = !c->start_steady && start_k == 0;
   double t_steady = -1, t0wall = wall_seconds();
   uint64_t prev_events = 0, out_events = 0, out_imp[GS_DEM_MAX_WALLS] = {0};
+  /* the engine's counters restart with the statistics window; the time series
+   * keeps running totals across that reset */
+  uint64_t base_events = 0, base_imp[GS_DEM_MAX_WALLS] = {0};
   double psteps = 0;
   long prev_out_step = 0;
   if (!rc) rc = gs_dem_run(d, 0, err); /* place the fill so that t = 0 is reported */
@@ -121,6 +133,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   while (!rc && step <= nsteps) {
     /* events at this step */
     if (!c->start_steady && !stats_on && step >= start_k) {
+      add_totals(d, &base_events, base_imp);
       gs_dem_stats_reset(&st, c, gs_dem_time(d));
       prev_events = 0;
       stats_on = 1;
@@ -164,6 +177,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
         t_steady = gs_dem_time(d);
         if (progress) fprintf(stderr, "gransim dem: steady state at t = %.6g s\n", t_steady);
         if (c->start_steady) {
+          add_totals(d, &base_events, base_imp);
           gs_dem_stats_reset(&st, c, t_steady);
           prev_events = 0;
           stats_on = 1;
@@ -179,16 +193,14 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       gs_dem_holdup(c, &hn, &hm);
       gs_dem_view v;
       gs_dem_get_view(d, &v);
-      uint64_t ev = 0;
+      uint64_t ev = base_events;
       for (int i = 0; i < k.nclass * k.nclass; i++) ev += k.pair_events[i];
-      if (ev < out_events) out_events = 0; /* counters were reset for the statistics window */
       fprintf(ts, "%.9g,%zu,%.0f,%.9g,%.9g,%.9g,%zu,%.9g", gs_dem_time(d), v.n, hn, hm, et, er,
               gs_dem_ncontacts(d), span > 0 ? (double)(ev - out_events) / span : 0);
       out_events = ev;
       for (size_t w = 0; w < k.nwalls; w++) {
-        uint64_t im = 0;
+        uint64_t im = base_imp[w];
         for (int i = 0; i < k.nclass; i++) im += k.wall_impacts[w * (size_t)k.nclass + i];
-        if (im < out_imp[w]) out_imp[w] = 0;
         fprintf(ts, ",%.9g", span > 0 ? (double)(im - out_imp[w]) / span : 0);
         out_imp[w] = im;
       }
