@@ -30,6 +30,15 @@ typedef struct gs_ode {
   /* Number of leading components that are number densities (must stay >= 0);
    * the Euler controller looks only at these. */
   size_t npositive;
+  /* Optional preconditioner for implicit integrators: approximately solve
+   * (I - gamma J) z = r, J the Jacobian of f at (t, y).  Returns 0, or
+   * non-zero when it cannot.  NULL: none. */
+  int (*psolve)(void *ctx, double t, const double *y, double gamma, const double *r, double *z);
+  /* Optional: hold(ctx, 1) asks f to keep the discrete choices it made at
+   * its last evaluation (e.g. which cells take part in aggregation) until
+   * hold(ctx, 0), so that a difference quotient (f(y + s v) - f(y)) / s is a
+   * derivative and not a jump.  NULL: f makes no such choices. */
+  void (*hold)(void *ctx, int on);
 } gs_ode;
 
 typedef struct gs_integrator_stats {

@@ -47,6 +47,13 @@ typedef struct gs_mech_type {
   void (*number_rates)(void *self, const gs_model *m, double t, const double *y, double *birth,
                        double *death);
   void (*free)(void *self);
+  /* Optional: apply in place an approximate inverse of (I - gamma J_m) to z
+   * (nstate numbers), J_m the Jacobian of this mechanism's rate at (t, y).
+   * Mechanisms whose rates are stiff and cheap to invert (growth along an
+   * axis: a bidiagonal J_m) provide it; the model composes them into the
+   * preconditioner of implicit integrators.  NULL: treated as identity. */
+  void (*precondition)(void *self, const gs_model *m, double t, const double *y, double gamma,
+                       double *z);
 } gs_mech_type;
 
 typedef struct gs_mechanism {
@@ -69,6 +76,17 @@ struct gs_model {
   int size_axes;  /* bitmask of axes summed into the granule volume for sizes (d10/d50/d90) */
   double *size_volume; /* ncells: granule volume used for diameters */
   char dir[1024];      /* directory of the case file, for relative paths in it ("." default) */
+  /* 1 while an implicit integrator forms Jacobian-vector difference
+   * quotients: mechanisms keep the discrete choices (cells taking part) of
+   * their last evaluation instead of making them again from y. */
+  int hold;
+  /* 1 while an integrator evaluates f: mechanisms may then make their
+   * discrete choices once per time value, so that the Newton iterations of
+   * an implicit step (same t, several y) see one smooth function. */
+  int in_integrator;
+  /* Numbers at or below this are integration noise (the solver's absolute
+   * tolerance); mechanisms may skip cells holding no more than it. */
+  double noise_floor;
 };
 
 /* Allocate an empty model around a grid (grid is moved in). */
@@ -80,6 +98,13 @@ void gs_model_free(gs_model *m);
 
 /* Full right-hand side: dydt (nstate) and dledger (nledger) are overwritten. */
 void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger);
+/* 1 if some mechanism provides a preconditioner. */
+int gs_model_has_preconditioner(const gs_model *m);
+/* Approximate solution of (I - gamma J) z = r over the numbers and the
+ * ledger (n = nstate + nledger): the product of the mechanisms' inverses,
+ * identity on the ledger. */
+void gs_model_precondition(const gs_model *m, double t, const double *y, double gamma,
+                           const double *r, double *z);
 
 /* ---- moments and size statistics ---------------------------------------- */
 typedef struct gs_summary {

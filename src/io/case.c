@@ -209,18 +209,60 @@ static int read_checks(gs_cfg_node *root, gs_checks *k, gs_error *err) {
 }
 
 static int model_ode(void *ctx, double t, const double *y, double *dydt) {
-  const gs_model *m = ctx;
+  gs_model *m = ctx;
+  m->in_integrator = 1;
   gs_model_rhs(m, t, y, dydt, dydt + m->nstate);
+  m->in_integrator = 0;
   return 0;
+}
+
+static int model_psolve(void *ctx, double t, const double *y, double gamma, const double *r,
+                        double *z) {
+  gs_model_precondition(ctx, t, y, gamma, r, z);
+  return 0;
+}
+
+static void model_hold(void *ctx, int on) {
+  gs_model *m = ctx;
+  m->hold = on;
+}
+
+/* Absolute-tolerance scale of the ledger entries of axis k: the coordinate
+ * of a typical particle (the initial mean, else the geometric mean of the
+ * positive pivots), so that the ledger is resolved to atol particles' worth
+ * of volume.  The ledger takes part in the error control because implicit
+ * integrators solve their Newton systems only in the components that do:
+ * left out, its entries would drift and break the volume balance. */
+static double ledger_scale(const gs_model *m, const double *y0, int k) {
+  const gs_grid *g = &m->grid;
+  double n = 0, v = 0;
+  for (size_t i = 0; i < m->nstate; i++) {
+    n += y0[i];
+    v += y0[i] * g->x[(i % g->ncells) * (size_t)g->dim + (size_t)k];
+  }
+  if (n > 0 && v > 0) return v / n;
+  double logsum = 0;
+  size_t count = 0;
+  for (size_t i = 0; i < g->axis[k].n; i++)
+    if (g->axis[k].pivots[i] > 0) {
+      logsum += log(g->axis[k].pivots[i]);
+      count++;
+    }
+  return count ? exp(logsum / (double)count) : 1.0;
 }
 
 static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
   gs_model *m = &c->model;
   size_t n = m->nstate + m->nledger;
+  const int dim = m->grid.dim;
   c->abs_scale = gs_malloc(n * sizeof(double), err);
   if (!c->abs_scale) return GS_ENOMEM;
-  for (size_t i = 0; i < n; i++) c->abs_scale[i] = i < m->nstate ? 1.0 : 0.0;
-  c->ode = (gs_ode){n, model_ode, m, c->abs_scale, m->nstate};
+  double scale[GS_MAX_DIM];
+  for (int k = 0; k < dim; k++) scale[k] = ledger_scale(m, c->y0, k);
+  for (size_t i = 0; i < n; i++)
+    c->abs_scale[i] = i < m->nstate ? 1.0 : scale[(i - m->nstate) % (size_t)dim];
+  c->ode = (gs_ode){n, model_ode, m, c->abs_scale, m->nstate,
+                    gs_model_has_preconditioner(m) ? model_psolve : NULL, model_hold};
   gs_cfg_node *solver = gs_cfg_get(root, "solver");
   if (solver && gs_cfg_require_kind(solver, GS_CFG_MAP, err)) return GS_EINPUT;
   return gs_integrator_create(solver, &c->ode, &c->integrator, err);
@@ -251,6 +293,7 @@ static void negative_floor(gs_cfg_node *root, gs_case *c) {
   double atol = 1e-12;
   if (an) gs_cfg_node_double(an, &atol, NULL);
   c->checks.negative_floor = 100 * atol;
+  c->model.noise_floor = atol;
 }
 
 /* Shared with the SWA solver (src/swa/case.c), which reads the same grid and

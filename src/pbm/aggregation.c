@@ -45,6 +45,11 @@ typedef struct {
   double *fp_excess[3];  /* fixed pivot: sum minus last pivot where clamped, else 0 */
   double *table;         /* packed kernel, ncomp * ncells*(ncells+1)/2, or NULL */
   size_t table_size;
+  double negligible;     /* cells holding less than this share of number and volume are skipped */
+  size_t nrows;          /* rows along the last padded axis: n[0] * n[1] */
+  size_t *span;          /* per compartment and row: [lo, hi) of the cells taking part */
+  int *span_valid;       /* per compartment: spans computed at least once */
+  double *span_t;        /* per compartment: time of the state they were computed from */
   int nthreads;
   size_t work_len;
   double *work;          /* per thread: death, B, V[3], fp birth, row  */
@@ -64,6 +69,9 @@ static void agg_free(void *self) {
     free(A->fp_excess[q]);
   }
   free(A->table);
+  free(A->span);
+  free(A->span_valid);
+  free(A->span_t);
   free(A->work);
   free(A);
 }
@@ -129,6 +137,7 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   gs_cfg_node *kn = NULL;
   int rc = gs_cfg_enum_opt(node, "redistribution", schemes, CELL_AVERAGE, &A->scheme, err);
   if (!rc) rc = gs_cfg_double_range(node, "table_limit_mb", 0, 1024, 0, 0, HUGE_VAL, 0, &limit_mb, err);
+  if (!rc) rc = gs_cfg_double_range(node, "negligible", 0, 1e-14, 0, 0, 1e-3, 0, &A->negligible, err);
   if (!rc) rc = gs_cfg_map_req(node, "kernel", &kn, err);
   if (!rc) rc = gs_kernel_create(kn, g, m->dir, &A->kernel, err);
   if (!rc) rc = gs_cfg_check_unused(node, err);
@@ -155,6 +164,11 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   if (!rc) rc = build_kernel_table(A, limit_mb, err);
   if (!rc) {
     A->nthreads = omp_get_max_threads();
+    A->nrows = A->n[0] * A->n[1];
+    A->span = gs_malloc(2 * A->nrows * A->ncomp * sizeof(size_t), err);
+    A->span_valid = gs_calloc(A->ncomp, sizeof(int), err);
+    A->span_t = gs_calloc(A->ncomp, sizeof(double), err);
+    if (!A->span || !A->span_valid || !A->span_t) rc = GS_ENOMEM;
     A->work_len = 7 * A->ncells + A->n[2];
     A->work = gs_malloc((size_t)A->nthreads * A->work_len * sizeof(double), err);
     if (!A->work) rc = GS_ENOMEM;
@@ -191,13 +205,10 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
   const double Na = N[a];
   const size_t n0 = A->n[0], n1 = A->n[1], n2 = A->n[2], ncells = A->ncells;
   const size_t a0 = a / (n1 * n2), a1 = (a / n2) % n1, a2 = a % n2;
-  const double *restrict beta;
-  if (A->table) {
-    beta = A->table + comp * A->table_size + packed_offset(a, ncells) - a;
-  } else {
-    A->kernel.type->row(A->kernel.self, comp, a, a, ncells, acc->row);
-    beta = acc->row - a;
-  }
+  /* kernel values against b >= a: from the table, or evaluated below per row segment */
+  const double *restrict beta =
+      A->table ? A->table + comp * A->table_size + packed_offset(a, ncells) - a : acc->row - a;
+  const size_t *restrict span = A->span + comp * 2 * A->nrows;
   const int off = 3 - DIM;
   double *restrict death = acc->death, *restrict births = acc->births, *restrict fp = acc->fp;
   double *restrict v0 = acc->vol[off], *restrict v1 = DIM > 1 ? acc->vol[off + 1] : NULL;
@@ -218,15 +229,20 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
   double death_a = 0, lost_n = 0, lost0 = 0, lost1 = 0, lost2 = 0;
   for (size_t i0 = a0; i0 < n0; i0++) {
     for (size_t i1 = (i0 == a0 ? a1 : 0); i1 < n1; i1++) {
-      const size_t row_start = (i0 == a0 && i1 == a1) ? a2 : 0;
-      const size_t bbase = (i0 * n1 + i1) * n2, tbase = T0[i0] + T1[i1];
+      const size_t r = i0 * n1 + i1, row_end = span[2 * r + 1];
+      const size_t row_start = (i0 == a0 && i1 == a1) ? a2 : span[2 * r];
+      if (row_start >= row_end) continue; /* nothing in this row takes part */
+      const size_t bbase = r * n2, tbase = T0[i0] + T1[i1];
+      if (!A->table)
+        A->kernel.type->row(A->kernel.self, comp, a, bbase + row_start, bbase + row_end,
+                            acc->row + (bbase + row_start - a));
       const size_t lbase = L0[i0] + L1[i1];
       const double w0 = W0[i0], w1 = W1[i1];
       /* clamping excess of the axes that are fixed along this row */
       const double e_fix0 = FP ? (off == 0 ? E0[i0] : off == 1 ? E0[i1] : 0.0) : 0.0;
       const double e_fix1 = FP && DIM > 1 ? (off == 0 ? E1[i1] : 0.0) : 0.0;
       /* pass 1 (vectorised): event rates of the row and the deaths they cause */
-      const size_t len = n2 - row_start;
+      const size_t len = row_end - row_start;
       const double *restrict Nb = N + bbase + row_start, *restrict bb = beta + bbase + row_start;
       double *restrict wr = acc->wrow;
       for (size_t j = 0; j < len; j++) wr[j] = Na * bb[j] * Nb[j];
@@ -241,7 +257,7 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
        * avoids store-to-load chains on the same accumulator. */
       size_t t_run = (size_t)-1;
       double rb = 0, r0 = 0, r1 = 0, r2 = 0;
-      for (size_t i2 = row_start; i2 < n2; i2++) {
+      for (size_t i2 = row_start; i2 < row_end; i2++) {
         const size_t b = bbase + i2;
         const double w = wr[i2 - row_start];
         if (w == 0.0) continue;
@@ -327,8 +343,57 @@ static void reduce_threads(const agg_t *A, int nth, acc_t *acc) {
   }
 }
 
+/* Which cells take part in this evaluation.  A cell holding less than
+ * `negligible` of the compartment's number AND of its volume is left out
+ * (together with every pair it belongs to, so number and volume stay exactly
+ * conserved); along each row of the last axis the cells that take part are
+ * the span between the first and the last cell that matters.  Populations on
+ * large grids occupy a thin band (aggregates tend to the mean composition),
+ * so whole rows and most pairs drop out. */
+static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
+  const size_t n2 = A->n[2];
+  size_t *span = A->span + comp * 2 * A->nrows;
+  double ntot = 0, vtot = 0;
+  for (size_t c = 0; c < A->ncells; c++) {
+    double v = 0;
+    for (int q = A->off; q < 3; q++) v += A->x[q][c];
+    if (N[c] > 0) {
+      ntot += N[c];
+      vtot += N[c] * v;
+    }
+  }
+  const double nmin = A->negligible * ntot, vmin = A->negligible * vtot;
+  for (size_t r = 0; r < A->nrows; r++) {
+    size_t lo = n2, hi = 0;
+    for (size_t i = 0; i < n2; i++) {
+      size_t c = r * n2 + i;
+      if (N[c] == 0.0) continue;
+      double v = 0;
+      for (int q = A->off; q < 3; q++) v += A->x[q][c];
+      if (fabs(N[c]) > noise && (fabs(N[c]) > nmin || fabs(N[c]) * v > vmin)) {
+        if (lo == n2) lo = i;
+        hi = i + 1;
+      }
+    }
+    span[2 * r] = lo;
+    span[2 * r + 1] = hi;
+  }
+  A->span_valid[comp] = 1;
+}
+
 /* Pair loop of one compartment; result in acc[0]. */
-static void compartment_pairs(const agg_t *A, size_t comp, const double *N, acc_t *acc) {
+static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
+                              const gs_model *m, acc_t *acc) {
+  /* The participating cells are chosen once per time value under an
+   * integrator, and kept while held (Jacobian-vector difference quotients,
+   * whose perturbed state has tolerance-sized noise in every cell): Newton
+   * iterations then see one smooth right-hand side. */
+  int keep = A->span_valid[comp] && (m->hold || (m->in_integrator && t == A->span_t[comp]));
+  if (!keep) {
+    find_spans(A, comp, N, A->negligible > 0 ? m->noise_floor : 0.0);
+    A->span_t[comp] = t;
+  }
+  const size_t *span = A->span + comp * 2 * A->nrows;
   int nth = 1;
   /* small grids: a parallel region costs more than the pairs themselves */
 #pragma omp parallel if (A->ncells > 400)
@@ -338,8 +403,11 @@ static void compartment_pairs(const agg_t *A, size_t comp, const double *N, acc_
     int tid = omp_get_thread_num();
     acc[tid] = thread_acc(A, tid);
 #pragma omp for schedule(dynamic, 8)
-    for (size_t a = 0; a < A->ncells; a++)
-      if (N[a] != 0.0) pairs_of(A, comp, N, a, &acc[tid]);
+    for (size_t a = 0; a < A->ncells; a++) {
+      const size_t r = a / A->n[2], i = a % A->n[2];
+      if (N[a] != 0.0 && i >= span[2 * r] && i < span[2 * r + 1])
+        pairs_of(A, comp, N, a, &acc[tid]);
+    }
   }
   reduce_threads(A, nth, acc);
 }
@@ -367,13 +435,13 @@ static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double 
   return placed;
 }
 
-static void agg_rates(const agg_t *A, const gs_model *m, const double *y, double *dydt,
+static void agg_rates(agg_t *A, const gs_model *m, double t, const double *y, double *dydt,
                       double *dledger, double *birth, double *death) {
   acc_t acc[A->nthreads > 0 ? A->nthreads : 1];
   const int dim = A->dim;
   for (size_t comp = 0; comp < A->ncomp; comp++) {
     const double *N = y + comp * A->ncells;
-    compartment_pairs(A, comp, N, acc);
+    compartment_pairs(A, comp, t, N, m, acc);
     double *d = dydt ? dydt + comp * A->ncells : NULL;
     double dead = 0;
     for (size_t c = 0; c < A->ncells; c++) {
@@ -392,16 +460,14 @@ static void agg_rates(const agg_t *A, const gs_model *m, const double *y, double
 
 static void agg_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
                     double *dledger) {
-  (void)t;
-  agg_rates(self, m, y, dydt, dledger, NULL, NULL);
+  agg_rates(self, m, t, y, dydt, dledger, NULL, NULL);
 }
 
 static void agg_number_rates(void *self, const gs_model *m, double t, const double *y,
                              double *birth, double *death) {
-  (void)t;
-  agg_rates(self, m, y, NULL, NULL, birth, death);
+  agg_rates(self, m, t, y, NULL, NULL, birth, death);
 }
 
 const gs_mech_type gs_mech_aggregation = {
     "aggregation", "binary aggregation with a kernel; cell-average or fixed-pivot redistribution",
-    agg_create, agg_rhs, agg_number_rates, agg_free};
+    agg_create, agg_rhs, agg_number_rates, agg_free, NULL};

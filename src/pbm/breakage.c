@@ -256,4 +256,4 @@ static void brk_number_rates(void *self, const gs_model *m, double t, const doub
 
 const gs_mech_type gs_mech_breakage = {
     "breakage", "breakage with a selection function and a daughter distribution", brk_create,
-    brk_rhs, brk_number_rates, brk_free};
+    brk_rhs, brk_number_rates, brk_free, NULL};

@@ -23,6 +23,7 @@ typedef struct {
   double c, emin;        /* consolidation */
   double *G;             /* per cell rates (workspace / precomputed) */
   double *solid_vol;     /* per cell solid volume */
+  double *work;          /* preconditioner: 2 * cells along the axis */
 } grow_t;
 
 static void grow_free(void *self) {
@@ -31,6 +32,7 @@ static void grow_free(void *self) {
   free(G->q);
   free(G->G);
   free(G->solid_vol);
+  free(G->work);
   free(G);
 }
 
@@ -129,6 +131,7 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
     }
   }
   if (!rc) rc = gs_cfg_check_unused(node, err);
+  if (!rc && !(G->work = gs_malloc(2 * g->axis[G->axis].n * sizeof(double), err))) rc = GS_ENOMEM;
   if (rc) {
     grow_free(G);
     return rc;
@@ -137,23 +140,46 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
   return GS_OK;
 }
 
+static int active(const grow_t *G, double t) {
+  return G->kind == KIND_CONSOLIDATION || (t >= G->start && t < G->end);
+}
+
+/* Rates of compartment comp into G->G; 0 when nothing grows there. */
+static int compartment_rates(grow_t *G, const gs_grid *g, size_t comp, const double *N) {
+  if (G->kind != KIND_LIQUID) return 1; /* precomputed */
+  /* share the spray in proportion to solid volume */
+  double solid = 0;
+  for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
+  if (!(solid > 0) || G->q[comp] == 0.0) return 0;
+  double per = G->q[comp] / solid;
+  for (size_t c = 0; c < g->ncells; c++) G->G[c] = per * G->solid_vol[c];
+  return 1;
+}
+
 static void grow_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
                      double *dledger) {
   grow_t *G = self;
   const gs_grid *g = &m->grid;
-  if (G->kind != KIND_CONSOLIDATION && (t < G->start || t >= G->end)) return;
+  if (!active(G, t)) return;
   for (size_t comp = 0; comp < g->ncomp; comp++) {
     const double *N = y + comp * g->ncells;
-    if (G->kind == KIND_LIQUID) { /* share the spray in proportion to solid volume */
-      double solid = 0;
-      for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
-      if (!(solid > 0) || G->q[comp] == 0.0) continue;
-      double per = G->q[comp] / solid;
-      for (size_t c = 0; c < g->ncells; c++) G->G[c] = per * G->solid_vol[c];
-    }
-    gs_growth_apply(g, G->axis, G->G, N, dydt + comp * g->ncells,
-                    dledger + comp * 2 * (size_t)g->dim);
+    if (compartment_rates(G, g, comp, N))
+      gs_growth_apply(g, G->axis, G->G, N, dydt + comp * g->ncells,
+                      dledger + comp * 2 * (size_t)g->dim);
   }
+}
+
+/* Exact inverse of I - gamma J for the transfer along the axis with the
+ * rates frozen at y (the spray's dependence on the total solid volume, a
+ * rank-one term, is left to the Krylov iterations). */
+static void grow_precondition(void *self, const gs_model *m, double t, const double *y,
+                              double gamma, double *z) {
+  grow_t *G = self;
+  const gs_grid *g = &m->grid;
+  if (!active(G, t)) return;
+  for (size_t comp = 0; comp < g->ncomp; comp++)
+    if (compartment_rates(G, g, comp, y + comp * g->ncells))
+      gs_growth_solve(g, G->axis, G->G, gamma, z + comp * g->ncells, G->work);
 }
 
 static int growth_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
@@ -167,10 +193,11 @@ static int consol_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *
 }
 
 const gs_mech_type gs_mech_growth = {"growth", "growth along an axis, G = constant + linear * x",
-                                     growth_create, grow_rhs, NULL, grow_free};
+                                     growth_create, grow_rhs, NULL, grow_free,
+                                     grow_precondition};
 const gs_mech_type gs_mech_liquid_addition = {
     "liquid_addition", "liquid spray shared in proportion to solid volume (seed 000 eq. 5)",
-    liquid_create, grow_rhs, NULL, grow_free};
+    liquid_create, grow_rhs, NULL, grow_free, grow_precondition};
 const gs_mech_type gs_mech_consolidation = {
     "consolidation", "loss of gas down to a minimum porosity (seed 002 eq. 2.12, corrected sign)",
-    consol_create, grow_rhs, NULL, grow_free};
+    consol_create, grow_rhs, NULL, grow_free, grow_precondition};

@@ -1,4 +1,6 @@
 /* Upwind pivot-transfer growth scheme; see growth_scheme.h. */
+#include <math.h>
+
 #include "pbm/growth_scheme.h"
 
 void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *N, double *d,
@@ -35,5 +37,45 @@ void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *
   if (ledger) {
     ledger[axis] += ext;
     for (int k = 0; k < dim; k++) ledger[dim + k] += lost[k];
+  }
+}
+
+/* Transfer rate coefficient of the cell at index i along the axis: particles
+ * leave at k * N towards i+1 (k > 0) or i-1 (k < 0). */
+static double transfer_coefficient(const gs_axis *ax, size_t i, double rate) {
+  const size_t n = ax->n;
+  if (rate > 0) {
+    if (i + 1 < n) return rate / (ax->pivots[i + 1] - ax->pivots[i]);
+    return n > 1 ? rate / (ax->pivots[i] - ax->pivots[i - 1]) : 0.0;
+  }
+  if (rate < 0 && i > 0) return rate / (ax->pivots[i] - ax->pivots[i - 1]);
+  return 0.0;
+}
+
+void gs_growth_solve(const gs_grid *g, int axis, const double *G, double gamma, double *z,
+                     double *work) {
+  const gs_axis *ax = &g->axis[axis];
+  const size_t n = ax->n, stride = g->stride[axis];
+  double *cp = work, *k = work + n; /* Thomas: modified super-diagonal; coefficients */
+  for (size_t base = 0; base < g->ncells; base++) {
+    if ((base / stride) % n != 0) continue; /* one line per first cell along the axis */
+    for (size_t i = 0; i < n; i++) k[i] = transfer_coefficient(ax, i, G[base + i * stride]);
+    /* row i: -gamma k+_{i-1} z_{i-1} + (1 + gamma |k_i|) z_i - gamma k-_{i+1} z_{i+1} = r_i */
+    double prev_c = 0, prev_z = 0;
+    for (size_t i = 0; i < n; i++) {
+      const size_t c = base + i * stride;
+      double a = i > 0 && k[i - 1] > 0 ? -gamma * k[i - 1] : 0.0;
+      double b = 1 + gamma * fabs(k[i]);
+      double up = i + 1 < n && k[i + 1] < 0 ? gamma * k[i + 1] : 0.0; /* -gamma |k-| */
+      double den = b - a * prev_c;
+      cp[i] = up / den;
+      z[c] = (z[c] - a * prev_z) / den;
+      prev_c = cp[i];
+      prev_z = z[c];
+    }
+    for (size_t i = n - 1; i-- > 0;) {
+      const size_t c = base + i * stride;
+      z[c] -= cp[i] * z[c + stride];
+    }
   }
 }

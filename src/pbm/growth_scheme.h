@@ -15,4 +15,12 @@
  * ledger: this compartment's 2*dim ledger entries (may be NULL). */
 void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *N, double *d,
                      double *ledger);
+
+/* Solve (I - gamma J) z = r in place for one compartment, J the Jacobian of
+ * gs_growth_apply with these rates G: a tridiagonal system along each line
+ * of the axis (bidiagonal when G has one sign), solved exactly by the Thomas
+ * algorithm, which is stable here because I - gamma J is column diagonally
+ * dominant.  work: 2 * (cells along the axis) doubles. */
+void gs_growth_solve(const gs_grid *g, int axis, const double *G, double gamma, double *z,
+                     double *work);
 #endif

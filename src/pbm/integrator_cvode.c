@@ -4,6 +4,9 @@
  *   linear_solver  dense | gmres | auto (default auto: dense up to 1000
  *                  components, else matrix-free GMRES without preconditioner)
  *   max_order      BDF order limit 1..5 (default 5)
+ *   preconditioner auto | none (default auto: GMRES is left-preconditioned
+ *                  with the system's psolve when it has one, i.e. when a
+ *                  mechanism can invert its own stiff part, such as growth)
  *
  * Absolute tolerances are per component, atol * abs_scale[i]; components with
  * abs_scale 0 get 1e300, which removes them from the error and Newton
@@ -42,7 +45,8 @@ typedef struct {
   size_t n;
   double rtol, atol, h_init, h_min, h_max;
   long max_steps, max_order;
-  int gmres;
+  int gmres, precondition;
+  long jtimes_evals; /* f evaluations of our Jacobian-vector products (all runs) */
   SUNContext sunctx;
   void *mem;
   N_Vector y;      /* the state CVODE last returned (compared to detect restarts) */
@@ -119,6 +123,10 @@ static int gs_cvode_read(gs_cvode *self, gs_cfg_node *solver, gs_error *err) {
     rc = gs_cfg_enum_opt(solver, "linear_solver", gs_cvode_solvers, GS_CVODE_AUTO, &solver_kind,
                          err);
   if (!rc) rc = gs_cfg_long_range(solver, "max_order", 0, 5, 1, 5, &self->max_order, err);
+  static const char *const preconditioners[] = {"auto", "none", NULL};
+  int pre = 0;
+  if (!rc) rc = gs_cfg_enum_opt(solver, "preconditioner", preconditioners, 0, &pre, err);
+  self->precondition = pre == 0;
   self->gmres = solver_kind == GS_CVODE_GMRES ||
                 (solver_kind == GS_CVODE_AUTO && self->n > GS_CVODE_DENSE_MAX_N);
   return rc;
@@ -138,11 +146,61 @@ static int gs_cvode_vectors(gs_cvode *self, const gs_ode *ode, gs_error *err) {
   return GS_OK;
 }
 
-static int gs_cvode_linear_solver(gs_cvode *self, gs_error *err) {
+/* CVODE's preconditioner solve: P z = r with P ~ I - gamma J. */
+static int gs_cvode_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector r, N_Vector z,
+                           sunrealtype gamma, sunrealtype delta, int lr, void *data) {
+  (void)fy;
+  (void)delta;
+  (void)lr;
+  gs_cvode *self = data;
+  return self->ode->psolve(self->ode->ctx, t, N_VGetArrayPointer(y), gamma,
+                           N_VGetArrayPointer(r), N_VGetArrayPointer(z))
+             ? 1 /* recoverable: CVODE retries with a smaller step */
+             : 0;
+}
+
+/* Jacobian-vector product by a forward difference, as CVODE's own (the
+ * perturbation 1 / ||v|| in the weighted RMS norm), but with the system's
+ * discrete choices held at the linearisation point (gs_ode.hold): a state
+ * perturbed by tolerance-sized noise must not switch cells on. */
+static int gs_cvode_jtimes(N_Vector v, N_Vector Jv, sunrealtype t, N_Vector y, N_Vector fy,
+                           void *data, N_Vector tmp) {
+  gs_cvode *self = data;
+  int flag = CVodeGetErrWeights(self->mem, tmp);
+  double norm = flag == CV_SUCCESS ? N_VWrmsNorm(v, tmp) : 0.0;
+  if (flag != CV_SUCCESS) return -1;
+  if (!(norm > 0)) {
+    N_VConst(0.0, Jv);
+    return 0;
+  }
+  double sig = 1.0 / norm;
+  N_VLinearSum(sig, v, 1.0, y, tmp);
+  self->ode->hold(self->ode->ctx, 1);
+  int rc = gs_cvode_rhs(t, tmp, Jv, self);
+  self->ode->hold(self->ode->ctx, 0);
+  self->jtimes_evals++;
+  if (rc) return rc;
+  N_VLinearSum(1.0 / sig, Jv, -1.0 / sig, fy, Jv);
+  return 0;
+}
+
+static int gs_cvode_linear_solver(gs_cvode *self, const gs_ode *ode, gs_error *err) {
   sunindextype n = (sunindextype)self->n;
   if (self->gmres) {
+    int pre = self->precondition && ode->psolve;
     /* maxl 0: SUNDIALS' default Krylov dimension (5) */
-    self->ls = SUNLinSol_SPGMR(self->y, SUN_PREC_NONE, 0, self->sunctx);
+    self->ls = SUNLinSol_SPGMR(self->y, pre ? SUN_PREC_LEFT : SUN_PREC_NONE, 0, self->sunctx);
+    if (self->ls && (pre || ode->hold)) {
+      int rc = gs_cvode_flag(self, CVodeSetLinearSolver(self->mem, self->ls, NULL),
+                             "CVodeSetLinearSolver", err);
+      if (!rc && pre)
+        rc = gs_cvode_flag(self, CVodeSetPreconditioner(self->mem, NULL, gs_cvode_psolve),
+                           "CVodeSetPreconditioner", err);
+      if (!rc && ode->hold)
+        rc = gs_cvode_flag(self, CVodeSetJacTimes(self->mem, NULL, gs_cvode_jtimes),
+                           "CVodeSetJacTimes", err);
+      return rc;
+    }
   } else {
     self->jac = SUNDenseMatrix(n, n, self->sunctx);
     if (self->jac) self->ls = SUNLinSol_Dense(self->y, self->jac, self->sunctx);
@@ -182,7 +240,7 @@ static int gs_cvode_setup(gs_cvode *self, const gs_ode *ode, gs_error *err) {
   if (!rc)
     rc = gs_cvode_flag(self, CVodeSVtolerances(self->mem, self->rtol, self->abstol),
                        "CVodeSVtolerances", err);
-  if (!rc) rc = gs_cvode_linear_solver(self, err);
+  if (!rc) rc = gs_cvode_linear_solver(self, ode, err);
   if (!rc) rc = gs_cvode_options(self, err);
   self->needs_reinit = 1;
   return rc;
@@ -213,7 +271,7 @@ static void gs_cvode_counters(const gs_cvode *self, gs_integrator_stats *s) {
   CVodeGetNumNonlinSolvConvFails(self->mem, &nncf);
   CVodeGetLastStep(self->mem, &hlast);
   s->steps = self->base.steps + steps;
-  s->rhs_evals = self->base.rhs_evals + nfe + nfels;
+  s->rhs_evals = self->base.rhs_evals + nfe + nfels + self->jtimes_evals;
   s->rejected = self->base.rejected + netf + nncf;
   s->last_step = steps ? hlast : self->base.last_step;
 }

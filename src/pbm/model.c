@@ -61,6 +61,20 @@ void gs_model_free(gs_model *m) {
   memset(m, 0, sizeof *m);
 }
 
+int gs_model_has_preconditioner(const gs_model *m) {
+  for (size_t i = 0; i < m->nmech; i++)
+    if (m->mech[i].type->precondition) return 1;
+  return 0;
+}
+
+void gs_model_precondition(const gs_model *m, double t, const double *y, double gamma,
+                           const double *r, double *z) {
+  memcpy(z, r, (m->nstate + m->nledger) * sizeof(double));
+  for (size_t i = 0; i < m->nmech; i++)
+    if (m->mech[i].type->precondition)
+      m->mech[i].type->precondition(m->mech[i].self, m, t, y, gamma, z);
+}
+
 void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger) {
   memset(dydt, 0, m->nstate * sizeof(double));
   memset(dledger, 0, m->nledger * sizeof(double));

@@ -35,8 +35,10 @@ typedef struct {
 /* Right-hand side with a guard against non-finite rates. */
 static int guarded_rhs(void *ctx, double t, const double *y, double *dydt) {
   guard_t *gd = ctx;
-  const gs_model *m = &gd->c->model;
+  gs_model *m = &gd->c->model;
+  m->in_integrator = 1;
   gs_model_rhs(m, t, y, dydt, dydt + m->nstate);
+  m->in_integrator = 0;
   for (size_t i = 0; i < m->nstate + m->nledger; i++)
     if (!isfinite(dydt[i])) {
       gd->bad = 1;
@@ -45,6 +47,18 @@ static int guarded_rhs(void *ctx, double t, const double *y, double *dydt) {
       return 1;
     }
   return 0;
+}
+
+/* The case's preconditioner, reached through the guard's case. */
+static int guarded_psolve(void *ctx, double t, const double *y, double gamma, const double *r,
+                          double *z) {
+  guard_t *gd = ctx;
+  return gd->c->ode.psolve(gd->c->ode.ctx, t, y, gamma, r, z);
+}
+
+static void guarded_hold(void *ctx, int on) {
+  guard_t *gd = ctx;
+  gd->c->ode.hold(gd->c->ode.ctx, on);
 }
 
 static int check_state(const gs_case *c, const double *Y, const double *M1_0, double t,
@@ -169,6 +183,8 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   gs_ode ode = c->ode;
   ode.f = guarded_rhs;
   ode.ctx = &guard;
+  if (ode.psolve) ode.psolve = guarded_psolve;
+  if (ode.hold) ode.hold = guarded_hold;
   double start = now_seconds(), t_end = c->times[c->ntimes - 1];
   gs_integrator_stats st = {0};
   for (size_t i = 0; !rc && i < c->ntimes; i++) {

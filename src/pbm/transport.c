@@ -152,7 +152,7 @@ static void transfer_rhs(void *self, const gs_model *m, double t, const double *
 }
 
 const gs_mech_type gs_mech_feed = {"feed", "particles fed into a compartment at a constant rate",
-                                   feed_create, feed_rhs, NULL, feed_free};
+                                   feed_create, feed_rhs, NULL, feed_free, NULL};
 const gs_mech_type gs_mech_transfer = {
     "transfer", "flow to the next compartment at rate k N; out of the last as product",
-    transfer_create, transfer_rhs, NULL, transfer_free};
+    transfer_create, transfer_rhs, NULL, transfer_free, NULL};
