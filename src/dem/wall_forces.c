@@ -92,14 +92,26 @@ static void mesh_candidates(const gs_dem_wall *w, int wi, const double xw[3], do
   }
 }
 
+/* an overlap with no usable geometry (centre on the axis of an outer cylinder) */
+static void analytic_candidate_hit(cand *c, int *nc, int wi) {
+  cand x;
+  memset(&x, 0, sizeof x);
+  x.wall = wi;
+  x.feat = -1;
+  add_cand(c, nc, &x);
+}
+
+/* behind != 0 also reports spheres whose centre is on the wrong side of the
+ * wall (insertion must refuse those; the force loop leaves them alone, as a
+ * mesh cannot tell its sides apart either). */
 static void analytic_candidate(const gs_dem_wall *w, int wi, const double xw[3], double r,
-                               cand *c, int *nc) {
+                               cand *c, int *nc, int behind) {
   double pb[3], nb[3], q[3], dist;
   gs_dem_wall_to_body(w, xw, pb);
   double rel[3] = {pb[0] - w->p[0], pb[1] - w->p[1], pb[2] - w->p[2]};
   if (w->kind == GS_DEM_WALL_PLANE) {
     dist = rel[0] * w->n[0] + rel[1] * w->n[1] + rel[2] * w->n[2];
-    if (dist >= r || dist <= 0) return;
+    if (dist >= r || (dist <= 0 && !behind)) return;
     for (int k = 0; k < 3; k++) {
       nb[k] = w->n[k];
       q[k] = pb[k] - dist * w->n[k];
@@ -108,9 +120,12 @@ static void analytic_candidate(const gs_dem_wall *w, int wi, const double xw[3],
     double ax = rel[0] * w->a[0] + rel[1] * w->a[1] + rel[2] * w->a[2];
     double rad[3] = {rel[0] - ax * w->a[0], rel[1] - ax * w->a[1], rel[2] - ax * w->a[2]};
     double rho = sqrt(rad[0] * rad[0] + rad[1] * rad[1] + rad[2] * rad[2]);
-    if (rho <= 0) return;
+    if (rho <= 0) {
+      if (behind && !w->inside) analytic_candidate_hit(c, nc, wi);
+      return;
+    }
     dist = w->inside ? w->R - rho : rho - w->R;
-    if (dist >= r || dist <= 0) return;
+    if (dist >= r || (dist <= 0 && !behind)) return;
     double sgn = w->inside ? -1.0 : 1.0;
     for (int k = 0; k < 3; k++) {
       nb[k] = sgn * rad[k] / rho;
@@ -188,7 +203,7 @@ void gs_dem_wall_forces(gs_dem *d) {
       for (size_t w = 0; w < nw; w++) {
         const gs_dem_wall *wl = &d->walls[w];
         if (wl->kind == GS_DEM_WALL_MESH) mesh_candidates(wl, (int)w, xi, r, c, &nc);
-        else analytic_candidate(wl, (int)w, xi, r, c, &nc);
+        else analytic_candidate(wl, (int)w, xi, r, c, &nc, 0);
       }
       uint64_t *okey = p->wkey + i * GS_DEM_WSLOTS;
       double *oshear = p->wshear + i * 3 * GS_DEM_WSLOTS;
@@ -303,7 +318,7 @@ int gs_dem_touches_wall(gs_dem *d, const double x[3], double r) {
       if (wl->mesh->bin_reach < r) continue; /* cannot happen after gs_dem_prepare */
       mesh_candidates(wl, (int)w, x, r, c, &nc);
     } else {
-      analytic_candidate(wl, (int)w, x, r, c, &nc);
+      analytic_candidate(wl, (int)w, x, r, c, &nc, 1);
     }
     if (nc) return 1;
   }

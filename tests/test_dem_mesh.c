@@ -1,0 +1,218 @@
+/* Triangle meshes: binary and ASCII STL read the same (with scale); a sphere
+ * pressed onto a face, an edge or a vertex of a cube feels exactly one Hertz
+ * contact (shared edges and vertices are not counted twice, and neighbouring
+ * coplanar triangles add nothing); a moving mesh pushes with its own velocity;
+ * the real CoriMix meshes load. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "gransim/dem.h"
+
+/* unit cube [0,1]^3 as 12 outward triangles */
+static const int QUADS[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+
+static void cube(double *t) {
+  double v[8][3];
+  for (int k = 0; k < 8; k++) v[k][0] = k & 1, v[k][1] = (k >> 1) & 1, v[k][2] = (k >> 2) & 1;
+  for (int f = 0; f < 6; f++) {
+    const int *q = QUADS[f];
+    int tri[2][3] = {{q[0], q[1], q[2]}, {q[0], q[2], q[3]}};
+    for (int h = 0; h < 2; h++)
+      for (int c = 0; c < 3; c++) memcpy(t + 9 * (2 * f + h) + 3 * c, v[tri[h][c]], 3 * sizeof(double));
+  }
+}
+
+static void write_stl(const char *path, const double *t, int binary) {
+  FILE *fp = fopen(path, "wb");
+  if (binary) {
+    char head[80] = "solid but binary: the header must not decide the format";
+    uint32_t n = 12;
+    fwrite(head, 1, 80, fp);
+    fwrite(&n, 4, 1, fp);
+    for (int k = 0; k < 12; k++) {
+      float f[12] = {0};
+      for (int c = 0; c < 9; c++) f[3 + c] = (float)t[9 * k + c];
+      uint16_t attr = 0;
+      fwrite(f, 4, 12, fp);
+      fwrite(&attr, 2, 1, fp);
+    }
+  } else {
+    fprintf(fp, "solid cube\n");
+    for (int k = 0; k < 12; k++) {
+      fprintf(fp, "  facet normal 0 0 0\n    outer loop\n");
+      for (int c = 0; c < 3; c++)
+        fprintf(fp, "      vertex %g %g %g\n", t[9 * k + 3 * c], t[9 * k + 3 * c + 1], t[9 * k + 3 * c + 2]);
+      fprintf(fp, "    endloop\n  endfacet\n");
+    }
+    fprintf(fp, "endsolid cube\n");
+  }
+  fclose(fp);
+}
+
+static void test_stl(void) {
+  double t[108];
+  cube(t);
+  write_stl("/tmp/gransim_test_cube_b.stl", t, 1);
+  write_stl("/tmp/gransim_test_cube_a.stl", t, 0);
+  gs_error err = {0};
+  gs_dem_mesh *b = gs_dem_mesh_read_stl("/tmp/gransim_test_cube_b.stl", 0.01, &err);
+  gs_dem_mesh *a = gs_dem_mesh_read_stl("/tmp/gransim_test_cube_a.stl", 0.01, &err);
+  CHECK(a && b);
+  if (a && b) {
+    double lo[3], hi[3], lo2[3], hi2[3];
+    gs_dem_mesh_bounds(a, lo, hi);
+    gs_dem_mesh_bounds(b, lo2, hi2);
+    CHECK(gs_dem_mesh_ntri(a) == 12 && gs_dem_mesh_ntri(b) == 12);
+    for (int k = 0; k < 3; k++) {
+      CHECK_ABS(lo[k], 0, 1e-12);
+      CHECK_ABS(hi[k], 0.01, 1e-9);
+      CHECK_ABS(lo2[k], lo[k], 1e-9);
+      CHECK_ABS(hi2[k], hi[k], 1e-9);
+    }
+  }
+  gs_dem_mesh_free(a);
+  gs_dem_mesh_free(b);
+  /* errors name the file */
+  FILE *fp = fopen("/tmp/gransim_test_bad.stl", "w");
+  fprintf(fp, "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 zero\n");
+  fclose(fp);
+  CHECK(!gs_dem_mesh_read_stl("/tmp/gransim_test_bad.stl", 1, &err));
+  CHECK(strstr(err.msg, "gransim_test_bad.stl:4") != NULL);
+  CHECK(!gs_dem_mesh_read_stl("/tmp/gransim_test_none.stl", 1, &err));
+  remove("/tmp/gransim_test_cube_b.stl");
+  remove("/tmp/gransim_test_cube_a.stl");
+  remove("/tmp/gransim_test_bad.stl");
+}
+
+static const gs_dem_material MAT = {8e6, 0.2, 1.0, 0.0, 0.0, 500};
+
+static gs_dem *box_sim(void) {
+  gs_dem_params p;
+  memset(&p, 0, sizeof p);
+  p.dt = 1e-8;
+  p.skin = 1e-4;
+  for (int a = 0; a < 3; a++) p.lo[a] = -0.01, p.hi[a] = 0.02;
+  p.nclass = 1;
+  gs_error err = {0};
+  return gs_dem_alloc(&p, &err);
+}
+
+/* Force on a sphere of radius r whose centre is at x, overlapping the 1 cm
+ * cube by delta: measured from its velocity after one tiny step. */
+static double push(const double x[3], double r, double *dir) {
+  gs_dem *d = box_sim();
+  gs_error err = {0};
+  int t = gs_dem_add_type(d, &MAT, 0, &err);
+  double tri[108];
+  cube(tri);
+  for (int k = 0; k < 108; k++) tri[k] *= 0.01;
+  gs_dem_add_mesh(d, "cube", gs_dem_mesh_from_triangles(tri, 12, &err), &MAT, &err);
+  gs_dem_add_particle(d, t, r, x, NULL, NULL, &err);
+  gs_dem_run(d, 1, &err);
+  gs_dem_view v;
+  gs_dem_get_view(d, &v);
+  /* from rest, one step of velocity Verlet gives v = (F/m)(dt/2 + dt/2) */
+  double mv = v.m[0] / 1e-8;
+  double f[3] = {v.vx[0] * mv, v.vy[0] * mv, v.vz[0] * mv};
+  double fm = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+  for (int k = 0; k < 3; k++) dir[k] = f[k] / fm;
+  gs_dem_free(d);
+  return fm;
+}
+
+static void test_features(void) {
+  const double r = 1e-3, delta = 2e-5;
+  const double Estar = 1 / (2 * (1 - 0.04) / 8e6);
+  const double hertz = 4.0 / 3 * Estar * sqrt(r) * pow(delta, 1.5);
+  double dir[3];
+  const double s = r - delta;
+  /* face: above the middle of the top face and above a diagonal of it (where
+   * two triangles of the face meet), on an edge, on a vertex */
+  double face[3] = {0.005, 0.003, 0.01 + s};
+  double diag[3] = {0.005, 0.005, 0.01 + s};
+  double edge[3] = {0.005, 0.01 + s / sqrt(2), 0.01 + s / sqrt(2)};
+  double vert[3] = {0.01 + s / sqrt(3), 0.01 + s / sqrt(3), 0.01 + s / sqrt(3)};
+  double f = push(face, r, dir);
+  fprintf(stderr, "face: %.6g N (Hertz %.6g N), direction %.3f %.3f %.3f\n", f, hertz, dir[0], dir[1], dir[2]);
+  CHECK_REL(f, hertz, 1e-3);
+  CHECK_ABS(dir[2], 1, 1e-9);
+  f = push(diag, r, dir);
+  fprintf(stderr, "face diagonal: %.6g N\n", f);
+  CHECK_REL(f, hertz, 1e-3);
+  f = push(edge, r, dir);
+  fprintf(stderr, "edge: %.6g N, direction %.3f %.3f %.3f\n", f, dir[0], dir[1], dir[2]);
+  CHECK_REL(f, hertz, 1e-3);
+  CHECK_ABS(dir[1], 1 / sqrt(2), 1e-6);
+  CHECK_ABS(dir[2], 1 / sqrt(2), 1e-6);
+  f = push(vert, r, dir);
+  fprintf(stderr, "vertex: %.6g N, direction %.3f %.3f %.3f\n", f, dir[0], dir[1], dir[2]);
+  CHECK_REL(f, hertz, 1e-3);
+  CHECK_ABS(dir[0], 1 / sqrt(3), 1e-6);
+}
+
+/* A plate (two triangles) moving at +0.2 m/s along z hits a resting sphere:
+ * elastic and frictionless, the sphere leaves at twice the plate speed. */
+static void test_moving(void) {
+  gs_dem_params p;
+  memset(&p, 0, sizeof p);
+  p.dt = 2e-7;
+  p.skin = 1e-4;
+  for (int a = 0; a < 3; a++) p.lo[a] = -0.02, p.hi[a] = 0.05;
+  p.nclass = 1;
+  gs_error err = {0};
+  gs_dem *d = gs_dem_alloc(&p, &err);
+  int t = gs_dem_add_type(d, &MAT, 0, &err);
+  double plate[18] = {-0.01, -0.01, 0, 0.01, -0.01, 0, 0.01, 0.01, 0,
+                      -0.01, -0.01, 0, 0.01, 0.01, 0, -0.01, 0.01, 0};
+  int w = gs_dem_add_mesh(d, "plate", gs_dem_mesh_from_triangles(plate, 2, &err), &MAT, &err);
+  double vel[3] = {0, 0, 0.2}, o[3] = {0, 0, 0}, ax[3] = {0, 0, 1};
+  CHECK(gs_dem_wall_set_motion(d, w, o, ax, 0, vel, &err) == 0);
+  double x[3] = {0.001, 0.002, 0.0015};
+  gs_dem_add_particle(d, t, 1e-3, x, NULL, NULL, &err);
+  gs_dem_run(d, 40000, &err);
+  gs_dem_view v;
+  gs_dem_get_view(d, &v);
+  fprintf(stderr, "moving plate 0.2 m/s: sphere leaves at %.6f m/s\n", v.vz[0]);
+  CHECK_REL(v.vz[0], 0.4, 0.005);
+  CHECK_ABS(v.vx[0], 0, 1e-9);
+  gs_dem_free(d);
+}
+
+/* The Lödige CoriMix meshes (when the shared data is present). */
+static void test_corimix(void) {
+  const char *dir = getenv("GRANSIM_SOURCE_DIR");
+  char path[4096];
+  snprintf(path, sizeof path, "%s/../shared/data/corimix/impeller.stl", dir ? dir : "..");
+  FILE *fp = fopen(path, "r");
+  if (!fp) {
+    fprintf(stderr, "no CoriMix meshes at %s; skipped\n", path);
+    return;
+  }
+  fclose(fp);
+  gs_error err = {0};
+  gs_dem_mesh *m = gs_dem_mesh_read_stl(path, 1e-3, &err);
+  CHECK(m != NULL);
+  if (m) {
+    double lo[3], hi[3];
+    gs_dem_mesh_bounds(m, lo, hi);
+    fprintf(stderr, "impeller: %zu facets, x %.3f..%.3f m, radius %.3f m\n", gs_dem_mesh_ntri(m), lo[0],
+            hi[0], hi[1]);
+    CHECK(gs_dem_mesh_ntri(m) == 2802);
+    CHECK_ABS(hi[0], 0.379, 1e-3);
+    CHECK_ABS(hi[1], 0.056, 1e-3);
+  }
+  gs_dem_mesh_free(m);
+}
+
+int main(void) {
+  test_stl();
+  test_features();
+  test_moving();
+  test_corimix();
+  TEST_EXIT();
+}
