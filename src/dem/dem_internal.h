@@ -108,6 +108,7 @@ struct gs_dem {
   int *cell_first; /* ncells + 1 */
   /* scratch */
   int *perm, *cellof;
+  int *order, *pos; /* particles in cell order, and each particle's place in it */
   size_t perm_cap;
   /* thread force buffers (threads 1..nt-1; thread 0 writes the particle arrays) */
   int nthreads;

@@ -79,11 +79,16 @@ int gs_dem_rebuild(gs_dem *d, gs_error *err) {
   if (ntot > d->perm_cap) {
     free(d->perm);
     free(d->cellof);
+    free(d->order);
+    free(d->pos);
     d->perm = gs_malloc((ntot + 1) * sizeof(int), err);
     d->cellof = gs_malloc((ntot + 1) * sizeof(int), err);
-    if (!d->perm || !d->cellof) return GS_ENOMEM;
+    d->order = gs_malloc((ntot + 1) * sizeof(int), err);
+    d->pos = gs_malloc((ntot + 1) * sizeof(int), err);
+    if (!d->perm || !d->cellof || !d->order || !d->pos) return GS_ENOMEM;
     d->perm_cap = ntot;
   }
+  int ndead = 0;
   for (size_t s = 0; s < ntot; s++) {
     const gs_dem_particles *src = s < nold ? p : &d->pend;
     size_t k = s < nold ? s : s - nold;
@@ -97,6 +102,7 @@ int gs_dem_rebuild(gs_dem *d, gs_error *err) {
       dead = 1;
       if (s < nold && record_removed(d, src, k)) return gs_error_set(err, GS_ENOMEM, "out of memory");
     }
+    ndead += dead;
     d->cellof[s] = dead ? -1
                         : (cell_coord(d, xs[2], 2) * d->cdim[1] + cell_coord(d, xs[1], 1)) * d->cdim[0] +
                               cell_coord(d, xs[0], 0);
@@ -107,25 +113,43 @@ int gs_dem_rebuild(gs_dem *d, gs_error *err) {
     if (d->cellof[s] >= 0) d->cell_first[d->cellof[s] + 1]++;
   for (size_t c = 0; c < d->ncells; c++) d->cell_first[c + 1] += d->cell_first[c];
   size_t nnew = (size_t)d->cell_first[d->ncells];
-  if ((rc = gs_dem_particles_reserve(&d->tmp, nnew, err))) return rc;
-  /* perm[s] = new index of source s (or -1); fill tmp in cell order */
+  /* Moving every particle array into cell order costs as much as building the
+   * list; between additions and removals the order drifts slowly, so the data
+   * are re-sorted only every 8th rebuild and the other rebuilds walk the cells
+   * through an index (order: particles by cell, pos: the inverse). */
+  const int resort = ndead || d->pend.n || d->rebuilds % 8 == 0;
   {
     int *fill = gs_malloc((d->ncells + 1) * sizeof(int), err);
     if (!fill) return GS_ENOMEM;
     memcpy(fill, d->cell_first, (d->ncells + 1) * sizeof(int));
-    for (size_t s = 0; s < ntot; s++) {
-      if (d->cellof[s] < 0) {
-        d->perm[s] = -1;
-        continue;
+    if (resort) {
+      /* perm[s] = new index of source s (or -1); fill tmp in cell order */
+      if ((rc = gs_dem_particles_reserve(&d->tmp, nnew, err))) {
+        free(fill);
+        return rc;
       }
-      int ni = fill[d->cellof[s]]++;
-      d->perm[s] = ni;
-      if (s < nold) gs_dem_particles_copy(&d->tmp, (size_t)ni, p, s);
-      else gs_dem_particles_copy(&d->tmp, (size_t)ni, &d->pend, s - nold);
+      for (size_t s = 0; s < ntot; s++) {
+        if (d->cellof[s] < 0) {
+          d->perm[s] = -1;
+          continue;
+        }
+        int ni = fill[d->cellof[s]]++;
+        d->perm[s] = ni;
+        if (s < nold) gs_dem_particles_copy(&d->tmp, (size_t)ni, p, s);
+        else gs_dem_particles_copy(&d->tmp, (size_t)ni, &d->pend, s - nold);
+      }
+      for (size_t k = 0; k < nnew; k++) d->order[k] = d->pos[k] = (int)k;
+      d->tmp.n = nnew;
+    } else {
+      for (size_t s = 0; s < ntot; s++) {
+        int k = fill[d->cellof[s]]++;
+        d->perm[s] = (int)s;
+        d->order[k] = (int)s;
+        d->pos[s] = k;
+      }
     }
     free(fill);
   }
-  d->tmp.n = nnew;
 
   /* 3. touching pairs of the old list, renumbered */
   size_t ncar = 0;
@@ -149,12 +173,15 @@ int gs_dem_rebuild(gs_dem *d, gs_error *err) {
   }
 
   /* 4. swap buffers */
-  gs_dem_particles t = *p;
-  *p = d->tmp;
-  d->tmp = t;
-  d->tmp.n = 0;
-  d->pend.n = 0;
+  if (resort) {
+    gs_dem_particles t = *p;
+    *p = d->tmp;
+    d->tmp = t;
+    d->tmp.n = 0;
+    d->pend.n = 0;
+  }
   size_t n = p->n;
+  const int *order = d->order;
 
   /* 5. half list: own cell (j > i) and the 13 forward neighbour cells */
   free(d->nl_first);
@@ -173,9 +200,10 @@ int gs_dem_rebuild(gs_dem *d, gs_error *err) {
           int jx = ix + dx, jy = iy + dy, jz = iz + dz;
           if (jx < 0 || jy < 0 || jx >= cx || jy >= cy || jz >= cz) continue;
           int c = (jz * cy + jy) * cx + jx;
-          int j0 = d->cell_first[c], j1 = d->cell_first[c + 1];
-          if (!dx && !dy && !dz) j0 = (int)i + 1;
-          for (int j = j0; j < j1; j++) {
+          int k0 = d->cell_first[c], k1 = d->cell_first[c + 1];
+          if (!dx && !dy && !dz) k0 = d->pos[i] + 1;
+          for (int kk = k0; kk < k1; kk++) {
+            const int j = order[kk];
             double ddx = xi - p->x[j], ddy = yi - p->y[j], ddz = zi - p->z[j];
             double cut = ri + p->r[j];
             if (ddx * ddx + ddy * ddy + ddz * ddz >= cut * cut) continue;

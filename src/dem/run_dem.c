@@ -243,8 +243,11 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   }
   if (!rc && progress) {
     double el = wall_seconds() - t0wall;
-    fprintf(stderr, "gransim dem: %ld steps in %.2f s, %.4g particle-steps/s%s\n", nsteps, el,
-            el > 0 ? psteps / el : 0, t_steady >= 0 ? "" : "; steady state not reached");
+    gs_dem_counters k;
+    gs_dem_get_counters(d, &k);
+    fprintf(stderr, "gransim dem: %ld steps in %.2f s, %.4g particle-steps/s, %llu neighbour-list "
+            "rebuilds%s\n", nsteps, el, el > 0 ? psteps / el : 0, (unsigned long long)k.rebuilds,
+            t_steady >= 0 ? "" : "; steady state not reached");
   }
   if (ts) fclose(ts);
   if (!rc) rc = gs_dem_stats_write(&st, c, dir, gs_dem_time(d), t_steady, err);

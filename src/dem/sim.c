@@ -62,6 +62,8 @@ void gs_dem_free(gs_dem *d) {
   free(d->cell_first);
   free(d->perm);
   free(d->cellof);
+  free(d->order);
+  free(d->pos);
   free(d->tbuf);
   free(d->pair_events);
   free(d->wall_impacts);
