@@ -97,13 +97,13 @@ TL_FN double tl_uniform(tl_rng *r) {
   return ((double)(r->s >> 11) + 0.5) / 9007199254740992.0;
 }
 
-/* The ledger entries of compartment comp: ext[k] = ledger[comp*2*dim + k],
- * lost[k] = ledger[comp*2*dim + dim + k]. */
+/* The ledger entries of compartment comp for volume coordinate k (axes, then
+ * carried quantities): ext[k] = ledger[comp*2*nvol + k], lost[k] = ledger[comp*2*nvol + nvol + k]. */
 TL_FN double tl_ext(const gs_model *m, const double *ledger, size_t comp, int k) {
-  return ledger[comp * 2 * (size_t)m->grid.dim + (size_t)k];
+  return ledger[comp * 2 * (size_t)m->nvol + (size_t)k];
 }
 TL_FN double tl_lost(const gs_model *m, const double *ledger, size_t comp, int k) {
-  return ledger[comp * 2 * (size_t)m->grid.dim + (size_t)m->grid.dim + (size_t)k];
+  return ledger[comp * 2 * (size_t)m->nvol + (size_t)m->nvol + (size_t)k];
 }
 
 /* Projection of a 1-D density f(v) onto the pivots the way gransim

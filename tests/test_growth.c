@@ -372,7 +372,7 @@ static void test_growth_solve(void) {
       memcpy(z, r, n * sizeof *z);
       gs_growth_solve(g, 1, G, gamma, z, work);
       memset(Jz, 0, n * sizeof *Jz);
-      gs_growth_apply(g, 1, G, z, Jz, NULL);
+      gs_growth_apply(g, 1, G, z, Jz, NULL, NULL);
       double worst = 0, scale = 0;
       for (size_t i = 0; i < n; i++) {
         worst = fmax(worst, fabs(z[i] - gamma * Jz[i] - r[i]));

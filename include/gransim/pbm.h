@@ -54,6 +54,9 @@ typedef struct gs_mech_type {
    * preconditioner of implicit integrators.  NULL: treated as identity. */
   void (*precondition)(void *self, const gs_model *m, double t, const double *y, double gamma,
                        double *z);
+  /* Optional: the first time > t at which this mechanism's rate jumps (the
+   * start or end of a time window), or INFINITY.  The run stops there. */
+  double (*next_switch)(void *self, double t);
 } gs_mech_type;
 
 typedef struct gs_mechanism {
@@ -67,10 +70,23 @@ const gs_mech_type *gs_mech_lookup(const char *name);
 const gs_mech_type *const *gs_mech_types(void);
 
 /* ---- the model ----------------------------------------------------------- */
+/* Carried quantities: besides the number N of every cell, the state may hold
+ * the total volume of some quantity carried by the particles of the cell
+ * (seed 000: liquid and gas per solid bin), so a particle of cell c carries
+ * Q_q[c] / N[c].  Every mechanism moves them with the particles. */
+#define GS_MAX_CARRIED 2
+#define GS_MAX_VOL (GS_MAX_DIM + GS_MAX_CARRIED)
+
 struct gs_model {
   gs_grid grid;
-  size_t nstate;  /* ncomp * ncells */
-  size_t nledger; /* ncomp * 2 * dim */
+  size_t nnum;    /* ncomp * ncells: the numbers, y[comp * ncells + cell] */
+  size_t nstate;  /* nnum * (1 + ncarried): numbers, then carried totals (gs_model_carried) */
+  size_t nledger; /* ncomp * 2 * nvol */
+  int ncarried;
+  char carried[GS_MAX_CARRIED][GS_NAME_LEN];
+  /* Volume coordinates: the dim axes, then the carried quantities.  The
+   * ledger holds per compartment nvol exchanged volumes, then nvol lost. */
+  int nvol;
   gs_mechanism *mech;
   size_t nmech;
   int size_axes;  /* bitmask of axes summed into the granule volume for sizes (d10/d50/d90) */
@@ -91,6 +107,26 @@ struct gs_model {
 
 /* Allocate an empty model around a grid (grid is moved in). */
 int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err);
+/* Declare carried quantities (before any mechanism is added). */
+int gs_model_set_carried(gs_model *m, const char *const *names, int n, gs_error *err);
+/* Index of a carried quantity by name, or -1. */
+int gs_model_carried_index(const gs_model *m, const char *name);
+/* Totals of carried quantity q in compartment comp of state y. */
+static inline double *gs_model_carried(const gs_model *m, double *y, size_t comp, int q) {
+  return y + m->nnum + (comp * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
+}
+static inline const double *gs_model_carried_c(const gs_model *m, const double *y, size_t comp,
+                                               int q) {
+  return y + m->nnum + (comp * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
+}
+/* Ledger of compartment comp: [0, nvol) exchanged, [nvol, 2 nvol) lost. */
+static inline double *gs_model_ledger(const gs_model *m, double *ledger, size_t comp) {
+  return ledger + comp * 2 * (size_t)m->nvol;
+}
+/* Name of volume coordinate k (axis or carried quantity). */
+const char *gs_model_vol_name(const gs_model *m, int k);
+/* Held volume of coordinate k in compartment comp. */
+double gs_model_held(const gs_model *m, const double *y, size_t comp, int k);
 /* Add a mechanism by type name, reading its parameters from node. */
 int gs_model_add_mechanism(gs_model *m, const char *type, gs_cfg_node *node, const char *label,
                            gs_error *err);
@@ -98,6 +134,10 @@ void gs_model_free(gs_model *m);
 
 /* Full right-hand side: dydt (nstate) and dledger (nledger) are overwritten. */
 void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger);
+/* The first time > t at which some mechanism's rate jumps, or INFINITY. */
+double gs_model_next_switch(const gs_model *m, double t);
+/* Helper for mechanisms active in [start, end). */
+double gs_window_next_switch(double start, double end, double t);
 /* 1 if some mechanism provides a preconditioner. */
 int gs_model_has_preconditioner(const gs_model *m);
 /* Approximate solution of (I - gamma J) z = r over the numbers and the
@@ -112,8 +152,8 @@ typedef struct gs_summary {
   double m1;                  /* total granule volume  sum N v */
   double m2;                  /* sum N v^2 */
   double d10, d50, d90;       /* volume-weighted percentiles of the volume-equivalent diameter */
-  double mean[GS_MAX_DIM];    /* number-mean of each coordinate */
-  double total[GS_MAX_DIM];   /* total volume of each coordinate, sum N x_k */
+  double mean[GS_MAX_VOL];    /* number-mean of each volume coordinate (axes, carried) */
+  double total[GS_MAX_VOL];   /* total volume of each: sum N x_k, or the carried total */
 } gs_summary;
 
 /* Statistics of compartment comp of state y. */

@@ -102,16 +102,54 @@ static int read_grid(gs_cfg_node *root, gs_model *m, gs_error *err) {
       m->size_volume[c] = v;
     }
   }
+  gs_cfg_node *carried = rc ? NULL : gs_cfg_get(grid, "carried");
+  if (carried) {
+    if ((rc = gs_cfg_require_kind(carried, GS_CFG_SEQ, err))) return rc;
+    const char *names[GS_MAX_CARRIED];
+    size_t n = gs_cfg_size(carried);
+    if (n > GS_MAX_CARRIED)
+      return gs_cfg_fail(carried, err, "expected at most %d carried quantities, got %zu", GS_MAX_CARRIED, n);
+    for (size_t i = 0; i < n; i++) {
+      names[i] = gs_cfg_scalar(gs_cfg_item(carried, i));
+      if (!names[i] || !*names[i] || strlen(names[i]) >= GS_NAME_LEN)
+        return gs_cfg_fail(gs_cfg_item(carried, i), err, "expected a name (e.g. liquid, gas)");
+    }
+    rc = gs_model_set_carried(m, names, (int)n, err);
+    if (rc == GS_EINPUT) gs_error_prefix(err, "%s:%d: grid.carried: ", gs_cfg_file(carried), gs_cfg_line(carried));
+  }
   if (!rc) rc = gs_cfg_check_unused(grid, err);
   return rc;
 }
 
 /* ---- initial state, mechanisms -------------------------------------------- */
+/* carried_ratio: {name: volume per unit particle volume, ...} (absent: 0). */
+static int read_carried_ratio(gs_cfg_node *n, const gs_model *m, double *ratio, gs_error *err) {
+  gs_cfg_node *r = gs_cfg_get(n, "carried_ratio");
+  for (int q = 0; q < GS_MAX_CARRIED; q++) ratio[q] = 0;
+  if (!r) return GS_OK;
+  int rc = gs_cfg_require_kind(r, GS_CFG_MAP, err);
+  for (int q = 0; !rc && q < m->ncarried; q++)
+    rc = gs_cfg_double_range(r, m->carried[q], 0, 0, 0, 0, HUGE_VAL, 0, &ratio[q], err);
+  if (!rc) rc = gs_cfg_check_unused(r, err);
+  return rc;
+}
+
 static int read_initial_one(gs_cfg_node *n, gs_model *m, double *y, gs_error *err) {
   long comp = 1;
+  double ratio[GS_MAX_CARRIED];
+  const size_t nc = m->grid.ncells;
   int rc = gs_cfg_require_kind(n, GS_CFG_MAP, err);
   if (!rc) rc = gs_cfg_long_range(n, "compartment", 0, 1, 1, (long)m->grid.ncomp, &comp, err);
-  if (!rc) rc = gs_distribution_add(n, &m->grid, y + (size_t)(comp - 1) * m->grid.ncells, 0, err);
+  if (!rc) rc = read_carried_ratio(n, m, ratio, err);
+  double *added = rc ? NULL : gs_calloc(nc, sizeof(double), err);
+  if (!rc && !added) rc = GS_ENOMEM;
+  if (!rc) rc = gs_distribution_add(n, &m->grid, added, 0, err);
+  for (size_t c = 0; !rc && c < nc; c++) {
+    y[(size_t)(comp - 1) * nc + c] += added[c];
+    for (int q = 0; q < m->ncarried; q++)
+      gs_model_carried(m, y, (size_t)(comp - 1), q)[c] += ratio[q] * added[c] * m->grid.volume[c];
+  }
+  free(added);
   return rc;
 }
 
@@ -236,7 +274,7 @@ static void model_hold(void *ctx, int on) {
 static double ledger_scale(const gs_model *m, const double *y0, int k) {
   const gs_grid *g = &m->grid;
   double n = 0, v = 0;
-  for (size_t i = 0; i < m->nstate; i++) {
+  for (size_t i = 0; i < m->nnum; i++) {
     n += y0[i];
     v += y0[i] * g->x[(i % g->ncells) * (size_t)g->dim + (size_t)k];
   }
@@ -257,10 +295,17 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
   const int dim = m->grid.dim;
   c->abs_scale = gs_malloc(n * sizeof(double), err);
   if (!c->abs_scale) return GS_ENOMEM;
-  double scale[GS_MAX_DIM];
+  double scale[GS_MAX_VOL];
   for (int k = 0; k < dim; k++) scale[k] = ledger_scale(m, c->y0, k);
+  /* carried totals and their ledger: resolved to atol particles' worth of a
+   * typical particle volume (they are volumes, not numbers) */
+  double vtyp = 1;
+  for (int k = 0; k < dim; k++) vtyp = k ? vtyp + scale[k] : scale[k];
+  for (int q = 0; q < m->ncarried; q++) scale[dim + q] = vtyp;
   for (size_t i = 0; i < n; i++)
-    c->abs_scale[i] = i < m->nstate ? 1.0 : scale[(i - m->nstate) % (size_t)dim];
+    c->abs_scale[i] = i < m->nnum       ? 1.0
+                      : i < m->nstate   ? vtyp
+                                        : scale[(i - m->nstate) % (size_t)m->nvol];
   c->ode = (gs_ode){n, model_ode, m, c->abs_scale, m->nstate,
                     gs_model_has_preconditioner(m) ? model_psolve : NULL, model_hold};
   gs_cfg_node *solver = gs_cfg_get(root, "solver");

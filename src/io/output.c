@@ -37,9 +37,9 @@
 #define H5_NEW ".result.h5.new"
 #define CSV_PARTIAL ".summary.csv.partial"
 #define NCOL_FIXED 8                           /* time .. d90 */
-#define NCOL_MAX (NCOL_FIXED + 2 * GS_MAX_DIM) /* + mean_<axis>, total_<axis> */
-#define NSERIES_MAX (3 + NCOL_MAX)             /* /time, /number, /ledger, /summary/<col> */
-#define RANK_MAX (2 + GS_MAX_DIM)              /* /number: time, comp, axes */
+#define NCOL_MAX (NCOL_FIXED + 2 * GS_MAX_VOL) /* + mean_<coordinate>, total_<coordinate> */
+#define NSERIES_MAX (4 + NCOL_MAX)             /* /time, /number, /ledger, /summary/<col>, /carried */
+#define RANK_MAX (3 + GS_MAX_DIM)              /* /carried: time, comp, quantity, axes */
 #define CHUNK_ROWS 64                          /* time rows per chunk of the small series */
 #define BLOCK_VALUES 65536                     /* doubles per read when copying or rebuilding */
 
@@ -58,7 +58,8 @@ struct gs_output {
   size_t rowlen[NSERIES_MAX];              /* values per time row */
   FILE *csv;
   hsize_t ntimes; /* committed output times */
-  size_t ncomp, nstate;
+  size_t ncomp, nstate, nnum;
+  int s_carried; /* index of the /carried series, or -1 */
   double *sbuf; /* ncol * ncomp: one output time of every summary column */
 };
 
@@ -218,24 +219,33 @@ static void set_series(gs_output *o, int i, const char *name, int rank, const hs
 }
 
 /* Names and shapes of every time series, summary columns in CSV order. */
-static void describe_series(gs_output *o, const gs_grid *g) {
+static void describe_series(gs_output *o, const gs_model *m) {
   static const char *fixed[NCOL_FIXED] = {"time", "compartment", "M0", "M1",
                                           "M2",   "d10",         "d50", "d90"};
-  hsize_t rest[RANK_MAX - 1] = {g->ncomp}, lrest[2] = {g->ncomp, 2 * (hsize_t)g->dim};
+  const gs_grid *g = &m->grid;
+  const int nvol = m->nvol;
+  hsize_t rest[RANK_MAX - 1] = {g->ncomp}, lrest[2] = {g->ncomp, 2 * (hsize_t)nvol};
   for (int k = 0; k < g->dim; k++) rest[1 + k] = g->axis[k].n;
   set_series(o, S_TIME, "/time", 1, rest);
   set_series(o, S_NUMBER, "/number", 2 + g->dim, rest);
   set_series(o, S_LEDGER, "/ledger", 3, lrest);
   char name[sizeof o->sname[0]];
-  o->ncol = NCOL_FIXED + 2 * g->dim;
+  o->ncol = NCOL_FIXED + 2 * nvol;
   for (int c = 0; c < o->ncol; c++) {
     if (c < NCOL_FIXED) snprintf(name, sizeof name, "/summary/%s", fixed[c]);
-    else if (c < NCOL_FIXED + g->dim)
-      snprintf(name, sizeof name, "/summary/mean_%s", g->axis[c - NCOL_FIXED].name);
-    else snprintf(name, sizeof name, "/summary/total_%s", g->axis[c - NCOL_FIXED - g->dim].name);
+    else if (c < NCOL_FIXED + nvol)
+      snprintf(name, sizeof name, "/summary/mean_%s", gs_model_vol_name(m, c - NCOL_FIXED));
+    else snprintf(name, sizeof name, "/summary/total_%s", gs_model_vol_name(m, c - NCOL_FIXED - nvol));
     set_series(o, S_SUMMARY + c, name, 2, rest);
   }
   o->nseries = S_SUMMARY + o->ncol;
+  o->s_carried = -1;
+  if (m->ncarried) { /* totals carried per cell: (time, comp, quantity, axes) */
+    hsize_t crest[RANK_MAX - 1] = {g->ncomp, (hsize_t)m->ncarried};
+    for (int k = 0; k < g->dim; k++) crest[2 + k] = g->axis[k].n;
+    o->s_carried = o->nseries++;
+    set_series(o, o->s_carried, "/carried", 3 + g->dim, crest);
+  }
 }
 
 /* ---- writing the skeleton: grid, case, empty series ----------------------- */
@@ -304,12 +314,13 @@ static int deflate_usable(void) {
 static int create_series(gs_output *o, int i, gs_error *err) {
   int rank = o->rank[i];
   hsize_t dims[RANK_MAX] = {0}, maxdims[RANK_MAX] = {H5S_UNLIMITED}, chunk[RANK_MAX];
-  chunk[0] = i == S_NUMBER ? 1 : i == S_TIME ? 4 * CHUNK_ROWS : CHUNK_ROWS;
+  const int big = i == S_NUMBER || i == o->s_carried;
+  chunk[0] = big ? 1 : i == S_TIME ? 4 * CHUNK_ROWS : CHUNK_ROWS;
   for (int r = 1; r < rank; r++) dims[r] = maxdims[r] = chunk[r] = o->rest[i][r - 1];
   hid_t space = H5Screate_simple(rank, dims, maxdims);
   hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
   if (space >= 0 && dcpl >= 0 && H5Pset_chunk(dcpl, rank, chunk) >= 0 &&
-      (i != S_NUMBER || !deflate_usable() || H5Pset_deflate(dcpl, 1) >= 0))
+      (!big || !deflate_usable() || H5Pset_deflate(dcpl, 1) >= 0))
     o->ds[i] = H5Dcreate2(o->file, o->sname[i], H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl,
                           H5P_DEFAULT);
   if (dcpl >= 0) H5Pclose(dcpl);
@@ -427,13 +438,17 @@ static void output_free(gs_output *o) {
 static gs_output *output_alloc(const char *dir, const gs_model *m, gs_error *err) {
   const gs_grid *g = &m->grid;
   if (check_axis_names(g, err)) return NULL;
+  for (int q = 0; q < m->ncarried; q++)
+    if (strchr(m->carried[q], '/') || strchr(m->carried[q], ','))
+      return gs_error_set(err, GS_EINPUT, "carried name '%s' cannot be used in result files", m->carried[q]), NULL;
   gs_output *o = gs_calloc(1, sizeof *o, err);
   if (!o) return NULL;
   o->file = H5I_INVALID_HID;
   for (int i = 0; i < NSERIES_MAX; i++) o->ds[i] = H5I_INVALID_HID;
   o->ncomp = g->ncomp;
-  o->nstate = g->ncomp * g->ncells;
-  describe_series(o, g);
+  o->nstate = m->nstate;
+  o->nnum = m->nnum;
+  describe_series(o, m);
   o->dir = path_join(dir, "", err);
   o->h5_new = path_join(dir, H5_NEW, err);
   o->h5_tmp = path_join(dir, H5_PARTIAL, err);
@@ -536,16 +551,16 @@ gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_t
 /* Fills o->sbuf ([column][comp]) for output time t. */
 static void summarize_all(gs_output *o, const gs_model *m, double t, const double *y) {
   size_t nc = o->ncomp;
-  int dim = m->grid.dim;
+  int nvol = m->nvol;
   for (size_t j = 0; j < nc; j++) {
     gs_summary s;
     memset(&s, 0, sizeof s);
     gs_summarize(m, y, j, &s);
     double fixed[NCOL_FIXED] = {t, (double)(j + 1) /* 1-based, as in case files */, s.m0, s.m1, s.m2, s.d10, s.d50, s.d90};
     for (int c = 0; c < NCOL_FIXED; c++) o->sbuf[(size_t)c * nc + j] = fixed[c];
-    for (int k = 0; k < dim; k++) {
+    for (int k = 0; k < nvol; k++) {
       o->sbuf[(size_t)(NCOL_FIXED + k) * nc + j] = s.mean[k];
-      o->sbuf[(size_t)(NCOL_FIXED + dim + k) * nc + j] = s.total[k];
+      o->sbuf[(size_t)(NCOL_FIXED + nvol + k) * nc + j] = s.total[k];
     }
   }
 }
@@ -555,10 +570,11 @@ static int write_h5_time(gs_output *o, double t, const double *y, const double *
                          gs_error *err) {
   int rc = GS_OK;
   for (int i = 0; i < o->nseries && !rc; i++) {
-    const double *row = i == S_TIME     ? &t
-                        : i == S_NUMBER ? y
-                        : i == S_LEDGER ? ledger
-                                        : o->sbuf + (size_t)(i - S_SUMMARY) * o->ncomp;
+    const double *row = i == S_TIME         ? &t
+                        : i == S_NUMBER     ? y
+                        : i == S_LEDGER     ? ledger
+                        : i == o->s_carried ? y + o->nnum
+                                            : o->sbuf + (size_t)(i - S_SUMMARY) * o->ncomp;
     rc = write_rows(o, i, o->ntimes, 1, row, err);
   }
   if (!rc) rc = flush_h5(o, err);
@@ -796,6 +812,7 @@ static int read_last(gs_output *o, double *t, double *y, double *ledger, gs_erro
   hsize_t last = o->ntimes - 1;
   int rc = read_rows(o, S_TIME, last, 1, t, err);
   if (!rc) rc = read_rows(o, S_NUMBER, last, 1, y, err);
+  if (!rc && o->s_carried >= 0) rc = read_rows(o, o->s_carried, last, 1, y + o->nnum, err);
   if (!rc) rc = read_rows(o, S_LEDGER, last, 1, ledger, err);
   return rc;
 }

@@ -20,7 +20,17 @@
  * the target cell of every pivot sum.  Internally the grid is padded to three
  * axes (padding axes of one cell at the front) so one loop nest serves 1-, 2-
  * and 3-D.  The pair loop is parallel over OpenMP threads with per-thread
- * accumulators. */
+ * accumulators.
+ *
+ * Carried quantities (liquid and gas lumped per solid bin, seed 000): each
+ * particle of cell c carries Q_q[c] / N[c]; an event removes both partners'
+ * loads from their cells and gives their sum to the product; the pooled
+ * loads of a target cell are spread over the same nodes, with the same
+ * weights, as its particles, so every carried volume is conserved exactly.
+ * `wet` makes aggregation need liquid (seed 000 eq. 10): a particle is wet
+ * when its liquid / solid volume ratio reaches min_content; pairs need both
+ * partners wet, or either (then the dry-dry pairs are subtracted from a pass
+ * over all pairs, which keeps every event whole). */
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
@@ -31,6 +41,7 @@
 #include "pbm/lever.h"
 
 enum { CELL_AVERAGE = 0, FIXED_PIVOT = 1 };
+enum { WET_OFF = 0, WET_BOTH = 1, WET_EITHER = 2 };
 
 typedef struct {
   gs_kernel kernel;
@@ -50,6 +61,14 @@ typedef struct {
   size_t *span;          /* per compartment and row: [lo, hi) of the cells taking part */
   int *span_valid;       /* per compartment: spans computed at least once */
   double *span_t;        /* per compartment: time of the state they were computed from */
+  int nc;                /* carried quantities */
+  double *pcar;          /* nc * ncells: load per particle in the compartment being evaluated */
+  int wet, wet_liquid;   /* WET_*; carried index of the liquid */
+  double wet_min;        /* liquid / solid volume ratio that makes a particle wet */
+  double wet_ramp;       /* relative width of the switch (0: a step, as in seed 000) */
+  double *wet_ok;        /* ncomp * ncells: wetness psi in [0, 1], chosen once per time value */
+  double *wet_t;         /* per compartment: time of that choice */
+  double *masked;        /* ncells: numbers of the wet (or dry) cells for a pass */
   int nthreads;
   size_t work_len;
   double *work;          /* per thread: death, B, V[3], fp birth, row  */
@@ -72,6 +91,10 @@ static void agg_free(void *self) {
   free(A->span);
   free(A->span_valid);
   free(A->span_t);
+  free(A->pcar);
+  free(A->wet_ok);
+  free(A->wet_t);
+  free(A->masked);
   free(A->work);
   free(A);
 }
@@ -128,6 +151,27 @@ static int build_kernel_table(agg_t *A, double limit_mb, gs_error *err) {
   return GS_OK;
 }
 
+/* wet: {min_content, partners: both | either, liquid: <carried quantity>} */
+static int read_wet(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_error *err) {
+  static const char *const partners[] = {"both", "either", NULL};
+  gs_cfg_node *wn = gs_cfg_get(node, "wet");
+  if (!wn) return GS_OK;
+  const char *liquid = NULL;
+  int mode = 0;
+  int rc = gs_cfg_require_kind(wn, GS_CFG_MAP, err);
+  if (!rc) rc = gs_cfg_double_range(wn, "min_content", 1, 0, 0, 0, HUGE_VAL, 0, &A->wet_min, err);
+  if (!rc) rc = gs_cfg_enum_opt(wn, "partners", partners, 0, &mode, err);
+  if (!rc) rc = gs_cfg_double_range(wn, "ramp", 0, 0.1, 0, 0, 2, 1, &A->wet_ramp, err);
+  if (!rc) rc = gs_cfg_string_opt(wn, "liquid", "liquid", &liquid, err);
+  if (!rc && (A->wet_liquid = gs_model_carried_index(m, liquid)) < 0) {
+    gs_cfg_node *ln = gs_cfg_get(wn, "liquid");
+    rc = gs_cfg_fail(ln ? ln : wn, err, "needs a carried quantity named '%s' (grid.carried)", liquid);
+  }
+  if (!rc) rc = gs_cfg_check_unused(wn, err);
+  A->wet = mode == 0 ? WET_BOTH : WET_EITHER;
+  return rc;
+}
+
 static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err) {
   static const char *const schemes[] = {"cell_average", "fixed_pivot", NULL};
   const gs_grid *g = &m->grid;
@@ -138,6 +182,9 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   int rc = gs_cfg_enum_opt(node, "redistribution", schemes, CELL_AVERAGE, &A->scheme, err);
   if (!rc) rc = gs_cfg_double_range(node, "table_limit_mb", 0, 1024, 0, 0, HUGE_VAL, 0, &limit_mb, err);
   if (!rc) rc = gs_cfg_double_range(node, "negligible", 0, 1e-14, 0, 0, 1e-3, 0, &A->negligible, err);
+  if (!rc) rc = read_wet(node, m, A, err);
+  if (!rc && m->ncarried && A->scheme == FIXED_PIVOT)
+    rc = gs_cfg_fail(node, err, "fixed_pivot does not move carried quantities (grid.carried); use cell_average");
   if (!rc) rc = gs_cfg_map_req(node, "kernel", &kn, err);
   if (!rc) rc = gs_kernel_create(kn, g, m->dir, &A->kernel, err);
   if (!rc) rc = gs_cfg_check_unused(node, err);
@@ -164,12 +211,19 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   if (!rc) rc = build_kernel_table(A, limit_mb, err);
   if (!rc) {
     A->nthreads = omp_get_max_threads();
+    A->nc = m->ncarried;
+    A->pcar = gs_calloc((size_t)A->nc * A->ncells + 1, sizeof(double), err);
+    A->wet_ok = gs_calloc(A->ncomp * A->ncells, sizeof(double), err);
+    A->wet_t = gs_calloc(A->ncomp, sizeof(double), err);
+    A->masked = gs_calloc(A->ncells, sizeof(double), err);
+    if (!A->pcar || !A->wet_ok || !A->wet_t || !A->masked) rc = GS_ENOMEM;
+    for (size_t c = 0; !rc && c < A->ncomp; c++) A->wet_t[c] = NAN; /* not chosen yet */
     A->nrows = A->n[0] * A->n[1];
     A->span = gs_malloc(2 * A->nrows * A->ncomp * sizeof(size_t), err);
     A->span_valid = gs_calloc(A->ncomp, sizeof(int), err);
     A->span_t = gs_calloc(A->ncomp, sizeof(double), err);
     if (!A->span || !A->span_valid || !A->span_t) rc = GS_ENOMEM;
-    A->work_len = 7 * A->ncells + A->n[2];
+    A->work_len = (size_t)(7 + A->nc) * A->ncells + A->n[2];
     A->work = gs_malloc((size_t)A->nthreads * A->work_len * sizeof(double), err);
     if (!A->work) rc = GS_ENOMEM;
   }
@@ -184,14 +238,27 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
 /* Accumulators of one thread. */
 typedef struct {
   double *death, *births, *vol[3], *fp, *row, *wrow;
-  double lost_n, lost_v[3];
+  double *cvol[GS_MAX_CARRIED]; /* pooled carried loads per target cell */
+  double lost_n, lost_v[3], lost_c[GS_MAX_CARRIED];
 } acc_t;
+
+/* Per-thread work: death, births, vol[3], cvol[nc], fp (zeroed and summed
+ * over threads), then row and wrow (scratch). */
+static size_t summed_len(const agg_t *A) { return (size_t)(6 + A->nc) * A->ncells; }
 
 static acc_t thread_acc(const agg_t *A, int tid) {
   double *w = A->work + (size_t)tid * A->work_len;
-  size_t n = A->ncells;
-  acc_t acc = {w, w + n, {w + 2 * n, w + 3 * n, w + 4 * n}, w + 5 * n, w + 6 * n, w + 7 * n, 0, {0, 0, 0}};
-  memset(w, 0, 6 * n * sizeof(double));
+  size_t n = A->ncells, nc = (size_t)A->nc;
+  acc_t acc;
+  memset(&acc, 0, sizeof acc);
+  acc.death = w;
+  acc.births = w + n;
+  for (int q = 0; q < 3; q++) acc.vol[q] = w + (2 + (size_t)q) * n;
+  for (size_t q = 0; q < nc; q++) acc.cvol[q] = w + (5 + q) * n;
+  acc.fp = w + (5 + nc) * n;
+  acc.row = w + (6 + nc) * n;
+  acc.wrow = w + (7 + nc) * n;
+  memset(w, 0, summed_len(A) * sizeof(double));
   return acc;
 }
 
@@ -216,6 +283,12 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
   const double *restrict x0 = A->x[off], *restrict x1 = DIM > 1 ? A->x[off + 1] : NULL;
   const double *restrict x2 = DIM > 2 ? A->x[2] : NULL;
   const double xa0 = x0[a], xa1 = DIM > 1 ? x1[a] : 0, xa2 = DIM > 2 ? x2[a] : 0;
+  /* carried loads per particle (cell average only) */
+  const int NC = FP ? 0 : A->nc;
+  const double *restrict p0 = A->pcar, *restrict p1 = A->pcar + ncells;
+  const double pa0 = NC > 0 ? p0[a] : 0, pa1 = NC > 1 ? p1[a] : 0;
+  double *restrict c0 = acc->cvol[0], *restrict c1 = acc->cvol[1];
+  double lostq0 = 0, lostq1 = 0;
   const size_t *T0 = A->target[0] + a0 * n0, *T1 = A->target[1] + a1 * n1;
   const size_t *restrict T2 = A->target[2] + a2 * n2;
   const size_t *L0 = A->fp_lo[0] + a0 * n0, *L1 = A->fp_lo[1] + a1 * n1;
@@ -256,7 +329,7 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
        * with the same target are summed in registers before one store; this
        * avoids store-to-load chains on the same accumulator. */
       size_t t_run = (size_t)-1;
-      double rb = 0, r0 = 0, r1 = 0, r2 = 0;
+      double rb = 0, r0 = 0, r1 = 0, r2 = 0, q0 = 0, q1 = 0;
       for (size_t i2 = row_start; i2 < row_end; i2++) {
         const size_t b = bbase + i2;
         const double w = wr[i2 - row_start];
@@ -270,14 +343,18 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
                 v0[t_run] += r0;
                 if (DIM > 1) v1[t_run] += r1;
                 if (DIM > 2) v2[t_run] += r2;
+                if (NC > 0) c0[t_run] += q0;
+                if (NC > 1) c1[t_run] += q1;
               }
               t_run = t;
-              rb = r0 = r1 = r2 = 0;
+              rb = r0 = r1 = r2 = q0 = q1 = 0;
             }
             rb += w;
             r0 += w * (xa0 + x0[b]);
             if (DIM > 1) r1 += w * (xa1 + x1[b]);
             if (DIM > 2) r2 += w * (xa2 + x2[b]);
+            if (NC > 0) q0 += w * (pa0 + p0[b]);
+            if (NC > 1) q1 += w * (pa1 + p1[b]);
             continue;
           }
         } else {
@@ -302,6 +379,8 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
           }
         }
         lost_n += w; /* the product lies beyond the grid */
+        if (NC > 0) lostq0 += w * (pa0 + p0[b]);
+        if (NC > 1) lostq1 += w * (pa1 + p1[b]);
         lost0 += w * (xa0 + x0[b]);
         if (DIM > 1) lost1 += w * (xa1 + x1[b]);
         if (DIM > 2) lost2 += w * (xa2 + x2[b]);
@@ -311,6 +390,8 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
         v0[t_run] += r0;
         if (DIM > 1) v1[t_run] += r1;
         if (DIM > 2) v2[t_run] += r2;
+        if (NC > 0) c0[t_run] += q0;
+        if (NC > 1) c1[t_run] += q1;
       }
     }
   }
@@ -319,6 +400,8 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
   acc->lost_v[off] += lost0;
   if (DIM > 1) acc->lost_v[off + 1] += lost1;
   if (DIM > 2) acc->lost_v[2] += lost2;
+  acc->lost_c[0] += lostq0;
+  acc->lost_c[1] += lostq1;
 }
 
 static void pairs_of(const agg_t *A, size_t comp, const double *N, size_t a, acc_t *acc) {
@@ -337,9 +420,10 @@ static void reduce_threads(const agg_t *A, int nth, acc_t *acc) {
   for (int t = 1; t < nth; t++) {
     const double *src = A->work + (size_t)t * A->work_len;
     double *dst = A->work;
-    for (size_t i = 0; i < 6 * A->ncells; i++) dst[i] += src[i];
+    for (size_t i = 0; i < summed_len(A); i++) dst[i] += src[i];
     acc[0].lost_n += acc[t].lost_n;
     for (int q = 0; q < 3; q++) acc[0].lost_v[q] += acc[t].lost_v[q];
+    for (int q = 0; q < GS_MAX_CARRIED; q++) acc[0].lost_c[q] += acc[t].lost_c[q];
   }
 }
 
@@ -414,45 +498,103 @@ static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
 
 /* Redistribute pooled births (cell average) or copy fixed-pivot births into
  * dydt; returns the number placed.  Lost packets go to lost_n / lost_v. */
-static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double *dydt) {
+static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double sign,
+                           double *dydt, double *const *qdst) {
   double placed = 0;
   if (A->scheme == FIXED_PIVOT) {
     for (size_t c = 0; c < A->ncells; c++) {
-      dydt[c] += acc->fp[c];
-      placed += acc->fp[c];
+      dydt[c] += sign * acc->fp[c];
+      placed += sign * acc->fp[c];
     }
     return placed;
   }
   for (size_t t = 0; t < A->ncells; t++) {
     double B = acc->births[t];
     if (B == 0.0) continue;
-    double vbar[GS_MAX_DIM], excess[GS_MAX_DIM] = {0};
+    double vbar[GS_MAX_DIM], excess[GS_MAX_DIM] = {0}, qtot[GS_MAX_CARRIED];
     for (int k = 0; k < A->dim; k++) vbar[k] = acc->vol[A->off + k][t] / B;
-    gs_lever_place(g, t, vbar, B, dydt, excess);
-    placed += B;
+    for (int q = 0; q < A->nc; q++) qtot[q] = sign * acc->cvol[q][t];
+    gs_lever_place_carried(g, t, vbar, sign * B, dydt, excess, qdst ? A->nc : 0, qtot, qdst);
+    placed += sign * B;
     for (int k = 0; k < A->dim; k++) acc->lost_v[A->off + k] += excess[k];
   }
   return placed;
 }
 
+/* Loads per particle of compartment comp into A->pcar. */
+static void carried_loads(agg_t *A, const gs_model *m, size_t comp, const double *y) {
+  const double *N = y + comp * A->ncells;
+  for (int q = 0; q < A->nc; q++) {
+    const double *Q = gs_model_carried_c(m, y, comp, q);
+    double *p = A->pcar + (size_t)q * A->ncells;
+    for (size_t c = 0; c < A->ncells; c++) p[c] = N[c] > 0 ? Q[c] / N[c] : 0.0;
+  }
+}
+
+/* Wetness psi of the cells of compartment comp: 0 below min_content, 1
+ * above, linear across the relative width `ramp` around it (a step makes the
+ * right-hand side jump whenever a cell crosses, which adaptive integrators
+ * cannot step over).  Chosen once per time value under an integrator (like
+ * the participating cells), so Newton iterations see one function. */
+static const double *wet_cells(agg_t *A, const gs_model *m, size_t comp, double t,
+                               const double *y) {
+  double *psi = A->wet_ok + comp * A->ncells;
+  if (m->hold || (m->in_integrator && t == A->wet_t[comp])) return psi;
+  const double *N = y + comp * A->ncells, *L = gs_model_carried_c(m, y, comp, A->wet_liquid);
+  const double lo = A->wet_min * (1 - 0.5 * A->wet_ramp), hi = A->wet_min * (1 + 0.5 * A->wet_ramp);
+  for (size_t c = 0; c < A->ncells; c++) {
+    double content = N[c] > 0 ? L[c] / (N[c] * m->grid.volume[c]) : 0.0;
+    psi[c] = content >= hi ? 1.0 : content < lo ? 0.0 : (content - lo) / (hi - lo);
+  }
+  A->wet_t[comp] = t;
+  return psi;
+}
+
+/* One pass of pairs over the numbers Nv, its rates added with sign. */
+static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const double *Nv,
+                 double sign, const double *y, double *dydt, double *dledger, double *born,
+                 double *dead, acc_t *acc) {
+  compartment_pairs(A, comp, t, Nv, m, acc);
+  double *d = dydt ? dydt + comp * A->ncells : NULL;
+  for (size_t c = 0; c < A->ncells; c++) {
+    *dead += sign * acc[0].death[c];
+    if (d) d[c] -= sign * acc[0].death[c];
+  }
+  double *qdst[GS_MAX_CARRIED] = {NULL, NULL};
+  for (int q = 0; d && q < A->nc; q++) {
+    qdst[q] = gs_model_carried(m, dydt, comp, q);
+    const double *p = A->pcar + (size_t)q * A->ncells;
+    for (size_t c = 0; c < A->ncells; c++) qdst[q][c] -= sign * acc[0].death[c] * p[c];
+  }
+  double *scratch = d ? d : acc[0].row; /* number_rates: place into a scratch row */
+  if (!d) memset(scratch, 0, A->ncells * sizeof(double));
+  *born += place_births(A, &m->grid, &acc[0], sign, scratch, d ? qdst : NULL);
+  if (dledger) {
+    double *lost = gs_model_ledger(m, dledger, comp) + m->nvol;
+    for (int k = 0; k < A->dim; k++) lost[k] += sign * acc[0].lost_v[A->off + k];
+    for (int q = 0; q < A->nc; q++) lost[A->dim + q] += sign * acc[0].lost_c[q];
+  }
+  (void)y;
+}
+
 static void agg_rates(agg_t *A, const gs_model *m, double t, const double *y, double *dydt,
                       double *dledger, double *birth, double *death) {
   acc_t acc[A->nthreads > 0 ? A->nthreads : 1];
-  const int dim = A->dim;
   for (size_t comp = 0; comp < A->ncomp; comp++) {
     const double *N = y + comp * A->ncells;
-    compartment_pairs(A, comp, t, N, m, acc);
-    double *d = dydt ? dydt + comp * A->ncells : NULL;
-    double dead = 0;
-    for (size_t c = 0; c < A->ncells; c++) {
-      dead += acc[0].death[c];
-      if (d) d[c] -= acc[0].death[c];
+    double born = 0, dead = 0;
+    carried_loads(A, m, comp, y);
+    if (A->wet == WET_OFF) {
+      pass(A, m, comp, t, N, 1.0, y, dydt, dledger, &born, &dead, acc);
+    } else {
+      const double *psi = wet_cells(A, m, comp, t, y);
+      /* both: pair weight psi_a psi_b, so the numbers psi N; either:
+       * 1 - (1 - psi_a)(1 - psi_b), all pairs minus those of (1 - psi) N */
+      const int both = A->wet == WET_BOTH;
+      for (size_t c = 0; c < A->ncells; c++) A->masked[c] = (both ? psi[c] : 1.0 - psi[c]) * N[c];
+      if (!both) pass(A, m, comp, t, N, 1.0, y, dydt, dledger, &born, &dead, acc);
+      pass(A, m, comp, t, A->masked, both ? 1.0 : -1.0, y, dydt, dledger, &born, &dead, acc);
     }
-    double *scratch = d ? d : acc[0].row; /* number_rates: place into a scratch row */
-    if (!d) memset(scratch, 0, A->ncells * sizeof(double));
-    double born = place_births(A, &m->grid, &acc[0], scratch);
-    if (dledger)
-      for (int k = 0; k < dim; k++) dledger[comp * 2 * dim + dim + k] += acc[0].lost_v[A->off + k];
     if (birth) birth[comp] = born;
     if (death) death[comp] = dead;
   }
@@ -470,4 +612,4 @@ static void agg_number_rates(void *self, const gs_model *m, double t, const doub
 
 const gs_mech_type gs_mech_aggregation = {
     "aggregation", "binary aggregation with a kernel; cell-average or fixed-pivot redistribution",
-    agg_create, agg_rhs, agg_number_rates, agg_free, NULL};
+    agg_create, agg_rhs, agg_number_rates, agg_free, NULL, NULL};

@@ -166,7 +166,10 @@ static int brk_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   brk_t *B = gs_calloc(1, sizeof *B, err);
   if (!B) return GS_ENOMEM;
   gs_cfg_node *sn = NULL, *dn = NULL;
-  int rc = gs_cfg_enum_opt(node, "redistribution", schemes, CELL_AVERAGE, &B->scheme, err);
+  int rc = m->ncarried ? gs_cfg_fail(node, err, "breakage does not yet share carried quantities "
+                                                 "(grid.carried) among fragments")
+                       : GS_OK;
+  if (!rc) rc = gs_cfg_enum_opt(node, "redistribution", schemes, CELL_AVERAGE, &B->scheme, err);
   if (!rc) rc = gs_cfg_map_req(node, "selection", &sn, err);
   if (!rc) rc = gs_cfg_map_req(node, "daughters", &dn, err);
   if (!rc) rc = gs_selection_create(sn, g, &B->sel, err);
@@ -203,7 +206,7 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
   for (size_t comp = 0; comp < B->ncomp; comp++) {
     const double *N = y + comp * B->ncells;
     double *d = dydt ? dydt + comp * B->ncells : NULL;
-    double *lost = dledger ? dledger + comp * 2 * (size_t)dim + (size_t)dim : NULL;
+    double *lost = dledger ? gs_model_ledger(m, dledger, comp) + m->nvol : NULL;
     double born = 0, dead = 0, excess[GS_MAX_DIM] = {0};
     if (B->scheme == CELL_AVERAGE) {
       memset(B->births, 0, B->ncells * sizeof(double));
@@ -256,4 +259,4 @@ static void brk_number_rates(void *self, const gs_model *m, double t, const doub
 
 const gs_mech_type gs_mech_breakage = {
     "breakage", "breakage with a selection function and a daughter distribution", brk_create,
-    brk_rhs, brk_number_rates, brk_free, NULL};
+    brk_rhs, brk_number_rates, brk_free, NULL, NULL};

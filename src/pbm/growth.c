@@ -89,6 +89,9 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
   G->liquid = G->gas = -1;
   G->G = gs_calloc(g->ncells, sizeof(double), err);
   int rc = G->G ? GS_OK : GS_ENOMEM;
+  if (!rc && m->ncarried > 0) /* particles moving between cells would leave their load behind */
+    rc = gs_cfg_fail(node, err, "growth along an axis cannot be combined with carried quantities "
+                                "(grid.carried); use spray / pore_consolidation for carried liquid and gas");
   if (!rc && kind == KIND_GROWTH) {
     rc = axis_key(node, g, "axis", NULL, &G->axis, err);
     if (!rc) rc = gs_cfg_double_opt(node, "constant", 0, &G->g0, err);
@@ -165,7 +168,7 @@ static void grow_rhs(void *self, const gs_model *m, double t, const double *y, d
     const double *N = y + comp * g->ncells;
     if (compartment_rates(G, g, comp, N))
       gs_growth_apply(g, G->axis, G->G, N, dydt + comp * g->ncells,
-                      dledger + comp * 2 * (size_t)g->dim);
+                      gs_model_ledger(m, dledger, comp), gs_model_ledger(m, dledger, comp) + m->nvol);
   }
 }
 
@@ -182,6 +185,11 @@ static void grow_precondition(void *self, const gs_model *m, double t, const dou
       gs_growth_solve(g, G->axis, G->G, gamma, z + comp * g->ncells, G->work);
 }
 
+static double grow_switch(void *self, double t) {
+  const grow_t *G = self;
+  return G->kind == KIND_CONSOLIDATION ? INFINITY : gs_window_next_switch(G->start, G->end, t);
+}
+
 static int growth_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
   return grow_create_kind(n, m, s, KIND_GROWTH, e);
 }
@@ -194,10 +202,10 @@ static int consol_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *
 
 const gs_mech_type gs_mech_growth = {"growth", "growth along an axis, G = constant + linear * x",
                                      growth_create, grow_rhs, NULL, grow_free,
-                                     grow_precondition};
+                                     grow_precondition, grow_switch};
 const gs_mech_type gs_mech_liquid_addition = {
     "liquid_addition", "liquid spray shared in proportion to solid volume (seed 000 eq. 5)",
-    liquid_create, grow_rhs, NULL, grow_free, grow_precondition};
+    liquid_create, grow_rhs, NULL, grow_free, grow_precondition, grow_switch};
 const gs_mech_type gs_mech_consolidation = {
     "consolidation", "loss of gas down to a minimum porosity (seed 002 eq. 2.12, corrected sign)",
-    consol_create, grow_rhs, NULL, grow_free, grow_precondition};
+    consol_create, grow_rhs, NULL, grow_free, grow_precondition, grow_switch};

@@ -4,7 +4,7 @@
 #include "pbm/growth_scheme.h"
 
 void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *N, double *d,
-                     double *ledger) {
+                     double *exchanged, double *lost_out) {
   const gs_axis *ax = &g->axis[axis];
   const size_t n = ax->n, stride = g->stride[axis];
   const int dim = g->dim;
@@ -34,10 +34,9 @@ void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *
       ext += rate * num;
     }
   }
-  if (ledger) {
-    ledger[axis] += ext;
-    for (int k = 0; k < dim; k++) ledger[dim + k] += lost[k];
-  }
+  if (exchanged) exchanged[axis] += ext;
+  if (lost_out)
+    for (int k = 0; k < dim; k++) lost_out[k] += lost[k];
 }
 
 /* Transfer rate coefficient of the cell at index i along the axis: particles

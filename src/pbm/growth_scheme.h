@@ -12,9 +12,9 @@
 #include "gransim/grid.h"
 
 /* N, d: one compartment; G: rate per cell (NULL entries not allowed);
- * ledger: this compartment's 2*dim ledger entries (may be NULL). */
+ * exchanged, lost: this compartment's ledger entries per axis (may be NULL). */
 void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *N, double *d,
-                     double *ledger);
+                     double *exchanged, double *lost);
 
 /* Solve (I - gamma J) z = r in place for one compartment, J the Jacobian of
  * gs_growth_apply with these rates G: a tridiagonal system along each line

@@ -3,6 +3,12 @@
 
 int gs_lever_place(const gs_grid *g, size_t cell, const double *v, double count, double *dst,
                    double *excess) {
+  return gs_lever_place_carried(g, cell, v, count, dst, excess, 0, NULL, NULL);
+}
+
+int gs_lever_place_carried(const gs_grid *g, size_t cell, const double *v, double count,
+                           double *dst, double *excess, int nq, const double *qtot,
+                           double *const *qdst) {
   int clamped = 0;
   size_t lo[GS_MAX_DIM], idx[GS_MAX_DIM];
   double w[GS_MAX_DIM];
@@ -20,5 +26,6 @@ int gs_lever_place(const gs_grid *g, size_t cell, const double *v, double count,
     }
   }
   gs_lever_spread(g, lo, w, count, dst);
+  for (int q = 0; q < nq; q++) gs_lever_spread(g, lo, w, qtot[q], qdst[q]);
   return clamped;
 }

@@ -44,6 +44,12 @@ static inline int gs_lever_near(const gs_axis *ax, size_t t, double v, size_t *l
  * the number of axes that had to be clamped; excess may be NULL. */
 int gs_lever_place(const gs_grid *g, size_t cell, const double *v, double count, double *dst,
                    double *excess);
+/* The same, and the packet's carried totals qtot[q] (q < nq) spread over the
+ * same nodes with the same weights into qdst[q]: each node receives the
+ * share of the carried volume that it receives of the particles. */
+int gs_lever_place_carried(const gs_grid *g, size_t cell, const double *v, double count,
+                           double *dst, double *excess, int nq, const double *qtot,
+                           double *const *qdst);
 
 /* Spread count over the 2^dim nodes given per-axis lower nodes and weights. */
 static inline void gs_lever_spread(const gs_grid *g, const size_t *lo, const double *w,

@@ -1,4 +1,5 @@
 /* The sectional model: grid + registered mechanisms; full right-hand side. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -6,12 +7,14 @@
 #include "gransim/pbm.h"
 
 extern const gs_mech_type gs_mech_aggregation, gs_mech_breakage, gs_mech_growth,
-    gs_mech_liquid_addition, gs_mech_consolidation, gs_mech_feed, gs_mech_transfer;
+    gs_mech_liquid_addition, gs_mech_consolidation, gs_mech_feed, gs_mech_transfer, gs_mech_spray,
+    gs_mech_pore_consolidation;
 
 /* Adding a mechanism is one file and one line here. */
 static const gs_mech_type *const registry[] = {
     &gs_mech_aggregation, &gs_mech_breakage, &gs_mech_growth, &gs_mech_liquid_addition,
-    &gs_mech_consolidation, &gs_mech_feed, &gs_mech_transfer, NULL};
+    &gs_mech_consolidation, &gs_mech_feed, &gs_mech_transfer, &gs_mech_spray,
+    &gs_mech_pore_consolidation, NULL};
 
 const gs_mech_type *const *gs_mech_types(void) { return registry; }
 
@@ -25,14 +28,55 @@ int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err) {
   memset(m, 0, sizeof *m);
   m->grid = *grid;
   memset(grid, 0, sizeof *grid);
-  m->nstate = m->grid.ncomp * m->grid.ncells;
-  m->nledger = m->grid.ncomp * 2 * (size_t)m->grid.dim;
+  m->nnum = m->nstate = m->grid.ncomp * m->grid.ncells;
+  m->nvol = m->grid.dim;
+  m->nledger = m->grid.ncomp * 2 * (size_t)m->nvol;
   m->size_axes = (1 << m->grid.dim) - 1;
   strcpy(m->dir, ".");
   m->size_volume = gs_malloc(m->grid.ncells * sizeof(double), err);
   if (!m->size_volume) return GS_ENOMEM;
   memcpy(m->size_volume, m->grid.volume, m->grid.ncells * sizeof(double));
   return GS_OK;
+}
+
+int gs_model_set_carried(gs_model *m, const char *const *names, int n, gs_error *err) {
+  if (m->nmech)
+    return gs_error_set(err, GS_EINPUT, "carried quantities must be declared before mechanisms");
+  if (n < 0 || n > GS_MAX_CARRIED)
+    return gs_error_set(err, GS_EINPUT, "at most %d carried quantities", GS_MAX_CARRIED);
+  for (int q = 0; q < n; q++) {
+    if (gs_grid_axis_by_name(&m->grid, names[q]) >= 0 || gs_model_carried_index(m, names[q]) >= 0)
+      return gs_error_set(err, GS_EINPUT, "carried quantity '%s' repeats a name", names[q]);
+    snprintf(m->carried[q], sizeof m->carried[q], "%s", names[q]);
+    m->ncarried = q + 1;
+  }
+  m->nvol = m->grid.dim + m->ncarried;
+  m->nstate = m->nnum * (1 + (size_t)m->ncarried);
+  m->nledger = m->grid.ncomp * 2 * (size_t)m->nvol;
+  return GS_OK;
+}
+
+int gs_model_carried_index(const gs_model *m, const char *name) {
+  for (int q = 0; q < m->ncarried; q++)
+    if (!strcmp(m->carried[q], name)) return q;
+  return -1;
+}
+
+const char *gs_model_vol_name(const gs_model *m, int k) {
+  return k < m->grid.dim ? m->grid.axis[k].name : m->carried[k - m->grid.dim];
+}
+
+double gs_model_held(const gs_model *m, const double *y, size_t comp, int k) {
+  const gs_grid *g = &m->grid;
+  double held = 0;
+  if (k < g->dim) {
+    const double *N = y + comp * g->ncells;
+    for (size_t c = 0; c < g->ncells; c++) held += N[c] * g->x[c * (size_t)g->dim + (size_t)k];
+  } else {
+    const double *Q = gs_model_carried_c(m, y, comp, k - g->dim);
+    for (size_t c = 0; c < g->ncells; c++) held += Q[c];
+  }
+  return held;
 }
 
 int gs_model_add_mechanism(gs_model *m, const char *type, gs_cfg_node *node, const char *label,
@@ -59,6 +103,20 @@ void gs_model_free(gs_model *m) {
   free(m->size_volume);
   gs_grid_free(&m->grid);
   memset(m, 0, sizeof *m);
+}
+
+double gs_window_next_switch(double start, double end, double t) {
+  if (t < start) return start;
+  if (t < end) return end;
+  return INFINITY;
+}
+
+double gs_model_next_switch(const gs_model *m, double t) {
+  double next = INFINITY;
+  for (size_t i = 0; i < m->nmech; i++)
+    if (m->mech[i].type->next_switch)
+      next = fmin(next, m->mech[i].type->next_switch(m->mech[i].self, t));
+  return next;
 }
 
 int gs_model_has_preconditioner(const gs_model *m) {

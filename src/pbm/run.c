@@ -65,20 +65,23 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
                        double *ymax_seen, gs_run_report *rep, gs_error *err) {
   const gs_model *m = &c->model;
   const gs_grid *g = &m->grid;
-  const int dim = g->dim;
+  const int nvol = m->nvol;
   char where[512];
   double ymax = *ymax_seen; /* largest number seen so far in the run */
   for (size_t i = 0; i < m->nstate; i++) {
     if (!isfinite(Y[i])) {
-      describe_cell(m, i / g->ncells, i % g->ncells, where, sizeof where);
-      return gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: number is %g", t, where, Y[i]);
+      size_t j = i < m->nnum ? i : (i - m->nnum) % m->nnum;
+      describe_cell(m, (i < m->nnum ? i : (i - m->nnum) / g->ncells / (size_t)m->ncarried) % g->ncomp,
+                    j % g->ncells, where, sizeof where);
+      return gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: %s is %g", t, where,
+                          i < m->nnum ? "number" : "a carried volume", Y[i]);
     }
-    ymax = fmax(ymax, fabs(Y[i]));
+    if (i < m->nnum) ymax = fmax(ymax, fabs(Y[i]));
   }
   *ymax_seen = ymax;
   /* an absolute floor: a state that is still (nearly) empty has only round-off */
   const double floor_abs = fmax(1e-30, c->checks.negative_floor);
-  for (size_t i = 0; i < m->nstate; i++)
+  for (size_t i = 0; i < m->nnum; i++)
     if (Y[i] < -c->checks.negative_tolerance * ymax - floor_abs) {
       describe_cell(m, i / g->ncells, i % g->ncells, where, sizeof where);
       return gs_error_set(err, GS_ENUMERIC,
@@ -87,49 +90,67 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
                           "solver.rtol/atol or check the rates",
                           t, where, Y[i], -Y[i] / ymax, ymax, c->checks.negative_tolerance);
     }
+  for (int q = 0; q < m->ncarried; q++) { /* carried volumes: same rule, per quantity */
+    double qmax = 0;
+    for (size_t comp = 0; comp < g->ncomp; comp++) {
+      const double *Q = gs_model_carried_c(m, Y, comp, q);
+      for (size_t cell = 0; cell < g->ncells; cell++) qmax = fmax(qmax, fabs(Q[cell]));
+    }
+    for (size_t comp = 0; comp < g->ncomp; comp++) {
+      const double *Q = gs_model_carried_c(m, Y, comp, q);
+      for (size_t cell = 0; cell < g->ncells; cell++)
+        if (Q[cell] < -c->checks.negative_tolerance * qmax - 1e-30) {
+          describe_cell(m, comp, cell, where, sizeof where);
+          return gs_error_set(err, GS_ENUMERIC,
+                              "numerical failure at t = %g: %s: carried %s %g is negative beyond "
+                              "round-off (%g of the largest %g; checks.negative_tolerance = %g)",
+                              t, where, m->carried[q], Q[cell], -Q[cell] / qmax, qmax,
+                              c->checks.negative_tolerance);
+        }
+    }
+  }
   const double *L = Y + m->nstate;
   double worst_frac = 0;
-  int worst_axis = -1, worst_sign = 0;
-  for (int k = 0; k < dim; k++) {
-    double scale = 0, lost = 0, held0 = 0;
+  int worst_k = -1, worst_sign = 0;
+  for (int k = 0; k < nvol; k++) {
+    double scale = 0, lost = 0;
     double held[g->ncomp];
     for (size_t comp = 0; comp < g->ncomp; comp++) {
-      const double *N = Y + comp * g->ncells;
-      held[comp] = 0;
-      for (size_t cell = 0; cell < g->ncells; cell++) held[comp] += N[cell] * g->x[cell * (size_t)dim + (size_t)k];
-      scale += M1_0[comp * (size_t)dim + (size_t)k] + fabs(held[comp]) + fabs(L[comp * 2 * (size_t)dim + (size_t)k]);
-      lost += L[comp * 2 * (size_t)dim + (size_t)dim + (size_t)k];
-      held0 += M1_0[comp * (size_t)dim + (size_t)k];
+      const double *led = L + comp * 2 * (size_t)nvol;
+      held[comp] = gs_model_held(m, Y, comp, k);
+      scale += M1_0[comp * (size_t)nvol + (size_t)k] + fabs(held[comp]) + fabs(led[k]);
+      lost += led[nvol + k];
     }
     if (!(scale > 0)) continue;
     for (size_t comp = 0; comp < g->ncomp; comp++) {
-      double ext = L[comp * 2 * (size_t)dim + (size_t)k], lst = L[comp * 2 * (size_t)dim + (size_t)dim + (size_t)k];
-      double expect = M1_0[comp * (size_t)dim + (size_t)k] + ext - lst;
+      const double *led = L + comp * 2 * (size_t)nvol;
+      double expect = M1_0[comp * (size_t)nvol + (size_t)k] + led[k] - led[nvol + k];
       double rel = fabs(held[comp] - expect) / scale;
       if (rel > rep->max_balance_error) rep->max_balance_error = rel;
       if (rel > c->checks.mass_tolerance)
         return gs_error_set(err, GS_ENUMERIC,
-                            "numerical failure at t = %g: volume balance of axis '%s' broken in "
+                            "numerical failure at t = %g: volume balance of '%s' broken in "
                             "compartment %zu: held %.12g, expected %.12g (initial + exchanged - "
                             "lost); relative error %.3g > checks.mass_tolerance = %g",
-                            t, g->axis[k].name, comp + 1, held[comp], expect, rel, c->checks.mass_tolerance);
+                            t, gs_model_vol_name(m, k), comp + 1, held[comp], expect, rel,
+                            c->checks.mass_tolerance);
     }
     double frac = fabs(lost) / scale;
     if (frac > worst_frac) {
       worst_frac = frac;
-      worst_axis = k;
+      worst_k = k;
       worst_sign = lost > 0;
     }
-    (void)held0;
   }
   if (worst_frac > rep->max_loss) rep->max_loss = worst_frac;
-  if (worst_axis >= 0 && worst_frac > c->checks.max_loss) {
-    const gs_axis *ax = &g->axis[worst_axis];
+  if (worst_k >= 0 && worst_frac > c->checks.max_loss) {
+    /* carried volumes are lost with the particles beyond the grid: name the axes */
+    const gs_axis *ax = &g->axis[worst_k < g->dim ? worst_k : 0];
     return gs_error_set(err, GS_ENUMERIC,
-                        "at t = %g, a fraction %.3g of the volume of axis '%s' has crossed the grid "
+                        "at t = %g, a fraction %.3g of the volume of '%s' has crossed the grid "
                         "boundaries (%s), more than checks.max_loss = %g. Extend axis '%s' (now "
                         "[%g, %g]) or raise checks.max_loss",
-                        t, worst_frac, ax->name,
+                        t, worst_frac, gs_model_vol_name(m, worst_k),
                         worst_sign ? "lost beyond the last pivot" : "created below the first pivot",
                         c->checks.max_loss, ax->name, ax->edges[0], ax->edges[ax->n]);
   }
@@ -158,16 +179,15 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   gs_run_report rep;
   memset(&rep, 0, sizeof rep);
   double *Y = gs_malloc(n * sizeof(double), err);
-  double *M1_0 = gs_calloc(g->ncomp * (size_t)g->dim, sizeof(double), err);
+  double *M1_0 = gs_calloc(g->ncomp * (size_t)m->nvol, sizeof(double), err);
   if (!Y || !M1_0) {
     free(Y);
     free(M1_0);
     return GS_ENOMEM;
   }
   memcpy(Y, c->y0, n * sizeof(double));
-  for (size_t i = 0; i < m->nstate; i++)
-    for (int k = 0; k < g->dim; k++)
-      M1_0[(i / g->ncells) * (size_t)g->dim + (size_t)k] += c->y0[i] * g->x[(i % g->ncells) * (size_t)g->dim + (size_t)k];
+  for (size_t comp = 0; comp < g->ncomp; comp++)
+    for (int k = 0; k < m->nvol; k++) M1_0[comp * (size_t)m->nvol + (size_t)k] = gs_model_held(m, c->y0, comp, k);
   double t = c->t0, ymax_seen = 0;
   int show = opt && opt->progress >= 0 ? opt->progress : isatty(STDERR_FILENO);
   gs_output *out = NULL;
@@ -189,11 +209,17 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   gs_integrator_stats st = {0};
   for (size_t i = 0; !rc && i < c->ntimes; i++) {
     if (c->times[i] <= t) continue;
-    rc = c->integrator.type->advance(c->integrator.self, &ode, &t, c->times[i], Y, err);
+    /* stop at every time where a rate switches on or off (spray windows,
+     * feeds): an integrator cannot step over a jump in f to tolerance */
+    while (!rc && t < c->times[i]) {
+      double stop = fmin(c->times[i], gs_model_next_switch(m, t));
+      rc = c->integrator.type->advance(c->integrator.self, &ode, &t, stop, Y, err);
+    }
     if (rc && guard.bad) {
       char where[512];
       size_t idx = guard.bad_index;
-      if (idx < m->nstate) describe_cell(m, idx / g->ncells, idx % g->ncells, where, sizeof where);
+      if (idx < m->nnum) describe_cell(m, idx / g->ncells, idx % g->ncells, where, sizeof where);
+      else if (idx < m->nstate) snprintf(where, sizeof where, "carried volume entry %zu", idx - m->nnum);
       else snprintf(where, sizeof where, "volume ledger entry %zu", idx - m->nstate);
       rc = gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: the rate of change is not finite (NaN or infinity); check kernel and mechanism parameters", guard.bad_t, where);
     }

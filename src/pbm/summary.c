@@ -80,17 +80,28 @@ void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s
   const gs_grid *g = &m->grid;
   const double *N = y + comp * g->ncells;
   memset(s, 0, sizeof *s);
+  /* granule volume per cell: the size axes, plus what a particle carries
+   * (liquid and gas fill the pores of the granule: seed 000's external volume) */
+  double *vol = m->ncarried ? malloc(g->ncells * sizeof *vol) : NULL;
+  const double *size = vol ? vol : m->size_volume;
+  for (size_t c = 0; vol && c < g->ncells; c++) {
+    vol[c] = m->size_volume[c];
+    for (int q = 0; q < m->ncarried; q++)
+      if (N[c] > 0) vol[c] += gs_model_carried_c(m, y, comp, q)[c] / N[c];
+  }
   for (size_t c = 0; c < g->ncells; c++) {
-    double v = m->size_volume[c];
+    double v = size[c];
     s->m0 += N[c];
     s->m1 += N[c] * v;
     s->m2 += N[c] * v * v;
     for (int k = 0; k < g->dim; k++) s->total[k] += N[c] * g->x[c * (size_t)g->dim + (size_t)k];
   }
-  for (int k = 0; k < g->dim; k++) s->mean[k] = s->m0 > 0 ? s->total[k] / s->m0 : NAN;
+  for (int q = 0; q < m->ncarried; q++) s->total[g->dim + q] = gs_model_held(m, y, comp, g->dim + q);
+  for (int k = 0; k < m->nvol; k++) s->mean[k] = s->m0 > 0 ? s->total[k] / s->m0 : NAN;
   static const double p[3] = {0.1, 0.5, 0.9};
   double d[3];
-  percentiles(m->size_volume, N, g->ncells, p, 3, d);
+  percentiles(size, N, g->ncells, p, 3, d);
+  free(vol);
   s->d10 = d[0];
   s->d50 = d[1];
   s->d90 = d[2];

@@ -7,7 +7,11 @@
  *             (1/s), 1/`residence_time`, or `velocity`/`length` (the v dt / d
  *             of seed 000), each a number or one value per compartment.
  * Both book the volume they move in the ledger of the compartments involved,
- * so the balance held = fed - discharged is checked per compartment. */
+ * so the balance held = fed - discharged is checked per compartment.
+ * Carried quantities (gs_model.carried) move with the particles: transfer
+ * moves Q_q at the same rate k_c Q_q; fed particles carry `carried_ratio`
+ * (per quantity, volume per unit of the particle's volume, e.g. gas
+ * e/(1 - e) for porosity e). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,7 +23,8 @@ typedef struct {
   size_t comp;
   double start, end;
   double *rate;             /* ncells: particles per second per cell */
-  double volume[GS_MAX_DIM]; /* volume per second per axis */
+  double volume[GS_MAX_VOL]; /* volume per second per axis and carried quantity */
+  double ratio[GS_MAX_CARRIED]; /* carried volume per unit particle volume */
 } feed_t;
 
 static void feed_free(void *self) {
@@ -41,14 +46,23 @@ static int feed_create(gs_cfg_node *node, const gs_model *m, void **self, gs_err
   if (!rc) rc = gs_cfg_double_range(node, "end", 0, HUGE_VAL, F->start, 1, HUGE_VAL, 0, &F->end, err);
   if (!rc) rc = gs_cfg_map_req(node, "distribution", &dist, err);
   if (!rc) rc = gs_distribution_add(dist, g, F->rate, 0, err);
+  gs_cfg_node *ratios = rc ? NULL : gs_cfg_get(node, "carried_ratio");
+  if (ratios) {
+    rc = gs_cfg_require_kind(ratios, GS_CFG_MAP, err);
+    for (int q = 0; !rc && q < m->ncarried; q++)
+      rc = gs_cfg_double_range(ratios, m->carried[q], 0, 0, 0, 0, HUGE_VAL, 0, &F->ratio[q], err);
+    if (!rc) rc = gs_cfg_check_unused(ratios, err);
+  }
   if (!rc) rc = gs_cfg_check_unused(node, err);
   if (rc) {
     feed_free(F);
     return rc;
   }
   F->comp = (size_t)comp - 1;
-  for (size_t c = 0; c < g->ncells; c++)
+  for (size_t c = 0; c < g->ncells; c++) {
     for (int k = 0; k < g->dim; k++) F->volume[k] += F->rate[c] * g->x[c * (size_t)g->dim + (size_t)k];
+    for (int q = 0; q < m->ncarried; q++) F->volume[g->dim + q] += F->rate[c] * F->ratio[q] * g->volume[c];
+  }
   *self = F;
   return GS_OK;
 }
@@ -61,7 +75,18 @@ static void feed_rhs(void *self, const gs_model *m, double t, const double *y, d
   if (t < F->start || t >= F->end) return;
   double *d = dydt + F->comp * g->ncells;
   for (size_t c = 0; c < g->ncells; c++) d[c] += F->rate[c];
-  for (int k = 0; k < g->dim; k++) dledger[F->comp * 2 * (size_t)g->dim + (size_t)k] += F->volume[k];
+  for (int q = 0; q < m->ncarried; q++) {
+    if (F->ratio[q] == 0.0) continue;
+    double *dq = gs_model_carried(m, dydt, F->comp, q);
+    for (size_t c = 0; c < g->ncells; c++) dq[c] += F->rate[c] * F->ratio[q] * g->volume[c];
+  }
+  double *ledger = gs_model_ledger(m, dledger, F->comp);
+  for (int k = 0; k < m->nvol; k++) ledger[k] += F->volume[k];
+}
+
+static double feed_switch(void *self, double t) {
+  const feed_t *F = self;
+  return gs_window_next_switch(F->start, F->end, t);
 }
 
 typedef struct {
@@ -133,26 +158,38 @@ static void transfer_rhs(void *self, const gs_model *m, double t, const double *
   (void)t;
   const transfer_t *T = self;
   const gs_grid *g = &m->grid;
-  const size_t n = g->ncells, L = 2 * (size_t)g->dim;
+  const size_t n = g->ncells;
   for (size_t comp = 0; comp < g->ncomp; comp++) {
     const double *N = y + comp * n;
     double *out = dydt + comp * n, *next = comp + 1 < g->ncomp ? dydt + (comp + 1) * n : NULL;
-    double moved[GS_MAX_DIM] = {0};
+    double moved[GS_MAX_VOL] = {0};
     for (size_t c = 0; c < n; c++) {
       double r = T->k[comp] * N[c];
       out[c] -= r;
       if (next) next[c] += r;
       for (int k = 0; k < g->dim; k++) moved[k] += r * g->x[c * (size_t)g->dim + (size_t)k];
     }
-    for (int k = 0; k < g->dim; k++) {
-      dledger[comp * L + (size_t)k] -= moved[k];
-      if (next) dledger[(comp + 1) * L + (size_t)k] += moved[k];
+    for (int q = 0; q < m->ncarried; q++) {
+      const double *Q = gs_model_carried_c(m, y, comp, q);
+      double *qout = gs_model_carried(m, dydt, comp, q);
+      double *qnext = next ? gs_model_carried(m, dydt, comp + 1, q) : NULL;
+      for (size_t c = 0; c < n; c++) {
+        double r = T->k[comp] * Q[c];
+        qout[c] -= r;
+        if (qnext) qnext[c] += r;
+        moved[g->dim + q] += r;
+      }
+    }
+    for (int k = 0; k < m->nvol; k++) {
+      gs_model_ledger(m, dledger, comp)[k] -= moved[k];
+      if (next) gs_model_ledger(m, dledger, comp + 1)[k] += moved[k];
     }
   }
 }
 
 const gs_mech_type gs_mech_feed = {"feed", "particles fed into a compartment at a constant rate",
-                                   feed_create, feed_rhs, NULL, feed_free, NULL};
+                                   feed_create, feed_rhs, NULL, feed_free, NULL,
+                                   feed_switch};
 const gs_mech_type gs_mech_transfer = {
     "transfer", "flow to the next compartment at rate k N; out of the last as product",
-    transfer_create, transfer_rhs, NULL, transfer_free, NULL};
+    transfer_create, transfer_rhs, NULL, transfer_free, NULL, NULL};

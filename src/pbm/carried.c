@@ -1,0 +1,145 @@
+/* Mechanisms that act on carried quantities (gs_model.carried), the lumped
+ * liquid and gas per solid bin of seed 000:
+ *   spray               dL_c/dt = Q(comp) N_c s_c / sum(N s) during [start, end):
+ *                       the spray shared in proportion to solid volume (eq. 5)
+ *   pore_consolidation  per particle dg/dt = -k V (1 - e_min)/s max(0, g + l - s e_min/(1 - e_min))
+ *                       (eq. 13 with the sign of a loss; V = s + l + g), so the
+ *                       porosity (l + g)/V relaxes to e_min and stops there (the
+ *                       excess is capped at g: liquid alone cannot drive gas negative)
+ * s is the solid volume of the cell (sum of the grid axes), l = L_c/N_c and
+ * g = G_c/N_c the liquid and gas a particle carries.  Both book what they add
+ * or remove as exchanged volume of the carried quantity in the ledger. */
+#include <math.h>
+#include <stdlib.h>
+
+#include "gransim/pbm.h"
+
+enum { SPRAY, PORE_CONSOLIDATION };
+
+typedef struct {
+  int kind, liquid, gas; /* carried indices (-1 if absent) */
+  double *q;             /* spray: rate per compartment (m^3/s) */
+  double start, end;
+  double k, emin;        /* consolidation */
+} carried_t;
+
+static void carried_free(void *self) {
+  carried_t *C = self;
+  if (C) free(C->q);
+  free(C);
+}
+
+/* A carried quantity named by key (default def). */
+static int carried_key(gs_cfg_node *node, const gs_model *m, const char *key, const char *def,
+                       int *out, gs_error *err) {
+  const char *name;
+  int rc = gs_cfg_string_opt(node, key, def, &name, err);
+  if (rc) return rc;
+  *out = gs_model_carried_index(m, name);
+  if (*out >= 0) return GS_OK;
+  gs_cfg_node *n = gs_cfg_get(node, key);
+  return gs_cfg_fail(n ? n : node, err,
+                     "needs a carried quantity named '%s' (grid.carried; or set '%s')", name, key);
+}
+
+static int carried_create(gs_cfg_node *node, const gs_model *m, void **self, int kind,
+                          gs_error *err) {
+  carried_t *C = gs_calloc(1, sizeof *C, err);
+  if (!C) return GS_ENOMEM;
+  C->kind = kind;
+  C->liquid = C->gas = -1;
+  int rc = carried_key(node, m, "liquid", "liquid", &C->liquid, err);
+  if (!rc && kind == SPRAY) {
+    size_t nq = 0;
+    rc = gs_cfg_doubles_req(node, "rate", 1, &C->q, &nq, err);
+    if (!rc && nq != 1 && nq != m->grid.ncomp)
+      rc = gs_cfg_fail(gs_cfg_get(node, "rate"), err, "expected one rate or one per compartment (%zu)",
+                       m->grid.ncomp);
+    for (size_t i = 0; !rc && i < nq; i++)
+      if (!(C->q[i] >= 0)) rc = gs_cfg_fail(gs_cfg_get(node, "rate"), err, "rates must be >= 0");
+    if (!rc && nq == 1 && m->grid.ncomp > 1) {
+      double *all = realloc(C->q, m->grid.ncomp * sizeof(double));
+      if (!all) rc = GS_ENOMEM;
+      else {
+        C->q = all;
+        for (size_t i = 1; i < m->grid.ncomp; i++) C->q[i] = C->q[0];
+      }
+    }
+    if (!rc) rc = gs_cfg_double_range(node, "start", 0, 0, -HUGE_VAL, 0, HUGE_VAL, 0, &C->start, err);
+    if (!rc) rc = gs_cfg_double_range(node, "end", 0, HUGE_VAL, C->start, 1, HUGE_VAL, 0, &C->end, err);
+  } else if (!rc) {
+    rc = carried_key(node, m, "gas", "gas", &C->gas, err);
+    if (!rc) rc = gs_cfg_double_range(node, "rate", 1, 0, 0, 0, HUGE_VAL, 0, &C->k, err);
+    if (!rc) rc = gs_cfg_double_range(node, "min_porosity", 1, 0, 0, 0, 1, 1, &C->emin, err);
+  }
+  if (!rc) rc = gs_cfg_check_unused(node, err);
+  if (rc) {
+    carried_free(C);
+    return rc;
+  }
+  *self = C;
+  return GS_OK;
+}
+
+static void spray_rhs(const carried_t *C, const gs_model *m, double t, const double *y,
+                      double *dydt, double *dledger) {
+  const gs_grid *g = &m->grid;
+  if (t < C->start || t >= C->end) return;
+  for (size_t comp = 0; comp < g->ncomp; comp++) {
+    const double *N = y + comp * g->ncells;
+    double solid = 0;
+    for (size_t c = 0; c < g->ncells; c++) solid += N[c] * g->volume[c];
+    if (!(solid > 0) || C->q[comp] == 0.0) continue;
+    double per = C->q[comp] / solid, *dL = gs_model_carried(m, dydt, comp, C->liquid);
+    for (size_t c = 0; c < g->ncells; c++) dL[c] += per * N[c] * g->volume[c];
+    gs_model_ledger(m, dledger, comp)[g->dim + C->liquid] += C->q[comp];
+  }
+}
+
+static void consolidation_rhs(const carried_t *C, const gs_model *m, const double *y,
+                              double *dydt, double *dledger) {
+  const gs_grid *g = &m->grid;
+  const double target = C->emin / (1 - C->emin); /* pore volume per solid volume at e_min */
+  for (size_t comp = 0; comp < g->ncomp; comp++) {
+    const double *N = y + comp * g->ncells;
+    const double *L = gs_model_carried_c(m, y, comp, C->liquid);
+    const double *G = gs_model_carried_c(m, y, comp, C->gas);
+    double *dG = gs_model_carried(m, dydt, comp, C->gas), lost = 0;
+    for (size_t c = 0; c < g->ncells; c++) {
+      if (!(N[c] > 0) || !(G[c] > 0)) continue;
+      double s = g->volume[c], l = L[c] / N[c], gas = G[c] / N[c];
+      double excess = gas + l - target * s;
+      if (!(excess > 0) || !(s > 0)) continue;
+      double rate = C->k * (s + l + gas) * (1 - C->emin) / s * fmin(excess, gas) * N[c];
+      dG[c] -= rate;
+      lost += rate;
+    }
+    gs_model_ledger(m, dledger, comp)[g->dim + C->gas] -= lost;
+  }
+}
+
+static void carried_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
+                        double *dledger) {
+  const carried_t *C = self;
+  if (C->kind == SPRAY) spray_rhs(C, m, t, y, dydt, dledger);
+  else consolidation_rhs(C, m, y, dydt, dledger);
+}
+
+static int spray_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
+  return carried_create(n, m, s, SPRAY, e);
+}
+static int pore_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
+  return carried_create(n, m, s, PORE_CONSOLIDATION, e);
+}
+
+static double spray_switch(void *self, double t) {
+  const carried_t *C = self;
+  return gs_window_next_switch(C->start, C->end, t);
+}
+
+const gs_mech_type gs_mech_spray = {
+    "spray", "liquid sprayed onto the carried liquid, shared in proportion to solid volume (seed 000 eq. 5)",
+    spray_create, carried_rhs, NULL, carried_free, NULL, spray_switch};
+const gs_mech_type gs_mech_pore_consolidation = {
+    "pore_consolidation", "loss of carried gas down to a minimum porosity (seed 000 eq. 13, sign of a loss)",
+    pore_create, carried_rhs, NULL, carried_free, NULL, NULL};
