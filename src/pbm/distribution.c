@@ -7,7 +7,7 @@
 #include "gransim/distribution.h"
 #include "pbm/lever.h"
 
-enum { D_POINT, D_CELL, D_EXPONENTIAL, D_GAMMA };
+enum { D_POINT, D_CELL, D_EXPONENTIAL, D_GAMMA, D_CELLS };
 
 /* Marginal of one axis: cumulative number F and cumulative first moment M,
  * both normalised to total number 1. */
@@ -139,13 +139,52 @@ static int add_cell(gs_cfg_node *node, const gs_grid *g, double number, double *
   return rc;
 }
 
+/* cells: `indices` (a list of 1-based cell indices, one list per cell) and
+ * `weights` (one per cell, >= 0): `number` shared in proportion to weights
+ * (seed 000's inlet: given numbers on the diagonal of the solid bins). */
+static int add_cells(gs_cfg_node *node, const gs_grid *g, double number, double *dst,
+                     gs_error *err) {
+  gs_cfg_node *list = NULL;
+  double *w = NULL, total = 0;
+  size_t nw = 0;
+  int rc = gs_cfg_seq_req(node, "indices", &list, err);
+  if (!rc) rc = gs_cfg_doubles_req(node, "weights", 1, &w, &nw, err);
+  if (!rc && nw != gs_cfg_size(list))
+    rc = gs_cfg_fail(gs_cfg_get(node, "weights"), err, "expected one weight per entry of 'indices' (%zu), got %zu",
+                     gs_cfg_size(list), nw);
+  for (size_t i = 0; !rc && i < nw; i++) {
+    if (!(w[i] >= 0) || !isfinite(w[i])) rc = gs_cfg_fail(gs_cfg_get(node, "weights"), err, "weights must be finite and >= 0");
+    total += w[i];
+  }
+  if (!rc && !(total > 0)) rc = gs_cfg_fail(gs_cfg_get(node, "weights"), err, "weights must not all be 0");
+  for (size_t i = 0; !rc && i < nw; i++) {
+    gs_cfg_node *item = gs_cfg_item(list, i);
+    size_t idx[GS_MAX_DIM];
+    if (gs_cfg_kind_of(item) != GS_CFG_SEQ || gs_cfg_size(item) != (size_t)g->dim) {
+      rc = gs_cfg_fail(item, err, "expected a list of %d cell indices (one per axis)", g->dim);
+      break;
+    }
+    for (int k = 0; !rc && k < g->dim; k++) {
+      double v;
+      gs_cfg_node *e = gs_cfg_item(item, (size_t)k);
+      if (gs_cfg_node_double(e, &v, err) || v != floor(v) || v < 1 || v > (double)g->axis[k].n)
+        rc = gs_cfg_fail(e, err, "expected an integer cell index from 1 to %zu on axis '%s'",
+                         g->axis[k].n, g->axis[k].name);
+      else idx[k] = (size_t)v - 1;
+    }
+    if (!rc) dst[gs_grid_index(g, idx)] += number * w[i] / total;
+  }
+  free(w);
+  return rc;
+}
+
 int gs_distribution_add(gs_cfg_node *node, const gs_grid *g, double *dst, int keep_open,
                         gs_error *err) {
-  static const char *const types[] = {"point", "cell", "exponential", "gamma", NULL};
+  static const char *const types[] = {"point", "cell", "exponential", "gamma", "cells", NULL};
   int type = 0;
   double number = 0, coverage = 0;
   int rc = gs_cfg_require_kind(node, GS_CFG_MAP, err);
-  if (!rc && !gs_cfg_get(node, "type")) rc = gs_cfg_fail(node, err, "missing key 'type' (point, cell, exponential or gamma)");
+  if (!rc && !gs_cfg_get(node, "type")) rc = gs_cfg_fail(node, err, "missing key 'type' (point, cell, cells, exponential or gamma)");
   if (!rc) rc = gs_cfg_enum_opt(node, "type", types, 0, &type, err);
   if (!rc) rc = gs_cfg_double_range(node, "number", 1, 0, 0, 1, HUGE_VAL, 0, &number, err);
   if (!rc) rc = gs_cfg_double_range(node, "coverage", 0, 1e-6, 0, 0, 1, 0, &coverage, err);
@@ -153,6 +192,7 @@ int gs_distribution_add(gs_cfg_node *node, const gs_grid *g, double *dst, int ke
   switch (type) {
   case D_POINT: rc = add_point(node, g, number, dst, err); break;
   case D_CELL: rc = add_cell(node, g, number, dst, err); break;
+  case D_CELLS: rc = add_cells(node, g, number, dst, err); break;
   default: rc = add_product(node, g, number, type, coverage, dst, err); break;
   }
   if (!rc && !keep_open) rc = gs_cfg_check_unused(node, err);

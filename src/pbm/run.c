@@ -90,7 +90,10 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
                           "solver.rtol/atol or check the rates",
                           t, where, Y[i], -Y[i] / ymax, ymax, c->checks.negative_tolerance);
     }
-  for (int q = 0; q < m->ncarried; q++) { /* carried volumes: same rule, per quantity */
+  /* carried volumes: the same rule per quantity; the absolute floor is that of
+   * the numbers in volume units (the integrator's scale for carried totals) */
+  const double qfloor = fmax(1e-30, c->checks.negative_floor * (m->ncarried ? c->abs_scale[m->nnum] : 1.0));
+  for (int q = 0; q < m->ncarried; q++) {
     double qmax = 0;
     for (size_t comp = 0; comp < g->ncomp; comp++) {
       const double *Q = gs_model_carried_c(m, Y, comp, q);
@@ -99,7 +102,7 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
     for (size_t comp = 0; comp < g->ncomp; comp++) {
       const double *Q = gs_model_carried_c(m, Y, comp, q);
       for (size_t cell = 0; cell < g->ncells; cell++)
-        if (Q[cell] < -c->checks.negative_tolerance * qmax - 1e-30) {
+        if (Q[cell] < -c->checks.negative_tolerance * qmax - qfloor) {
           describe_cell(m, comp, cell, where, sizeof where);
           return gs_error_set(err, GS_ENUMERIC,
                               "numerical failure at t = %g: %s: carried %s %g is negative beyond "
