@@ -24,7 +24,8 @@ static void usage(FILE *fp) {
           "                         distributions and integrators\n"
           "  validate [--out FILE]  grid-refinement study against analytical solutions;\n"
           "                         writes a markdown report (default docs/validation.md)\n"
-          "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM)\n\n"
+          "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM)\n"
+          "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n\n"
           "options: --help, --version; `gransim <command> --help` for details.\n"
           "Case file format: docs/case-files.md\n",
           GRANSIM_VERSION);
@@ -144,6 +145,7 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "list")) return cmd_list();
   if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 2, argv + 2);
   if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 2, argv + 2);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;
