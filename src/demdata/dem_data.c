@@ -50,19 +50,19 @@ static double scaled_duration(double c) {
   return HUGE_VAL;
 }
 
+/* t_c / (m*^2/(R* E*^2 v))^(1/5) for restitution e (no state: safe from any thread) */
 static double duration_factor(double e) {
-  static double cached_e = -1, cached_f = 0;
-  if (e == cached_e) return cached_f;
   double c = (e > 0 && e < 1) ? gs_dem_damping_coefficient(e, GS_DEM_DAMPING_LIGGGHTS) : 0;
-  double f = c == 0 ? 2.868 : scaled_duration(c) * pow(0.75, 0.4);
-  cached_e = e;
-  cached_f = f;
-  return f;
+  return c == 0 ? 2.868 : scaled_duration(c) * pow(0.75, 0.4);
+}
+
+static double hertz_time(double factor, double meff, double reff, double estar, double v) {
+  if (!(meff > 0 && reff > 0 && estar > 0 && v > 0)) return NAN;
+  return factor * pow(meff * meff / (reff * estar * estar * v), 0.2);
 }
 
 double gs_dem_hertz_contact_time(double meff, double reff, double estar, double v, double e) {
-  if (!(meff > 0 && reff > 0 && estar > 0 && v > 0)) return NAN;
-  return duration_factor(e) * pow(meff * meff / (reff * estar * estar * v), 0.2);
+  return hertz_time(duration_factor(e), meff, reff, estar, v);
 }
 
 /* ---- files of a directory ------------------------------------------------- */
@@ -520,13 +520,14 @@ int gs_dem_data_read(const char *dir, const gs_dem_options *opt_in, gs_dem_data 
     double estar = 1 / f;
     double fw = (1 - opt.poisson * opt.poisson) / opt.youngs +
                 (opt.wall_youngs > 0 ? (1 - opt.wall_poisson * opt.wall_poisson) / opt.wall_youngs : 0);
+    double factor = duration_factor(opt.restitution);
     for (size_t i = 0; i < n; i++) {
       double ri = out->diameter[i] / 2, mi = opt.density * 4.0 / 3.0 * M_PI * ri * ri * ri;
-      out->wall_contact_time[i] = gs_dem_hertz_contact_time(mi, ri, 1 / fw, out->v_wall, opt.restitution);
+      out->wall_contact_time[i] = hertz_time(factor, mi, ri, 1 / fw, out->v_wall);
       for (size_t j = 0; j < n; j++) {
         double rj = out->diameter[j] / 2, mj = opt.density * 4.0 / 3.0 * M_PI * rj * rj * rj;
         out->pair_contact_time[i * n + j] =
-            gs_dem_hertz_contact_time(mi * mj / (mi + mj), ri * rj / (ri + rj), estar, out->v_pair, opt.restitution);
+            hertz_time(factor, mi * mj / (mi + mj), ri * rj / (ri + rj), estar, out->v_pair);
       }
     }
     if (!(out->v_pair > 0) || !(out->v_wall > 0)) {
