@@ -137,6 +137,10 @@ int gs_dem_insert(gs_dem *d, const gs_dem_region *reg, const gs_dem_psd *psd, lo
 int gs_dem_touches_wall(gs_dem *d, const double x[3], double r);
 
 /* ---- running ------------------------------------------------------------ */
+/* Use OpenMP threads only from n particles on (default 20000): below that a
+ * step takes well under a millisecond and the threads' synchronisation costs
+ * more than it saves, much more on a machine shared with other work. */
+void gs_dem_set_parallel_min(gs_dem *d, size_t n);
 /* Advance nsteps time steps.  Fails on non-finite positions. */
 int gs_dem_run(gs_dem *d, long nsteps, gs_error *err);
 /* Remove every particle whose centre satisfies pred (applied at list rebuilds,

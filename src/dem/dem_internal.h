@@ -112,6 +112,7 @@ struct gs_dem {
   size_t perm_cap;
   /* thread force buffers (threads 1..nt-1; thread 0 writes the particle arrays) */
   int nthreads;
+  size_t par_min; /* fewest particles for which the loops use threads */
   double *tbuf;
   size_t tbuf_cap;
   /* counters */

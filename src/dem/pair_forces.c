@@ -31,7 +31,7 @@ void gs_dem_pair_forces(gs_dem *d) {
   const size_t n = p->n;
   if (!n) return;
   int nt = omp_get_max_threads();
-  if (nt > 1 && (n < 2000 || ensure_buffers(d, nt))) nt = 1; /* small systems: not worth it */
+  if (nt > 1 && (n < d->par_min || ensure_buffers(d, nt))) nt = 1;
   const int ncl = d->prm.nclass;
   const size_t ntypes = d->ntypes;
   const double dt = d->prm.dt;

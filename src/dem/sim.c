@@ -41,8 +41,11 @@ gs_dem *gs_dem_alloc(const gs_dem_params *p, gs_error *err) {
     return gs_error_set(err, GS_ENOMEM, "out of memory"), NULL;
   }
   d->need_rebuild = 1;
+  d->par_min = 20000;
   return d;
 }
+
+void gs_dem_set_parallel_min(gs_dem *d, size_t n) { d->par_min = n; }
 
 void gs_dem_free(gs_dem *d) {
   if (!d) return;
@@ -244,8 +247,16 @@ int gs_dem_run(gs_dem *d, long nsteps, gs_error *err) {
   const double lim = 0.25 * d->prm.skin * d->prm.skin;
   const double g0 = d->prm.gravity[0], g1 = d->prm.gravity[1], g2 = d->prm.gravity[2];
   if (d->step == 0 && nsteps >= 0 && gs_dem_needs_rebuild(d)) {
-    /* the very first step needs the initial contact forces for its first kick */
+    /* the very first step needs the initial contact forces for its first kick
+     * (this may happen twice at t = 0, e.g. a feed after the fill: start over) */
     if ((rc = gs_dem_rebuild(d, err))) return rc;
+    gs_dem_particles *p = &d->p;
+    for (size_t i = 0; i < p->n; i++) {
+      p->fx[i] = p->m[i] * g0;
+      p->fy[i] = p->m[i] * g1;
+      p->fz[i] = p->m[i] * g2;
+      p->tx[i] = p->ty[i] = p->tz[i] = 0;
+    }
     compute_forces(d);
   }
   for (long s = 0; s < nsteps; s++) {
@@ -253,7 +264,7 @@ int gs_dem_run(gs_dem *d, long nsteps, gs_error *err) {
     size_t n = p->n;
     double maxd2 = 0;
     /* first half kick + drift; forces restart from gravity */
-#pragma omp parallel for reduction(max : maxd2) schedule(static) if (n > 4000)
+#pragma omp parallel for reduction(max : maxd2) schedule(static) if (n >= d->par_min)
     for (size_t i = 0; i < n; i++) {
       const double im = p->invm[i], iI = p->invI[i];
       p->vx[i] += hdt * p->fx[i] * im;
@@ -290,7 +301,7 @@ int gs_dem_run(gs_dem *d, long nsteps, gs_error *err) {
     }
     compute_forces(d);
     int bad = 0;
-#pragma omp parallel for reduction(| : bad) schedule(static) if (n > 4000)
+#pragma omp parallel for reduction(| : bad) schedule(static) if (n >= d->par_min)
     for (size_t i = 0; i < n; i++) {
       const double im = p->invm[i], iI = p->invI[i];
       p->vx[i] += hdt * p->fx[i] * im;

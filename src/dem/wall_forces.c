@@ -184,7 +184,7 @@ void gs_dem_wall_forces(gs_dem *d) {
   }
   const int ncl = d->prm.nclass;
   const size_t nctr = nw * (size_t)ncl;
-  int nt = n < 2000 ? 1 : omp_get_max_threads();
+  int nt = n < d->par_min ? 1 : omp_get_max_threads();
   /* per thread: impacts, vn, vn2, vt sums, histogram, wall force+torque */
   const size_t stride = nctr * (4 + GS_DEM_IMPACT_BINS) + 6 * nw;
   double *acc = calloc((size_t)nt * stride, sizeof(double));
