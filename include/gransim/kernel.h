@@ -26,6 +26,9 @@ typedef struct gs_kernel_type {
   /* out[b - b0] = beta(cell a, cell b) in compartment comp, for b in [b0, b1). */
   void (*row)(const void *self, size_t comp, size_t a, size_t b0, size_t b1, double *out);
   void (*free)(void *self);
+  /* Optional: 1 if beta differs between compartments (NULL: it does not), so
+   * callers keep one table for all compartments when it does not. */
+  int (*per_compartment)(const void *self);
 } gs_kernel_type;
 
 typedef struct gs_kernel {

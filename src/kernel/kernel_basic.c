@@ -66,8 +66,8 @@ static void product_row(const void *self, size_t comp, size_t a, size_t b0, size
 }
 
 const gs_kernel_type gs_kernel_constant = {"constant", "beta = beta0", constant_create,
-                                           constant_row, basic_free};
+                                           constant_row, basic_free, NULL};
 const gs_kernel_type gs_kernel_sum = {"sum", "beta = beta0 (u + v) (Golovin)", sized_create,
-                                      sum_row, basic_free};
+                                      sum_row, basic_free, NULL};
 const gs_kernel_type gs_kernel_product = {"product", "beta = beta0 u v", sized_create,
-                                          product_row, basic_free};
+                                          product_row, basic_free, NULL};

@@ -21,6 +21,7 @@
 typedef struct {
   double beta0;
   size_t nclass, ncomp, ncells;
+  int per_comp;    /* one file per compartment */
   double *table;   /* ncomp * nclass * nclass */
   size_t *cls;     /* per cell: class index */
 } table_kernel;
@@ -132,6 +133,7 @@ static int table_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
     rc = gs_cfg_fail(files, err, "expected one file, or one per compartment (%zu)", g->ncomp);
   k->ncomp = g->ncomp;
   k->ncells = g->ncells;
+  k->per_comp = nfiles > 1;
   for (size_t f = 0; !rc && f < nfiles; f++) {
     gs_cfg_node *fn = gs_cfg_kind_of(files) == GS_CFG_SEQ ? gs_cfg_item(files, f) : files;
     const char *name = gs_cfg_scalar(fn);
@@ -180,5 +182,9 @@ static void table_row(const void *self, size_t comp, size_t a, size_t b0, size_t
   for (size_t b = b0; b < b1; b++) out[b - b0] = k->beta0 * row[k->cls[b]];
 }
 
+static int table_per_compartment(const void *self) {
+  return ((const table_kernel *)self)->per_comp;
+}
+
 const gs_kernel_type gs_kernel_table = {"table", "beta0 * C[class][class'] from a CSV file (DEM collision frequencies)",
-                                        table_create, table_row, table_free};
+                                        table_create, table_row, table_free, table_per_compartment};

@@ -54,8 +54,8 @@ typedef struct {
   size_t *fp_lo[3];      /* fixed pivot: lower node times stride, >= big if above the last pivot */
   double *fp_w[3];       /* fixed pivot: weight of the upper node */
   double *fp_excess[3];  /* fixed pivot: sum minus last pivot where clamped, else 0 */
-  double *table;         /* packed kernel, ncomp * ncells*(ncells+1)/2, or NULL */
-  size_t table_size;
+  double *table;         /* packed kernel, table_comps * ncells*(ncells+1)/2, or NULL */
+  size_t table_size, table_comps; /* table_comps: ncomp, or 1 when beta is the same in all */
   double negligible;     /* cells holding less than this share of number and volume are skipped */
   size_t nrows;          /* rows along the last padded axis: n[0] * n[1] */
   size_t *span;          /* per compartment and row: [lo, hi) of the cells taking part */
@@ -138,12 +138,14 @@ static int build_axis_maps(agg_t *A, const gs_grid *g, gs_error *err) {
 
 static int build_kernel_table(agg_t *A, double limit_mb, gs_error *err) {
   size_t per = A->ncells * (A->ncells + 1) / 2;
-  double mb = (double)(per * A->ncomp) * sizeof(double) / 1048576.0;
+  const gs_kernel_type *kt = A->kernel.type;
+  A->table_comps = kt->per_compartment && kt->per_compartment(A->kernel.self) ? A->ncomp : 1;
+  double mb = (double)(per * A->table_comps) * sizeof(double) / 1048576.0;
   if (mb > limit_mb) return GS_OK; /* evaluate rows on the fly */
   A->table_size = per;
-  A->table = gs_malloc(per * A->ncomp * sizeof(double), err);
+  A->table = gs_malloc(per * A->table_comps * sizeof(double), err);
   if (!A->table) return GS_ENOMEM;
-  for (size_t c = 0; c < A->ncomp; c++)
+  for (size_t c = 0; c < A->table_comps; c++)
 #pragma omp parallel for schedule(dynamic, 16)
     for (size_t a = 0; a < A->ncells; a++)
       A->kernel.type->row(A->kernel.self, c, a, a, A->ncells,
@@ -212,10 +214,11 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   if (!rc) {
     A->nthreads = omp_get_max_threads();
     A->nc = m->ncarried;
-    A->pcar = gs_calloc((size_t)A->nc * A->ncells + 1, sizeof(double), err);
+    const size_t nslot = (size_t)omp_get_max_threads();
+    A->pcar = gs_calloc(nslot * ((size_t)A->nc * A->ncells + 1), sizeof(double), err);
     A->wet_ok = gs_calloc(A->ncomp * A->ncells, sizeof(double), err);
     A->wet_t = gs_calloc(A->ncomp, sizeof(double), err);
-    A->masked = gs_calloc(A->ncells, sizeof(double), err);
+    A->masked = gs_calloc(nslot * A->ncells, sizeof(double), err);
     if (!A->pcar || !A->wet_ok || !A->wet_t || !A->masked) rc = GS_ENOMEM;
     for (size_t c = 0; !rc && c < A->ncomp; c++) A->wet_t[c] = NAN; /* not chosen yet */
     A->nrows = A->n[0] * A->n[1];
@@ -239,6 +242,7 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
 typedef struct {
   double *death, *births, *vol[3], *fp, *row, *wrow;
   double *cvol[GS_MAX_CARRIED]; /* pooled carried loads per target cell */
+  const double *pcar;           /* loads per particle of the compartment (read only) */
   double lost_n, lost_v[3], lost_c[GS_MAX_CARRIED];
 } acc_t;
 
@@ -274,7 +278,8 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
   const size_t a0 = a / (n1 * n2), a1 = (a / n2) % n1, a2 = a % n2;
   /* kernel values against b >= a: from the table, or evaluated below per row segment */
   const double *restrict beta =
-      A->table ? A->table + comp * A->table_size + packed_offset(a, ncells) - a : acc->row - a;
+      A->table ? A->table + (A->table_comps > 1 ? comp : 0) * A->table_size + packed_offset(a, ncells) - a
+               : acc->row - a;
   const size_t *restrict span = A->span + comp * 2 * A->nrows;
   const int off = 3 - DIM;
   double *restrict death = acc->death, *restrict births = acc->births, *restrict fp = acc->fp;
@@ -285,7 +290,7 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
   const double xa0 = x0[a], xa1 = DIM > 1 ? x1[a] : 0, xa2 = DIM > 2 ? x2[a] : 0;
   /* carried loads per particle (cell average only) */
   const int NC = FP ? 0 : A->nc;
-  const double *restrict p0 = A->pcar, *restrict p1 = A->pcar + ncells;
+  const double *restrict p0 = acc->pcar, *restrict p1 = acc->pcar + ncells;
   const double pa0 = NC > 0 ? p0[a] : 0, pa1 = NC > 1 ? p1[a] : 0;
   double *restrict c0 = acc->cvol[0], *restrict c1 = acc->cvol[1];
   double lostq0 = 0, lostq1 = 0;
@@ -466,8 +471,11 @@ static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
 }
 
 /* Pair loop of one compartment; result in acc[0]. */
+/* slot < 0: this compartment alone, split over the OpenMP team (result in
+ * acc[0]); slot >= 0: called by thread `slot` of a team that splits the
+ * compartments, so the loop is serial (result in acc[slot]). */
 static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
-                              const gs_model *m, acc_t *acc) {
+                              const gs_model *m, acc_t *acc, int slot, const double *pcar) {
   /* The participating cells are chosen once per time value under an
    * integrator, and kept while held (Jacobian-vector difference quotients,
    * whose perturbed state has tolerance-sized noise in every cell): Newton
@@ -478,6 +486,15 @@ static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
     A->span_t[comp] = t;
   }
   const size_t *span = A->span + comp * 2 * A->nrows;
+  if (slot >= 0) {
+    acc[slot] = thread_acc(A, slot);
+    acc[slot].pcar = pcar;
+    for (size_t a = 0; a < A->ncells; a++) {
+      const size_t r = a / A->n[2], i = a % A->n[2];
+      if (N[a] != 0.0 && i >= span[2 * r] && i < span[2 * r + 1]) pairs_of(A, comp, N, a, &acc[slot]);
+    }
+    return;
+  }
   int nth = 1;
   /* small grids: a parallel region costs more than the pairs themselves */
 #pragma omp parallel if (A->ncells > 400)
@@ -486,6 +503,7 @@ static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
     nth = omp_get_num_threads();
     int tid = omp_get_thread_num();
     acc[tid] = thread_acc(A, tid);
+    acc[tid].pcar = pcar;
 #pragma omp for schedule(dynamic, 8)
     for (size_t a = 0; a < A->ncells; a++) {
       const size_t r = a / A->n[2], i = a % A->n[2];
@@ -521,12 +539,28 @@ static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double 
   return placed;
 }
 
-/* Loads per particle of compartment comp into A->pcar. */
-static void carried_loads(agg_t *A, const gs_model *m, size_t comp, const double *y) {
+/* Work of one evaluator: thread `slot` of a team that splits the
+ * compartments, or -1 for the whole team on one compartment (slot 0). */
+typedef struct {
+  int slot, res;  /* res: the acc entry and work slot holding the results */
+  double *pcar;   /* nc * ncells loads per particle */
+  double *masked; /* ncells */
+} evaluator;
+
+static evaluator evaluator_for(const agg_t *A, int slot) {
+  int res = slot < 0 ? 0 : slot;
+  evaluator e = {slot, res, A->pcar + (size_t)res * ((size_t)A->nc * A->ncells + 1),
+                 A->masked + (size_t)res * A->ncells};
+  return e;
+}
+
+/* Loads per particle of compartment comp. */
+static void carried_loads(const agg_t *A, const gs_model *m, size_t comp, const double *y,
+                          double *pcar) {
   const double *N = y + comp * A->ncells;
   for (int q = 0; q < A->nc; q++) {
     const double *Q = gs_model_carried_c(m, y, comp, q);
-    double *p = A->pcar + (size_t)q * A->ncells;
+    double *p = pcar + (size_t)q * A->ncells;
     for (size_t c = 0; c < A->ncells; c++) p[c] = N[c] > 0 ? Q[c] / N[c] : 0.0;
   }
 }
@@ -552,51 +586,67 @@ static const double *wet_cells(agg_t *A, const gs_model *m, size_t comp, double 
 
 /* One pass of pairs over the numbers Nv, its rates added with sign. */
 static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const double *Nv,
-                 double sign, const double *y, double *dydt, double *dledger, double *born,
-                 double *dead, acc_t *acc) {
-  compartment_pairs(A, comp, t, Nv, m, acc);
+                 double sign, double *dydt, double *dledger, double *born, double *dead,
+                 acc_t *acc, const evaluator *ev) {
+  compartment_pairs(A, comp, t, Nv, m, acc, ev->slot, ev->pcar);
+  acc_t *r = &acc[ev->res];
   double *d = dydt ? dydt + comp * A->ncells : NULL;
   for (size_t c = 0; c < A->ncells; c++) {
-    *dead += sign * acc[0].death[c];
-    if (d) d[c] -= sign * acc[0].death[c];
+    *dead += sign * r->death[c];
+    if (d) d[c] -= sign * r->death[c];
   }
   double *qdst[GS_MAX_CARRIED] = {NULL, NULL};
   for (int q = 0; d && q < A->nc; q++) {
     qdst[q] = gs_model_carried(m, dydt, comp, q);
-    const double *p = A->pcar + (size_t)q * A->ncells;
-    for (size_t c = 0; c < A->ncells; c++) qdst[q][c] -= sign * acc[0].death[c] * p[c];
+    const double *p = ev->pcar + (size_t)q * A->ncells;
+    for (size_t c = 0; c < A->ncells; c++) qdst[q][c] -= sign * r->death[c] * p[c];
   }
-  double *scratch = d ? d : acc[0].row; /* number_rates: place into a scratch row */
+  double *scratch = d ? d : r->row; /* number_rates: place into a scratch row */
   if (!d) memset(scratch, 0, A->ncells * sizeof(double));
-  *born += place_births(A, &m->grid, &acc[0], sign, scratch, d ? qdst : NULL);
+  *born += place_births(A, &m->grid, r, sign, scratch, d ? qdst : NULL);
   if (dledger) {
     double *lost = gs_model_ledger(m, dledger, comp) + m->nvol;
-    for (int k = 0; k < A->dim; k++) lost[k] += sign * acc[0].lost_v[A->off + k];
-    for (int q = 0; q < A->nc; q++) lost[A->dim + q] += sign * acc[0].lost_c[q];
+    for (int k = 0; k < A->dim; k++) lost[k] += sign * r->lost_v[A->off + k];
+    for (int q = 0; q < A->nc; q++) lost[A->dim + q] += sign * r->lost_c[q];
   }
-  (void)y;
 }
 
+static void compartment_rates(agg_t *A, const gs_model *m, double t, const double *y,
+                              double *dydt, double *dledger, double *birth, double *death,
+                              size_t comp, acc_t *acc, int slot) {
+  const evaluator ev = evaluator_for(A, slot);
+  const double *N = y + comp * A->ncells;
+  double born = 0, dead = 0;
+  carried_loads(A, m, comp, y, ev.pcar);
+  if (A->wet == WET_OFF) {
+    pass(A, m, comp, t, N, 1.0, dydt, dledger, &born, &dead, acc, &ev);
+  } else {
+    const double *psi = wet_cells(A, m, comp, t, y);
+    /* both: pair weight psi_a psi_b, so the numbers psi N; either:
+     * 1 - (1 - psi_a)(1 - psi_b), all pairs minus those of (1 - psi) N */
+    const int both = A->wet == WET_BOTH;
+    for (size_t c = 0; c < A->ncells; c++) ev.masked[c] = (both ? psi[c] : 1.0 - psi[c]) * N[c];
+    if (!both) pass(A, m, comp, t, N, 1.0, dydt, dledger, &born, &dead, acc, &ev);
+    pass(A, m, comp, t, ev.masked, both ? 1.0 : -1.0, dydt, dledger, &born, &dead, acc, &ev);
+  }
+  if (birth) birth[comp] = born;
+  if (death) death[comp] = dead;
+}
+
+/* Several compartments and threads: each thread takes whole compartments
+ * (one parallel region per evaluation instead of one per compartment and
+ * pass; compartments write disjoint parts of dydt and of the ledger).  One
+ * compartment: the threads split its pair loop. */
 static void agg_rates(agg_t *A, const gs_model *m, double t, const double *y, double *dydt,
                       double *dledger, double *birth, double *death) {
   acc_t acc[A->nthreads > 0 ? A->nthreads : 1];
-  for (size_t comp = 0; comp < A->ncomp; comp++) {
-    const double *N = y + comp * A->ncells;
-    double born = 0, dead = 0;
-    carried_loads(A, m, comp, y);
-    if (A->wet == WET_OFF) {
-      pass(A, m, comp, t, N, 1.0, y, dydt, dledger, &born, &dead, acc);
-    } else {
-      const double *psi = wet_cells(A, m, comp, t, y);
-      /* both: pair weight psi_a psi_b, so the numbers psi N; either:
-       * 1 - (1 - psi_a)(1 - psi_b), all pairs minus those of (1 - psi) N */
-      const int both = A->wet == WET_BOTH;
-      for (size_t c = 0; c < A->ncells; c++) A->masked[c] = (both ? psi[c] : 1.0 - psi[c]) * N[c];
-      if (!both) pass(A, m, comp, t, N, 1.0, y, dydt, dledger, &born, &dead, acc);
-      pass(A, m, comp, t, A->masked, both ? 1.0 : -1.0, y, dydt, dledger, &born, &dead, acc);
-    }
-    if (birth) birth[comp] = born;
-    if (death) death[comp] = dead;
+  if (A->ncomp > 1 && A->nthreads > 1 && A->ncells * A->ncomp > 400) {
+#pragma omp parallel for schedule(dynamic, 1)
+    for (size_t comp = 0; comp < A->ncomp; comp++)
+      compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, omp_get_thread_num());
+  } else {
+    for (size_t comp = 0; comp < A->ncomp; comp++)
+      compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, -1);
   }
 }
 
