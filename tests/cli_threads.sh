@@ -51,4 +51,10 @@ else
   echo "cli_threads: h5dump not found (install hdf5-tools); compared summary.csv only" >&2
 fi
 
+# The seed-000 granulator (4 compartments, carried liquid and gas, wet switch):
+# threads take whole compartments; the results must not depend on their number.
+run_rc 0 "$BIN" run "$SRC/examples/corimix-continuous.yaml" --out "$WORK/c1" --threads 1 --quiet
+run_rc 0 "$BIN" run "$SRC/examples/corimix-continuous.yaml" --out "$WORK/c2" --threads 2 --quiet
+csv_rows_close "$WORK/c1/summary.csv" "$WORK/c2/summary.csv" 1e-12
+
 echo "cli_threads: ok"
