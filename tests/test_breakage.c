@@ -10,6 +10,7 @@
  * ledger as negative loss), ~1e-9 of M1 on these grids.  The distribution
  * and non-closing moments carry the discretisation error; their tolerances
  * are ~2-3x the errors measured when they were set (stated below). */
+#include <gsl/gsl_cdf.h>
 #include <gsl/gsl_integration.h>
 #include <omp.h>
 
@@ -247,10 +248,71 @@ static void test_daughters_run(void) {
       }
 }
 
+
+/* ---- DEM impact selection (seed 000 eq. 12) ---------------------------------------------- */
+/* S = scale f(class) P(U > U_break(d)) with U_break = (2 St/rho)(9/8)((1-e)^2/e^2)(9/16)(mu/d):
+ * a table with two classes written here, the rate of each cell (from the
+ * death rate of a one-cell state) against the formula evaluated here with
+ * GSL's lognormal CDF, and cells below min_volume that do not break. */
+static void test_dem_impact(void) {
+  const char *table = "/tmp/gransim-test-impacts.csv";
+  FILE *fp = fopen(table, "w");
+  if (!fp) { CHECK(!"cannot write the impact table"); return; }
+  fprintf(fp, "# two classes of particle volume\nedges, 1e-15, 1e-12, 1e-9\n800, 1200\n0.5, 1.2\n1.5, 0.8\n");
+  fclose(fp);
+  char *yaml = tl_fmt("grid: {axes: [{name: v, type: geometric, min: 1.0e-15, max: 1.0e-9, cells: 12}]}\n"
+                      "mechanisms:\n  - type: breakage\n    selection: {type: dem_impact, file: %s, scale: 1.0e-4,"
+                      " min_volume: 2.0e-15, stokes: {critical: 0.2, density: 476, porosity: 0.5, viscosity: 0.05}}\n"
+                      "    daughters: {type: halves}\noutput: {end: 1}\n", table);
+  gs_case c;
+  if (tl_case(yaml, &c)) { free(yaml); return; }
+  gs_model *m = &c.model;
+  const gs_grid *g = &m->grid;
+  double *y = calloc(m->nstate, sizeof *y), worst = 0;
+  const double factor = 2 * 0.2 / 476 * 9.0 / 8.0 * 1.0 * 9.0 / 16.0 * 0.05; /* (1-e)^2/e^2 = 1 */
+  int zero_ok = 1;
+  for (size_t k = 0; k < g->ncells; k++) {
+    memset(y, 0, m->nstate * sizeof *y);
+    y[k] = 3.0;
+    double birth, death;
+    m->mech[0].type->number_rates(m->mech[0].self, m, 0, y, &birth, &death);
+    double v = g->x[k], d = cbrt(6 * v / M_PI);
+    int cls = v >= 1e-12;
+    double want = v < 2e-15 ? 0.0
+                            : 3.0 * 1e-4 * (cls ? 1200 : 800) *
+                                  gsl_cdf_lognormal_Q(factor / d, cls ? 1.2 : 0.5, cls ? 0.8 : 1.5);
+    if (want == 0.0) zero_ok &= death == 0.0;
+    else worst = fmax(worst, fabs(death - want) / want);
+  }
+  printf("dem_impact selection: worst relative error of S over %zu cells %.3g; cells below min_volume %s\n",
+         g->ncells, worst, zero_ok ? "do not break" : "BREAK");
+  CHECK(worst < 1e-13);
+  CHECK(zero_ok);
+  free(y);
+  free(yaml);
+  gs_case_free(&c);
+  /* a table with a missing row is refused, naming the file */
+  fp = fopen(table, "w");
+  if (fp) {
+    fprintf(fp, "edges, 1e-15, 1e-12, 1e-9\n800, 1200\n0.5, 1.2\n");
+    fclose(fp);
+  }
+  yaml = tl_fmt("grid: {axes: [{name: v, type: geometric, min: 1.0e-15, max: 1.0e-9, cells: 12}]}\n"
+                "mechanisms:\n  - {type: breakage, selection: {type: dem_impact, file: %s, u_break: 1},"
+                " daughters: {type: halves}}\noutput: {end: 1}\n", table);
+  gs_error err;
+  int rc = tl_case_try(yaml, "t.yaml", &c, &err);
+  printf("dem_impact with a short table: %s\n", err.msg);
+  CHECK(rc == GS_EINPUT && strstr(err.msg, table) && strstr(err.msg, "rows, expected 3"));
+  free(yaml);
+  remove(table);
+}
+
 int main(void) {
   omp_set_num_threads(1); /* small 1-D/2-D grids: threads only add overhead */
   test_t4();
   test_t5();
   test_daughters_run();
+  test_dem_impact();
   TEST_EXIT();
 }

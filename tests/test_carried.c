@@ -69,6 +69,47 @@ static void check_agg(const char *mech, const char *what, tl_rng *r, double wet_
   gs_case_free(&c);
 }
 
+/* Breakage with loads: number ratio 2 (binary) and every carried volume
+ * conserved (the parent's load is shared among its fragments). */
+static void test_breakage(void) {
+  char *yaml = tl_fmt("%smechanisms:\n  - {type: breakage, selection: {type: power, s0: 1.0e10, exponent: 1},"
+                      " daughters: {type: uniform}}\noutput: {end: 1}\n", tl_fmt(grid16, 1));
+  gs_case c;
+  if (tl_case(yaml, &c)) return;
+  gs_model *m = &c.model;
+  const gs_grid *g = &m->grid;
+  const size_t n = g->ncells;
+  double *y = calloc(m->nstate, sizeof *y), *d = calloc(m->nstate, sizeof *d);
+  double *dl = calloc(m->nledger, sizeof *dl), birth, death;
+  tl_rng r = {99};
+  for (size_t i = 0; i < n; i++) {
+    y[i] = 1e6 * tl_uniform(&r);
+    gs_model_carried(m, y, 0, 0)[i] = 0.2 * y[i] * g->volume[i];
+    gs_model_carried(m, y, 0, 1)[i] = 0.6 * y[i] * g->volume[i] * tl_uniform(&r);
+  }
+  gs_model_rhs(m, 0, y, d, dl);
+  m->mech[0].type->number_rates(m->mech[0].self, m, 0, y, &birth, &death);
+  double worst = 0;
+  for (int k = 0; k < m->nvol; k++) {
+    double change = 0, scale = 0;
+    for (size_t i = 0; i < n; i++) {
+      double dv = k < g->dim ? d[i] * g->x[i * 2 + (size_t)k] : gs_model_carried(m, d, 0, k - g->dim)[i];
+      change += dv;
+      scale += fabs(dv);
+    }
+    if (k >= g->dim) worst = fmax(worst, fabs(change) / scale); /* axes: clamping below the first pivot */
+  }
+  printf("carried, breakage: birth/death %.17g, worst carried change %.3g of the turnover\n",
+         birth / death, worst);
+  CHECK(fabs(birth / death - 2.0) < 1e-13);
+  CHECK(worst < 1e-13);
+  free(y);
+  free(d);
+  free(dl);
+  free(yaml);
+  gs_case_free(&c);
+}
+
 static void test_aggregation(void) {
   tl_rng r = {2024};
   double turnover[2];
@@ -191,6 +232,7 @@ static void test_pore_consolidation(void) {
 int main(void) {
   omp_set_num_threads(1);
   test_aggregation();
+  test_breakage();
   test_spray_and_transfer();
   test_pore_consolidation();
   TEST_EXIT();

@@ -94,6 +94,11 @@ double gs_dem_break_probability(const gs_dem_data *d, size_t cls, double u_break
 /* Write C as a kernel table CSV readable by src/kernel/kernel_table.c (class edges by diameter, or by
  * volume: d->edges if set, else midpoints between increasing class diameters). */
 int gs_dem_data_write_table(const gs_dem_data *d, const char *path, gs_error *err);
+/* Write the wall-impact table read by the `dem_impact` selection function:
+ * the class edges, then one row each of impacts per particle per second, mu
+ * and sigma of the lognormal impact-speed fits (pooled fit for classes with
+ * fewer than 2 samples). */
+int gs_dem_data_write_impacts(const gs_dem_data *d, const char *path, gs_error *err);
 void gs_dem_data_free(gs_dem_data *d);
 
 /* Duration of a head-on Hertz contact (s): effective mass meff (kg), radius reff (m), modulus estar

@@ -46,7 +46,8 @@ const gs_kernel_type *const *gs_kernel_types(void); /* NULL-terminated registry 
 typedef struct gs_selection_type {
   const char *name;
   const char *summary;
-  int (*create)(gs_cfg_node *node, const gs_grid *g, void **self, gs_error *err);
+  /* dir: directory of the case file, for relative paths. */
+  int (*create)(gs_cfg_node *node, const gs_grid *g, const char *dir, void **self, gs_error *err);
   /* Rate of breakage of a particle at the pivot of cell (coordinates x). */
   double (*rate)(const void *self, const gs_grid *g, size_t cell);
   void (*free)(void *self);
@@ -57,7 +58,8 @@ typedef struct gs_selection {
   void *self;
 } gs_selection;
 
-int gs_selection_create(gs_cfg_node *node, const gs_grid *g, gs_selection *s, gs_error *err);
+int gs_selection_create(gs_cfg_node *node, const gs_grid *g, const char *dir, gs_selection *s,
+                        gs_error *err);
 void gs_selection_free(gs_selection *s);
 const gs_selection_type *const *gs_selection_types(void);
 

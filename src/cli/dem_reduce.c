@@ -11,14 +11,15 @@
 
 static void reduce_usage(FILE *fp) {
   fprintf(fp,
-          "usage: gransim dem-reduce DIR [--out TABLE.csv] [--E PA] [--nu NU] [--rho KG_M3] [--e E]\n"
+          "usage: gransim dem-reduce DIR [--out TABLE.csv] [--impacts IMPACTS.csv] [--E PA] [--nu NU] [--rho KG_M3] [--e E]\n"
           "                          [--wall-E PA] [--wall-nu NU] [--contact-time S] [--min-speed M_S]\n"
           "                          [--edges E0,E1,...] [--measure diameter|volume] [--prefix c_cc_]\n"
           "                          [--contacts auto|ppcoll|cc|cc-partner]\n\n"
           "Reads every collision<STEP>.atom / impact<STEP>.atom pair (and ppcoll<STEP>.atom) in DIR,\n"
           "averages over the snapshots and prints classes, counts, contact times, the collision\n"
           "frequency diagonal C_ii, wall impact rates and lognormal fits of the impact speeds.\n"
-          "--out writes C_ij as a table for the PBM kernel `table`.  Defaults are the CoriMix\n"
+          "--out writes C_ij as a table for the PBM kernel `table`; --impacts writes the wall-impact\n"
+          "rates and impact-speed fits per class for the breakage selection `dem_impact`.  Defaults are the CoriMix\n"
           "materials: E 8e6 Pa, nu 0.2, rho 500 kg/m^3, e 0.4, wall E 9.99e8 Pa, min speed 1e-3 m/s;\n"
           "--contact-time replaces the Hertz durations.  --edges gives the table's class edges\n"
           "(nclass + 1 values, --measure says what they measure); without them the edges lie between\n"
@@ -54,7 +55,7 @@ static int edges_arg(const char *s, double **out, size_t *n) {
 }
 
 int gs_cmd_dem_reduce(int argc, char **argv) {
-  const char *dir = NULL, *out = NULL;
+  const char *dir = NULL, *out = NULL, *impacts = NULL;
   gs_dem_options opt;
   gs_dem_options_default(&opt);
   double *edges = NULL;
@@ -65,6 +66,7 @@ int gs_cmd_dem_reduce(int argc, char **argv) {
     int has = i + 1 < argc;
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) { reduce_usage(stdout); free(edges); return 0; }
     else if (!strcmp(a, "--out") && has) out = argv[++i];
+    else if (!strcmp(a, "--impacts") && has) impacts = argv[++i];
     else if (!strcmp(a, "--E") && has) rc = num_arg(a, argv[++i], &opt.youngs);
     else if (!strcmp(a, "--nu") && has) rc = num_arg(a, argv[++i], &opt.poisson);
     else if (!strcmp(a, "--rho") && has) rc = num_arg(a, argv[++i], &opt.density);
@@ -146,6 +148,12 @@ int gs_cmd_dem_reduce(int argc, char **argv) {
       fprintf(stderr, "gransim: %s\n", err.msg);
       rc = 1;
     } else printf("wrote %s\n", out);
+  }
+  if (impacts && !rc) {
+    if (gs_dem_data_write_impacts(&d, impacts, &err)) {
+      fprintf(stderr, "gransim: %s\n", err.msg);
+      rc = 1;
+    } else printf("wrote %s\n", impacts);
   }
   gs_dem_data_free(&d);
   return rc;

@@ -640,35 +640,76 @@ double gs_dem_break_probability(const gs_dem_data *d, size_t cls, double u_break
   return gsl_cdf_lognormal_Q(u_break, mu, sigma);
 }
 
+/* The n + 1 class edges of the written tables: the given ones, or geometric
+ * midpoints between the class diameters (as volumes when edges_volume). */
+static int table_edges(const gs_dem_data *d, const char *path, double *e, gs_error *err) {
+  size_t n = d->nclass;
+  int volume = d->edges_volume;
+  if (d->edges) {
+    memcpy(e, d->edges, (n + 1) * sizeof(double));
+    for (size_t i = 0; i < n; i++)
+      if (!(e[i] >= 0 && e[i + 1] > e[i]))
+        return gs_error_set(err, GS_EINPUT, "%s: class edges must be >= 0 and increasing (edge %zu = %g, edge %zu = %g)",
+                            path, i, d->edges[i], i + 1, d->edges[i + 1]);
+    return GS_OK;
+  }
+  for (size_t i = 0; i + 1 < n; i++)
+    if (!(d->diameter[i + 1] > d->diameter[i] * (1 + 1e-9)) || !(d->diameter[i] > 0))
+      return gs_error_set(err, GS_EINPUT, "%s: the DEM classes do not have increasing diameters (class %zu: %g m, "
+                          "class %zu: %g m), so they cannot define the table's class edges; give the PBM's class "
+                          "edges (nclass + 1 = %zu values)", path, i + 1, d->diameter[i], i + 2, d->diameter[i + 1], n + 1);
+  if (!(d->diameter[0] > 0)) return gs_error_set(err, GS_EINPUT, "%s: class 1 has no diameter", path);
+  /* geometric midpoints; the outer edges as far out as the neighbouring ones */
+  for (size_t i = 1; i < n; i++) e[i] = sqrt(d->diameter[i - 1] * d->diameter[i]);
+  e[0] = n > 1 ? d->diameter[0] * d->diameter[0] / e[1] : d->diameter[0] / 1.5;
+  e[n] = n > 1 ? d->diameter[n - 1] * d->diameter[n - 1] / e[n - 1] : d->diameter[0] * 1.5;
+  if (volume)
+    for (size_t i = 0; i <= n; i++) e[i] = M_PI / 6 * e[i] * e[i] * e[i];
+  return GS_OK;
+}
+
+int gs_dem_data_write_impacts(const gs_dem_data *d, const char *path, gs_error *err) {
+  size_t n = d->nclass;
+  double *e = malloc((n + 1) * sizeof(double));
+  if (!e) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  int rc = table_edges(d, path, e, err);
+  FILE *fp = rc ? NULL : fopen(path, "w");
+  if (!rc && !fp) rc = gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  if (rc) {
+    free(e);
+    return rc;
+  }
+  fprintf(fp, "# gransim dem-reduce: wall impacts per class, mean of %zu snapshot(s) (steps %ld..%ld)\n"
+          "# rows: impacts per particle per second (current wall contacts / contact time / particles);\n"
+          "# mu, sigma of the lognormal fit of the impact speed (ln m/s; classes with < 2 samples: the pooled fit)\n"
+          "# edges measure particle %s: use `selection: {type: dem_impact, measure: %s, file: ...}`\nedges",
+          d->nsnap, d->nsnap ? d->steps[0] : 0, d->nsnap ? d->steps[d->nsnap - 1] : 0,
+          d->edges_volume ? "volume [m^3]" : "diameter [m]", d->edges_volume ? "volume" : "diameter");
+  for (size_t i = 0; i <= n; i++) fprintf(fp, ", %.10g", e[i]);
+  fprintf(fp, "\n");
+  for (size_t i = 0; i < n; i++) fprintf(fp, "%s%.10g", i ? ", " : "", d->impact_rate[i]);
+  fprintf(fp, "\n");
+  for (size_t i = 0; i < n; i++)
+    fprintf(fp, "%s%.10g", i ? ", " : "", isnan(d->vel_mu[i]) ? d->all_mu : d->vel_mu[i]);
+  fprintf(fp, "\n");
+  for (size_t i = 0; i < n; i++)
+    fprintf(fp, "%s%.10g", i ? ", " : "", isnan(d->vel_sigma[i]) ? d->all_sigma : d->vel_sigma[i]);
+  fprintf(fp, "\n");
+  free(e);
+  int bad = ferror(fp);
+  if (fclose(fp) || bad) return gs_error_set(err, GS_EIO, "%s: write failed", path);
+  return GS_OK;
+}
+
 int gs_dem_data_write_table(const gs_dem_data *d, const char *path, gs_error *err) {
   size_t n = d->nclass;
   double *e = malloc((n + 1) * sizeof(double));
   if (!e) return gs_error_set(err, GS_ENOMEM, "out of memory");
   int volume = d->edges_volume;
-  if (d->edges) {
-    memcpy(e, d->edges, (n + 1) * sizeof(double));
-    for (size_t i = 0; i < n; i++)
-      if (!(e[i] >= 0 && e[i + 1] > e[i])) {
-        free(e);
-        return gs_error_set(err, GS_EINPUT, "%s: class edges must be >= 0 and increasing (edge %zu = %g, edge %zu = %g)",
-                            path, i, d->edges[i], i + 1, d->edges[i + 1]);
-      }
-  } else {
-    for (size_t i = 0; i + 1 < n; i++)
-      if (!(d->diameter[i + 1] > d->diameter[i] * (1 + 1e-9)) || !(d->diameter[i] > 0)) {
-        gs_error_set(err, GS_EINPUT, "%s: the DEM classes do not have increasing diameters (class %zu: %g m, "
-                     "class %zu: %g m), so they cannot define the table's class edges; give the PBM's class "
-                     "edges (nclass + 1 = %zu values)", path, i + 1, d->diameter[i], i + 2, d->diameter[i + 1], n + 1);
-        free(e);
-        return err->code;
-      }
-    if (!(d->diameter[0] > 0)) { free(e); return gs_error_set(err, GS_EINPUT, "%s: class 1 has no diameter", path); }
-    /* geometric midpoints; the outer edges as far out as the neighbouring ones */
-    for (size_t i = 1; i < n; i++) e[i] = sqrt(d->diameter[i - 1] * d->diameter[i]);
-    e[0] = n > 1 ? d->diameter[0] * d->diameter[0] / e[1] : d->diameter[0] / 1.5;
-    e[n] = n > 1 ? d->diameter[n - 1] * d->diameter[n - 1] / e[n - 1] : d->diameter[0] * 1.5;
-    if (volume)
-      for (size_t i = 0; i <= n; i++) e[i] = M_PI / 6 * e[i] * e[i] * e[i];
+  int erc = table_edges(d, path, e, err);
+  if (erc) {
+    free(e);
+    return erc;
   }
   FILE *fp = fopen(path, "w");
   if (!fp) { free(e); return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno)); }

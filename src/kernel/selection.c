@@ -35,7 +35,9 @@ static int sel_finish(gs_cfg_node *node, const gs_grid *g, sel_t *s, int rc, voi
   return GS_OK;
 }
 
-static int power_create(gs_cfg_node *node, const gs_grid *g, void **self, gs_error *err) {
+static int power_create(gs_cfg_node *node, const gs_grid *g, const char *dir, void **self,
+                        gs_error *err) {
+  (void)dir;
   sel_t *s = gs_calloc(1, sizeof *s, err);
   if (!s) return GS_ENOMEM;
   int rc = gs_cfg_double_range(node, "s0", 1, 0, 0, 0, HUGE_VAL, 0, &s->a, err);
@@ -50,7 +52,9 @@ static double power_rate(const void *self, const gs_grid *g, size_t cell) {
   return s->a * pow(s->size[cell], s->b);
 }
 
-static int shear_create(gs_cfg_node *node, const gs_grid *g, void **self, gs_error *err) {
+static int shear_create(gs_cfg_node *node, const gs_grid *g, const char *dir, void **self,
+                        gs_error *err) {
+  (void)dir;
   sel_t *s = gs_calloc(1, sizeof *s, err);
   if (!s) return GS_ENOMEM;
   int rc = gs_cfg_double_range(node, "shear_rate", 1, 0, 0, 1, HUGE_VAL, 0, &s->a, err);
@@ -72,15 +76,18 @@ static const gs_selection_type power_type = {"power", "S = s0 v^exponent", power
 static const gs_selection_type shear_type = {
     "shear", "S = sqrt(4/(15 pi)) G exp(-B/(G^2 R)) (seed 002 eq. 2.7)", shear_create,
     shear_rate, sel_free};
-static const gs_selection_type *const registry[] = {&power_type, &shear_type, NULL};
+extern const gs_selection_type gs_selection_dem_impact;
+static const gs_selection_type *const registry[] = {&power_type, &shear_type, &gs_selection_dem_impact,
+                                                    NULL};
 
 const gs_selection_type *const *gs_selection_types(void) { return registry; }
 
-int gs_selection_create(gs_cfg_node *node, const gs_grid *g, gs_selection *s, gs_error *err) {
+int gs_selection_create(gs_cfg_node *node, const gs_grid *g, const char *dir, gs_selection *s,
+                        gs_error *err) {
   s->self = NULL;
   s->type = gs_registry_pick(node, (const void *const *)registry, "selection function", err);
   if (!s->type) return GS_EINPUT;
-  return s->type->create(node, g, &s->self, err);
+  return s->type->create(node, g, dir, &s->self, err);
 }
 
 void gs_selection_free(gs_selection *s) {

@@ -15,7 +15,12 @@
  *    lever weights are linear within a packet).
  * Number of fragments and the volume of every coordinate are conserved;
  * fragments below the first pivot are clamped to it (number conserved, the
- * created volume booked in the ledger as negative loss, see lever.h). */
+ * created volume booked in the ledger as negative loss, see lever.h).
+ * Carried quantities (cell average only): a parent's load leaves with it and
+ * each packet receives the share of it equal to its share of the parent's
+ * volume (fragments keep the parent's composition, so also its liquid and
+ * gas per unit solid); pooled loads are placed with the particles' lever
+ * weights, so every carried volume is conserved. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -30,6 +35,7 @@ typedef struct {
   size_t cell;          /* target cell (CA) or destination node (FP) */
   double count;         /* fragments per breakage event */
   double vol[GS_MAX_DIM]; /* CA: volume per coordinate per event; FP: unused */
+  double share;           /* CA: fraction of the parent's volume (and load) per event */
 } packet_t;
 
 typedef struct {
@@ -42,6 +48,8 @@ typedef struct {
   packet_t *pk;
   double *excess;       /* FP: volume removed by clamping (lever.h), per parent and axis */
   double *births, *vol; /* CA workspace: ncells and dim*ncells */
+  int nc;               /* carried quantities */
+  double *cbirth;       /* CA workspace: nc*ncells pooled loads */
 } brk_t;
 
 static void brk_free(void *self) {
@@ -55,6 +63,7 @@ static void brk_free(void *self) {
   free(B->excess);
   free(B->births);
   free(B->vol);
+  free(B->cbirth);
   free(B);
 }
 
@@ -131,12 +140,12 @@ static int parent_packets(brk_t *B, const gs_grid *g, size_t k, double *z, doubl
       gs_lever_place(g, GS_NOWHERE, v, cnt, fp_row, B->excess + k * (size_t)dim);
       continue;
     }
-    packet_t p = {containing_cell(g, v), cnt, {0}};
+    packet_t p = {containing_cell(g, v), cnt, {0}, mass};
     for (int d = 0; d < dim; d++) p.vol[d] = mass * X[d];
     if (add_packet(B, cap, n, p, err)) return GS_ENOMEM;
   }
   for (size_t c = 0; B->scheme == FIXED_PIVOT && c < g->ncells; c++)
-    if (fp_row[c] != 0.0 && add_packet(B, cap, n, (packet_t){c, fp_row[c], {0}}, err))
+    if (fp_row[c] != 0.0 && add_packet(B, cap, n, (packet_t){c, fp_row[c], {0}, 0.0}, err))
       return GS_ENOMEM;
   return GS_OK;
 }
@@ -166,13 +175,12 @@ static int brk_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   brk_t *B = gs_calloc(1, sizeof *B, err);
   if (!B) return GS_ENOMEM;
   gs_cfg_node *sn = NULL, *dn = NULL;
-  int rc = m->ncarried ? gs_cfg_fail(node, err, "breakage does not yet share carried quantities "
-                                                 "(grid.carried) among fragments")
-                       : GS_OK;
-  if (!rc) rc = gs_cfg_enum_opt(node, "redistribution", schemes, CELL_AVERAGE, &B->scheme, err);
+  int rc = gs_cfg_enum_opt(node, "redistribution", schemes, CELL_AVERAGE, &B->scheme, err);
+  if (!rc && m->ncarried && B->scheme == FIXED_PIVOT)
+    rc = gs_cfg_fail(node, err, "fixed_pivot does not move carried quantities (grid.carried); use cell_average");
   if (!rc) rc = gs_cfg_map_req(node, "selection", &sn, err);
   if (!rc) rc = gs_cfg_map_req(node, "daughters", &dn, err);
-  if (!rc) rc = gs_selection_create(sn, g, &B->sel, err);
+  if (!rc) rc = gs_selection_create(sn, g, m->dir, &B->sel, err);
   if (!rc) rc = gs_daughter_create(dn, &B->dau, err);
   if (!rc) rc = gs_cfg_check_unused(node, err);
   B->dim = g->dim;
@@ -182,7 +190,9 @@ static int brk_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     B->rate = gs_malloc(g->ncells * sizeof(double), err);
     B->births = gs_malloc(g->ncells * sizeof(double), err);
     B->vol = gs_malloc(g->ncells * (size_t)g->dim * sizeof(double), err);
-    if (!B->rate || !B->births || !B->vol) rc = GS_ENOMEM;
+    B->nc = m->ncarried;
+    B->cbirth = gs_calloc((size_t)B->nc * g->ncells + 1, sizeof(double), err);
+    if (!B->rate || !B->births || !B->vol || !B->cbirth) rc = GS_ENOMEM;
   }
   for (size_t k = 0; !rc && k < g->ncells; k++) {
     B->rate[k] = B->sel.type->rate(B->sel.self, g, k);
@@ -211,12 +221,20 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
     if (B->scheme == CELL_AVERAGE) {
       memset(B->births, 0, B->ncells * sizeof(double));
       memset(B->vol, 0, B->ncells * (size_t)dim * sizeof(double));
+      memset(B->cbirth, 0, (size_t)B->nc * B->ncells * sizeof(double));
     }
+    double *qdst[GS_MAX_CARRIED] = {NULL, NULL};
+    for (int q = 0; d && q < B->nc; q++) qdst[q] = gs_model_carried(m, dydt, comp, q);
     for (size_t k = 0; k < B->ncells; k++) {
       double r = B->rate[k] * N[k];
       if (r == 0.0) continue;
       dead += r;
       if (d) d[k] -= r;
+      double load[GS_MAX_CARRIED] = {0, 0}; /* carried by one parent */
+      for (int q = 0; q < B->nc; q++) {
+        load[q] = N[k] > 0 ? gs_model_carried_c(m, y, comp, q)[k] / N[k] : 0.0;
+        if (d) qdst[q][k] -= r * load[q];
+      }
       for (size_t p = B->first[k]; p < B->first[k + 1]; p++) {
         const packet_t *pk = &B->pk[p];
         if (B->scheme == FIXED_PIVOT) {
@@ -226,6 +244,7 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
         }
         B->births[pk->cell] += r * pk->count;
         for (int q = 0; q < dim; q++) B->vol[pk->cell * (size_t)dim + (size_t)q] += r * pk->vol[q];
+        for (int q = 0; q < B->nc; q++) B->cbirth[(size_t)q * B->ncells + pk->cell] += r * pk->share * load[q];
       }
       if (B->scheme == FIXED_PIVOT)
         for (int q = 0; q < dim; q++) excess[q] += r * B->excess[k * (size_t)dim + (size_t)q];
@@ -233,9 +252,10 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
     for (size_t t = 0; B->scheme == CELL_AVERAGE && t < B->ncells; t++) {
       double b = B->births[t];
       if (b == 0.0) continue;
-      double vbar[GS_MAX_DIM];
+      double vbar[GS_MAX_DIM], qtot[GS_MAX_CARRIED];
       for (int q = 0; q < dim; q++) vbar[q] = B->vol[t * (size_t)dim + (size_t)q] / b;
-      if (d) gs_lever_place(g, t, vbar, b, d, excess);
+      for (int q = 0; q < B->nc; q++) qtot[q] = B->cbirth[(size_t)q * B->ncells + t];
+      if (d) gs_lever_place_carried(g, t, vbar, b, d, excess, B->nc, qtot, qdst);
       born += b;
     }
     if (lost)
