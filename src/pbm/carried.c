@@ -85,11 +85,12 @@ static void spray_rhs(const carried_t *C, const gs_model *m, double t, const dou
                       double *dydt, double *dledger) {
   const gs_grid *g = &m->grid;
   if (t < C->start || t >= C->end) return;
+#pragma omp parallel for schedule(static) if (g->ncomp * g->ncells > 20000)
   for (size_t comp = 0; comp < g->ncomp; comp++) {
     const double *N = y + comp * g->ncells;
     double solid = 0;
     for (size_t c = 0; c < g->ncells; c++) solid += N[c] * g->volume[c];
-    if (!(solid > 0) || C->q[comp] == 0.0) continue;
+    if (!(solid > 0) || C->q[comp] == 0.0) continue; /* (inside an OpenMP loop) */
     double per = C->q[comp] / solid, *dL = gs_model_carried(m, dydt, comp, C->liquid);
     for (size_t c = 0; c < g->ncells; c++) dL[c] += per * N[c] * g->volume[c];
     gs_model_ledger(m, dledger, comp)[g->dim + C->liquid] += C->q[comp];
@@ -100,6 +101,7 @@ static void consolidation_rhs(const carried_t *C, const gs_model *m, const doubl
                               double *dydt, double *dledger) {
   const gs_grid *g = &m->grid;
   const double target = C->emin / (1 - C->emin); /* pore volume per solid volume at e_min */
+#pragma omp parallel for schedule(static) if (g->ncomp * g->ncells > 20000)
   for (size_t comp = 0; comp < g->ncomp; comp++) {
     const double *N = y + comp * g->ncells;
     const double *L = gs_model_carried_c(m, y, comp, C->liquid);

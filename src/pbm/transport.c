@@ -159,31 +159,33 @@ static void transfer_rhs(void *self, const gs_model *m, double t, const double *
   const transfer_t *T = self;
   const gs_grid *g = &m->grid;
   const size_t n = g->ncells;
+  /* each compartment writes only its own rates and ledger (what leaves it,
+   * and what comes in from the one before), so compartments run in parallel */
+#pragma omp parallel for schedule(static) if (g->ncomp * n * (size_t)(1 + m->ncarried) > 20000)
   for (size_t comp = 0; comp < g->ncomp; comp++) {
-    const double *N = y + comp * n;
-    double *out = dydt + comp * n, *next = comp + 1 < g->ncomp ? dydt + (comp + 1) * n : NULL;
-    double moved[GS_MAX_VOL] = {0};
-    for (size_t c = 0; c < n; c++) {
-      double r = T->k[comp] * N[c];
-      out[c] -= r;
-      if (next) next[c] += r;
-      for (int k = 0; k < g->dim; k++) moved[k] += r * g->x[c * (size_t)g->dim + (size_t)k];
-    }
-    for (int q = 0; q < m->ncarried; q++) {
-      const double *Q = gs_model_carried_c(m, y, comp, q);
-      double *qout = gs_model_carried(m, dydt, comp, q);
-      double *qnext = next ? gs_model_carried(m, dydt, comp + 1, q) : NULL;
+    double *d = dydt + comp * n, moved_out[GS_MAX_VOL] = {0}, moved_in[GS_MAX_VOL] = {0};
+    for (int from = comp > 0 ? -1 : 0; from <= 0; from++) { /* -1: inflow from comp - 1 */
+      const size_t sc = from == 0 ? comp : comp - 1; /* source compartment */
+      const double k = T->k[sc], sign = from == 0 ? -1.0 : 1.0;
+      double *moved = from == 0 ? moved_out : moved_in;
+      const double *N = y + sc * n;
       for (size_t c = 0; c < n; c++) {
-        double r = T->k[comp] * Q[c];
-        qout[c] -= r;
-        if (qnext) qnext[c] += r;
-        moved[g->dim + q] += r;
+        double r = k * N[c];
+        d[c] += sign * r;
+        for (int a = 0; a < g->dim; a++) moved[a] += r * g->x[c * (size_t)g->dim + (size_t)a];
+      }
+      for (int q = 0; q < m->ncarried; q++) {
+        const double *Q = gs_model_carried_c(m, y, sc, q);
+        double *dq = gs_model_carried(m, dydt, comp, q);
+        for (size_t c = 0; c < n; c++) {
+          double r = k * Q[c];
+          dq[c] += sign * r;
+          moved[g->dim + q] += r;
+        }
       }
     }
-    for (int k = 0; k < m->nvol; k++) {
-      gs_model_ledger(m, dledger, comp)[k] -= moved[k];
-      if (next) gs_model_ledger(m, dledger, comp + 1)[k] += moved[k];
-    }
+    double *ledger = gs_model_ledger(m, dledger, comp);
+    for (int a = 0; a < m->nvol; a++) ledger[a] += moved_in[a] - moved_out[a];
   }
 }
 
