@@ -13,21 +13,12 @@
 
 #include "check.h"
 #include "gransim/swa.h"
+#include "pbm_testlib.h"
 
 #define SW_FN static __attribute__((unused))
 
-static char *sw_fmt(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
-SW_FN char *sw_fmt(const char *fmt, ...) {
-  va_list ap;
-  va_start(ap, fmt);
-  int n = vsnprintf(NULL, 0, fmt, ap);
-  va_end(ap);
-  char *s = malloc((size_t)n + 1);
-  va_start(ap, fmt);
-  vsnprintf(s, (size_t)n + 1, fmt, ap);
-  va_end(ap);
-  return s;
-}
+/* printf into a malloc'ed string: the shared helper of the sectional tests */
+#define sw_fmt tl_fmt
 
 /* Build (must succeed: aborts the test otherwise); takes over yaml. */
 SW_FN void sw_case(char *yaml, gs_swa_case *c) {

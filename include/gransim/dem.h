@@ -203,6 +203,10 @@ size_t gs_dem_wall_triangles(const gs_dem *d, size_t wall, double *out);
 double gs_dem_damping_coefficient(double e, int mode);
 /* Restitution a head-on Hertz impact with damping coefficient c realises. */
 double gs_dem_restitution_of(double c);
+/* The scaled head-on impact behind both (src/dem/material.c): its duration in
+ * units of (v^2 m* / (4/3 E* sqrt R*))^(2/5) / v and its restitution, for the
+ * scaled damping c, integrated with step h; either output may be NULL. */
+void gs_dem_scaled_impact(double c, double h, double *duration, double *restitution);
 
 /* ---- DEM case files (src/dem/case_dem.c, run_dem.c; docs/case-files.md) -- */
 typedef struct gs_dem_case_s gs_dem_case;

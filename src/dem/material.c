@@ -9,14 +9,15 @@
  *   xi'' = -xi^{3/2} - c sqrt(3/2) xi^{1/4} xi',  xi(0) = 0, xi'(0) = 1
  * (delta scaled by (v0^2 m* / (4/3 E* sqrt R*))^{2/5}, time by that over v0):
  * with gamma_n = c sqrt(2 E* sqrt(R* delta) m*) every physical impact maps to
- * this one equation, so the realised restitution depends on c alone.  RK4 with
- * a fine step; the end of contact (xi back to 0) is found by linear
- * interpolation. */
-double gs_dem_restitution_of(double c) {
-  const double k = c * sqrt(1.5), h = 2e-4;
+ * this one equation, so the realised restitution and the scaled duration
+ * depend on c alone.  RK4 with step h; the end of contact (xi back to 0) is
+ * found by linear interpolation.  A contact that never separates (fully
+ * damped) gives restitution 0 and duration infinity. */
+void gs_dem_scaled_impact(double c, double h, double *duration, double *restitution) {
+  const double k = c * sqrt(1.5);
   double x = 0, v = 1;
 #define ACC(X, V) (-(X) * sqrt(fmax(X, 0.0)) - k * sqrt(sqrt(fmax(X, 0.0))) * (V))
-  for (long i = 0; i < 2000000; i++) {
+  for (long i = 0; i < (long)(400.0 / h); i++) { /* 400: ~100 contact durations */
     double k1x = v, k1v = ACC(x, v);
     double k2x = v + 0.5 * h * k1v, k2v = ACC(x + 0.5 * h * k1x, v + 0.5 * h * k1v);
     double k3x = v + 0.5 * h * k2v, k3v = ACC(x + 0.5 * h * k2x, v + 0.5 * h * k2v);
@@ -25,13 +26,22 @@ double gs_dem_restitution_of(double c) {
     double vn = v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
     if (i > 0 && xn <= 0) {
       double f = x / (x - xn); /* fraction of the step where xi crosses 0 */
-      return -(v + f * (vn - v));
+      if (duration) *duration = (i + f) * h;
+      if (restitution) *restitution = -(v + f * (vn - v));
+      return;
     }
     x = xn;
     v = vn;
   }
 #undef ACC
-  return 0; /* never separates: fully damped */
+  if (duration) *duration = HUGE_VAL;
+  if (restitution) *restitution = 0;
+}
+
+double gs_dem_restitution_of(double c) {
+  double e;
+  gs_dem_scaled_impact(c, 2e-4, NULL, &e);
+  return e;
 }
 
 double gs_dem_damping_coefficient(double e, int mode) {

@@ -32,22 +32,9 @@ void gs_dem_options_default(gs_dem_options *o) {
  * and src/dem).  The contact lasts until xi is back to 0: tau(c) T.  For c = 0
  * tau = 3.2181 and tau (3/4)^(2/5) = 2.868, the classical constant. */
 static double scaled_duration(double c) {
-  const double k = c * sqrt(1.5), h = 1e-4;
-  double x = 0, v = 1;
-#define ACC(X, V) (-(X) * sqrt(fmax(X, 0.0)) - k * sqrt(sqrt(fmax(X, 0.0))) * (V))
-  for (long i = 0; i < 10000000; i++) {
-    double k1x = v, k1v = ACC(x, v);
-    double k2x = v + 0.5 * h * k1v, k2v = ACC(x + 0.5 * h * k1x, v + 0.5 * h * k1v);
-    double k3x = v + 0.5 * h * k2v, k3v = ACC(x + 0.5 * h * k2x, v + 0.5 * h * k2v);
-    double k4x = v + h * k3v, k4v = ACC(x + h * k3x, v + h * k3v);
-    double xn = x + h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x);
-    double vn = v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
-    if (i > 0 && xn <= 0) return (i + x / (x - xn)) * h;
-    x = xn;
-    v = vn;
-  }
-#undef ACC
-  return HUGE_VAL;
+  double tau;
+  gs_dem_scaled_impact(c, 1e-4, &tau, NULL);
+  return tau;
 }
 
 /* t_c / (m*^2/(R* E*^2 v))^(1/5) for restitution e (no state: safe from any thread) */
