@@ -39,6 +39,13 @@ typedef struct gs_ode {
    * hold(ctx, 0), so that a difference quotient (f(y + s v) - f(y)) / s is a
    * derivative and not a jump.  NULL: f makes no such choices. */
   void (*hold)(void *ctx, int on);
+  /* Optional, for a state distributed over MPI ranks (the rk and euler
+   * integrators support it; cvode refuses it): each rank integrates its own
+   * part of the state (f exchanges what it needs inside), and
+   * reduce_max(ctx, v) returns the maximum of v over all ranks, so that
+   * every rank accepts, rejects and sizes the same steps and fails on the
+   * same evaluation.  NULL: a single process. */
+  double (*reduce_max)(void *ctx, double v);
 } gs_ode;
 
 typedef struct gs_integrator_stats {

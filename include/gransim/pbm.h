@@ -100,6 +100,10 @@ struct gs_model {
    * discrete choices once per time value, so that the Newton iterations of
    * an implicit step (same t, several y) see one smooth function. */
   int in_integrator;
+  /* Compartments this process evaluates, [comp_lo, comp_hi): all of them,
+   * except under MPI, where each rank owns a contiguous block (the rates of
+   * the others are left 0).  Transfer reads compartment comp_lo - 1 too. */
+  size_t comp_lo, comp_hi;
   /* Numbers at or below this are integration noise (the solver's absolute
    * tolerance); mechanisms may skip cells holding no more than it. */
   double noise_floor;

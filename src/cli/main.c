@@ -7,6 +7,7 @@
 #include "cli/commands.h"
 #include "gransim/case.h"
 #include "gransim/kernel.h"
+#include "gransim/parallel.h"
 #include "gransim/swa.h"
 
 #ifndef GRANSIM_VERSION
@@ -80,8 +81,12 @@ static int cmd_run(int argc, char **argv) {
   }
   gs_run_report rep;
   int rc = gs_case_run(&c, &opt, NULL, &rep, &err);
-  if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
-  else
+  /* under MPI rank 0 speaks for all; another rank only for its own failure */
+  const int rank = gs_parallel_rank();
+  if (rc && rank == 0) fprintf(stderr, "gransim: %s\n", err.msg);
+  else if (rc && !strstr(err.msg, "on another MPI rank"))
+    fprintf(stderr, "gransim (MPI rank %d): %s\n", rank, err.msg);
+  else if (!rc && rank == 0)
     fprintf(stderr,
             "gransim: %s: done to t = %g in %.3f s (%ld steps, %ld rhs evaluations); results in "
             "%s/result.h5 and %s/summary.csv; largest volume-balance error %.2g, loss through "
@@ -140,7 +145,13 @@ int main(int argc, char **argv) {
     printf("gransim %s\n", GRANSIM_VERSION);
     return 0;
   }
-  if (!strcmp(argv[1], "run")) return cmd_run(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "run")) {
+    /* MPI only for runs, and only when launched by mpirun (gransim/parallel.h) */
+    gs_parallel_init(&argc, &argv);
+    int rc = cmd_run(argc - 2, argv + 2);
+    gs_parallel_finalize();
+    return rc;
+  }
   if (!strcmp(argv[1], "check")) return cmd_check(argc - 2, argv + 2);
   if (!strcmp(argv[1], "list")) return cmd_list();
   if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 2, argv + 2);

@@ -640,12 +640,13 @@ static void compartment_rates(agg_t *A, const gs_model *m, double t, const doubl
 static void agg_rates(agg_t *A, const gs_model *m, double t, const double *y, double *dydt,
                       double *dledger, double *birth, double *death) {
   acc_t acc[A->nthreads > 0 ? A->nthreads : 1];
-  if (A->ncomp > 1 && A->nthreads > 1 && A->ncells * A->ncomp > 400) {
+  const size_t lo = m->comp_lo, hi = m->comp_hi;
+  if (hi - lo > 1 && A->nthreads > 1 && A->ncells * (hi - lo) > 400) {
 #pragma omp parallel for schedule(dynamic, 1)
-    for (size_t comp = 0; comp < A->ncomp; comp++)
+    for (size_t comp = lo; comp < hi; comp++)
       compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, omp_get_thread_num());
   } else {
-    for (size_t comp = 0; comp < A->ncomp; comp++)
+    for (size_t comp = lo; comp < hi; comp++)
       compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, -1);
   }
 }

@@ -213,7 +213,7 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
                       double *birth, double *death) {
   const gs_grid *g = &m->grid;
   const int dim = B->dim;
-  for (size_t comp = 0; comp < B->ncomp; comp++) {
+  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
     const double *N = y + comp * B->ncells;
     double *d = dydt ? dydt + comp * B->ncells : NULL;
     double *lost = dledger ? gs_model_ledger(m, dledger, comp) + m->nvol : NULL;

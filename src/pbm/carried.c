@@ -86,7 +86,7 @@ static void spray_rhs(const carried_t *C, const gs_model *m, double t, const dou
   const gs_grid *g = &m->grid;
   if (t < C->start || t >= C->end) return;
 #pragma omp parallel for schedule(static) if (g->ncomp * g->ncells > 20000)
-  for (size_t comp = 0; comp < g->ncomp; comp++) {
+  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
     const double *N = y + comp * g->ncells;
     double solid = 0;
     for (size_t c = 0; c < g->ncells; c++) solid += N[c] * g->volume[c];
@@ -102,7 +102,7 @@ static void consolidation_rhs(const carried_t *C, const gs_model *m, const doubl
   const gs_grid *g = &m->grid;
   const double target = C->emin / (1 - C->emin); /* pore volume per solid volume at e_min */
 #pragma omp parallel for schedule(static) if (g->ncomp * g->ncells > 20000)
-  for (size_t comp = 0; comp < g->ncomp; comp++) {
+  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
     const double *N = y + comp * g->ncells;
     const double *L = gs_model_carried_c(m, y, comp, C->liquid);
     const double *G = gs_model_carried_c(m, y, comp, C->gas);

@@ -164,7 +164,7 @@ static void grow_rhs(void *self, const gs_model *m, double t, const double *y, d
   grow_t *G = self;
   const gs_grid *g = &m->grid;
   if (!active(G, t)) return;
-  for (size_t comp = 0; comp < g->ncomp; comp++) {
+  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
     const double *N = y + comp * g->ncells;
     if (compartment_rates(G, g, comp, N))
       gs_growth_apply(g, G->axis, G->G, N, dydt + comp * g->ncells,
@@ -180,7 +180,7 @@ static void grow_precondition(void *self, const gs_model *m, double t, const dou
   grow_t *G = self;
   const gs_grid *g = &m->grid;
   if (!active(G, t)) return;
-  for (size_t comp = 0; comp < g->ncomp; comp++)
+  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++)
     if (compartment_rates(G, g, comp, y + comp * g->ncells))
       gs_growth_solve(g, G->axis, G->G, gamma, z + comp * g->ncells, G->work);
 }

@@ -328,6 +328,10 @@ static int gs_cvode_advance(void *vself, const gs_ode *ode, double *t, double t_
     return gs_error_set(err, GS_EINPUT,
                         "integrator cvode: bad call (n = %zu for %zu, t = %g to %g)", ode->n,
                         self->n, *t, t_out);
+  if (ode->reduce_max)
+    return gs_error_set(err, GS_EINPUT,
+                        "integrator cvode: a state spread over several MPI ranks needs "
+                        "solver.method rk or euler (or run on one rank)");
   if (t_out == *t) return GS_OK;
   self->ode = ode;
   self->rhs_failed = 0;

@@ -120,13 +120,18 @@ static int gs_euler_step(gs_euler *self, const gs_ode *ode, double *t, double t_
   if (ode->f(ode->ctx, *t, y, self->f))
     return gs_error_set(err, GS_ENUMERIC, "integrator euler: right-hand side failed at t = %.9g",
                         *t);
-  gs_euler_adapt(self, gs_euler_rate(y, self->f, ode->npositive), h_max);
+  double m = gs_euler_rate(y, self->f, ode->npositive);
+  if (ode->reduce_max) m = ode->reduce_max(ode->ctx, m); /* one step for all ranks */
+  gs_euler_adapt(self, m, h_max);
   int final = *t + self->dt >= t_out;
   double h = final ? t_out - *t : self->dt;
   if (!final && *t + h == *t)
     return gs_error_set(err, GS_ENUMERIC,
                         "integrator euler: step size underflow at t = %.9g (dt = %g)", *t, h);
   int rc = gs_euler_check(self, ode->npositive, *t, h, y, err);
+  /* a rank that fails must not leave the others waiting in the next reduction */
+  if (ode->reduce_max && ode->reduce_max(ode->ctx, rc ? 1.0 : 0.0) > 0 && !rc)
+    rc = gs_error_set(err, GS_ENUMERIC, "integrator euler: the step from t = %.9g failed on another MPI rank", *t);
   if (rc) return rc;
   for (size_t i = 0; i < self->n; i++) y[i] += h * self->f[i];
   *t = final ? t_out : *t + h;

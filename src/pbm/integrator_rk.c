@@ -7,8 +7,14 @@
  * get an astronomically loose one and so never limit the step) and so that
  * the step bounds and step budget are ours to enforce.
  *
+ * The step-size controller is GSL's standard rule (shrink by at most 5 when
+ * the largest scaled error exceeds 1.1, grow by at most 5 below 0.5) written
+ * here as a GSL control type, so that under MPI (gs_ode.reduce_max) the
+ * largest error is taken over all ranks and every rank takes the same steps.
+ *
  * No GSL error handler is installed here (it is process-wide state); the
  * calls below are arranged never to hit GSL's argument-error paths. */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -59,24 +65,90 @@ static const gsl_odeiv2_step_type *gs_rk_step_type(int variant) {
  * caught here because GSL's error control never rejects NaN. */
 static int gs_rk_rhs(double t, const double y[], double dydt[], void *params) {
   gs_rk *self = params;
+  const gs_ode *ode = self->ode;
   self->stats.rhs_evals++;
   self->fail_t = t;
-  if (self->ode->f(self->ode->ctx, t, y, dydt)) {
-    self->rhs_failed = 1;
-    return GSL_EBADFUNC;
-  }
-  for (size_t i = 0; i < self->n; i++) {
+  if (ode->f(ode->ctx, t, y, dydt)) self->rhs_failed = 1;
+  for (size_t i = 0; !self->rhs_failed && i < self->n; i++) {
     if (!isfinite(dydt[i])) {
       self->rhs_failed = 2;
       self->fail_index = i;
       self->fail_value = dydt[i];
-      return GSL_EBADFUNC;
     }
   }
+  /* every rank must give up on the same evaluation */
+  if (ode->reduce_max && ode->reduce_max(ode->ctx, self->rhs_failed ? 1.0 : 0.0) > 0 &&
+      !self->rhs_failed)
+    self->rhs_failed = 3;
+  return self->rhs_failed ? GSL_EBADFUNC : GSL_SUCCESS;
+}
+
+/* ---- step-size control --------------------------------------------------- */
+
+typedef struct {
+  double atol, rtol;
+  const double *scale; /* per-component absolute-tolerance scale */
+  const gs_rk *rk;     /* for the ode of the advance in progress (reduce_max) */
+} gs_rk_control;
+
+static void *gs_rk_control_alloc(void) { return calloc(1, sizeof(gs_rk_control)); }
+
+static int gs_rk_control_init(void *state, double atol, double rtol, double a_y, double a_dydt) {
+  (void)a_y;
+  (void)a_dydt; /* tolerance rtol * |y_i| + atol * scale_i */
+  gs_rk_control *c = state;
+  c->atol = atol;
+  c->rtol = rtol;
   return GSL_SUCCESS;
 }
 
+static int gs_rk_control_hadjust(void *state, size_t dim, unsigned int ord, const double y[],
+                                 const double yerr[], const double yp[], double *h) {
+  (void)yp;
+  const gs_rk_control *c = state;
+  const double S = 0.9, h_old = *h;
+  double rmax = DBL_MIN;
+  for (size_t i = 0; i < dim; i++) {
+    double r = fabs(yerr[i]) / (c->rtol * fabs(y[i]) + c->atol * c->scale[i]);
+    if (r > rmax) rmax = r;
+  }
+  const gs_ode *ode = c->rk->ode;
+  if (ode->reduce_max) rmax = ode->reduce_max(ode->ctx, rmax);
+  if (rmax > 1.1) { /* shrink, by at most 5, a fraction S more than the error suggests */
+    *h = h_old * fmax(0.2, S / pow(rmax, 1.0 / ord));
+    return GSL_ODEIV_HADJ_DEC;
+  }
+  if (rmax < 0.5) { /* grow, by at most 5, never shrink */
+    *h = h_old * fmax(1.0, fmin(5.0, S / pow(rmax, 1.0 / (ord + 1.0))));
+    return GSL_ODEIV_HADJ_INC;
+  }
+  return GSL_ODEIV_HADJ_NIL;
+}
+
+static int gs_rk_control_errlevel(void *state, const double y, const double dydt, const double h,
+                                  const size_t ind, double *errlev) {
+  (void)dydt;
+  (void)h;
+  const gs_rk_control *c = state;
+  *errlev = c->rtol * fabs(y) + c->atol * c->scale[ind];
+  return GSL_SUCCESS;
+}
+
+static int gs_rk_control_set_driver(void *state, const gsl_odeiv2_driver *d) {
+  (void)state;
+  (void)d;
+  return GSL_SUCCESS;
+}
+
+static const gsl_odeiv2_control_type gs_rk_control_type = {
+    "gransim", gs_rk_control_alloc, gs_rk_control_init, gs_rk_control_hadjust,
+    gs_rk_control_errlevel, gs_rk_control_set_driver, free};
+
 static int gs_rk_rhs_error(const gs_rk *self, gs_error *err) {
+  if (self->rhs_failed == 3)
+    return gs_error_set(err, GS_ENUMERIC,
+                        "integrator rk: right-hand side failed on another MPI rank at t = %.9g",
+                        self->fail_t);
   if (self->rhs_failed == 2)
     return gs_error_set(err, GS_ENUMERIC,
                         "integrator rk: right-hand side gave dydt[%zu] = %g at t = %.9g",
@@ -104,8 +176,13 @@ static int gs_rk_alloc_gsl(gs_rk *self, int variant, const gs_ode *ode, gs_error
   }
   self->step = gsl_odeiv2_step_alloc(gs_rk_step_type(variant), self->n);
   /* a_y = 1, a_dydt = 0: tolerance rtol * |y_i| + atol * scale_i */
-  self->control = gsl_odeiv2_control_scaled_new(self->atol, self->rtol, 1.0, 0.0, self->scale,
-                                                self->n);
+  self->control = gsl_odeiv2_control_alloc(&gs_rk_control_type);
+  if (self->control) {
+    gsl_odeiv2_control_init(self->control, self->atol, self->rtol, 1.0, 0.0);
+    gs_rk_control *c = self->control->state;
+    c->scale = self->scale;
+    c->rk = self;
+  }
   self->evolve = gsl_odeiv2_evolve_alloc(self->n);
   if (!self->step || !self->control || !self->evolve)
     return gs_error_set(err, GS_ENOMEM, "integrator rk: out of memory for %zu components", self->n);
@@ -150,6 +227,10 @@ static int gs_rk_initial_step(gs_rk *self, double t, double span, const double *
     d0 = fmax(d0, fabs(y[i]) / sc);
     d1 = fmax(d1, fabs(f[i]) / sc);
   }
+  if (self->ode->reduce_max) {
+    d0 = self->ode->reduce_max(self->ode->ctx, d0);
+    d1 = self->ode->reduce_max(self->ode->ctx, d1);
+  }
   double h = (d1 > 0 && isfinite(d1)) ? 0.01 * fmax(d0, 1.0) / d1 : span;
   self->h = fmin(fmin(h, span), self->h_max);
   if (self->h < self->h_min) self->h = self->h_min;
@@ -181,7 +262,9 @@ static int gs_rk_fail(gs_rk *self, int status, double t0, double h, double *t, d
 /* A step GSL accepted may still be unusable: NaN slips through its error
  * control (NaN never exceeds the tolerance), so roll such a step back. */
 static int gs_rk_check_finite(gs_rk *self, double t0, double *t, double *y, gs_error *err) {
-  if (gs_rk_all_finite(y, self->n)) return GS_OK;
+  int ok = gs_rk_all_finite(y, self->n);
+  if (self->ode->reduce_max) ok = self->ode->reduce_max(self->ode->ctx, ok ? 0.0 : 1.0) == 0;
+  if (ok) return GS_OK;
   memcpy(y, self->evolve->y0, self->n * sizeof *y);
   *t = t0;
   return gs_error_set(err, GS_ENUMERIC,

@@ -30,6 +30,8 @@ int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err) {
   memset(grid, 0, sizeof *grid);
   m->nnum = m->nstate = m->grid.ncomp * m->grid.ncells;
   m->nvol = m->grid.dim;
+  m->comp_lo = 0;
+  m->comp_hi = m->grid.ncomp;
   m->nledger = m->grid.ncomp * 2 * (size_t)m->nvol;
   m->size_axes = (1 << m->grid.dim) - 1;
   strcpy(m->dir, ".");
@@ -134,8 +136,16 @@ void gs_model_precondition(const gs_model *m, double t, const double *y, double 
 }
 
 void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger) {
-  memset(dydt, 0, m->nstate * sizeof(double));
-  memset(dledger, 0, m->nledger * sizeof(double));
+  const size_t lo = m->comp_lo, nc = m->comp_hi - m->comp_lo, n = m->grid.ncells;
+  if (nc == m->grid.ncomp) {
+    memset(dydt, 0, m->nstate * sizeof(double));
+    memset(dledger, 0, m->nledger * sizeof(double));
+  } else { /* under MPI only this rank's compartments are written and read back */
+    const size_t nq = (size_t)m->ncarried * n, nl = 2 * (size_t)m->nvol;
+    memset(dydt + lo * n, 0, nc * n * sizeof(double));
+    if (nq) memset(dydt + m->nnum + lo * nq, 0, nc * nq * sizeof(double));
+    memset(dledger + lo * nl, 0, nc * nl * sizeof(double));
+  }
   for (size_t i = 0; i < m->nmech; i++)
     m->mech[i].type->rhs(m->mech[i].self, m, t, y, dydt, dledger);
 }

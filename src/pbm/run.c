@@ -9,6 +9,8 @@
 
 #include "gransim/case.h"
 #include "gransim/output.h"
+#include "gransim/parallel.h"
+#include "pbm/distributed.h"
 
 /* Describe cell `cell` of compartment `comp`: "compartment 2, cell (3, 5) [solid = ..., ...]". */
 static void describe_cell(const gs_model *m, size_t comp, size_t cell, char *buf, size_t len) {
@@ -27,10 +29,24 @@ static void describe_cell(const gs_model *m, size_t comp, size_t cell, char *buf
 
 typedef struct {
   gs_case *c;
+  gs_dist *dist; /* the compartments of each MPI rank */
+  double *Y, *F; /* under MPI: full state and rates, this rank's parts current */
   double bad_t;
-  size_t bad_index;
+  size_t bad_index; /* in the full vector */
   int bad;
 } guard_t;
+
+/* Flag the first non-finite rate (index i of f is entry full(i) of the state). */
+static int check_rates(guard_t *gd, double t, const double *f, size_t n, const gs_dist *local) {
+  for (size_t i = 0; i < n; i++)
+    if (!isfinite(f[i])) {
+      gd->bad = 1;
+      gd->bad_t = t;
+      gd->bad_index = local ? gs_dist_full_index(local, i) : i;
+      return 1;
+    }
+  return 0;
+}
 
 /* Right-hand side with a guard against non-finite rates. */
 static int guarded_rhs(void *ctx, double t, const double *y, double *dydt) {
@@ -39,14 +55,22 @@ static int guarded_rhs(void *ctx, double t, const double *y, double *dydt) {
   m->in_integrator = 1;
   gs_model_rhs(m, t, y, dydt, dydt + m->nstate);
   m->in_integrator = 0;
-  for (size_t i = 0; i < m->nstate + m->nledger; i++)
-    if (!isfinite(dydt[i])) {
-      gd->bad = 1;
-      gd->bad_t = t;
-      gd->bad_index = i;
-      return 1;
-    }
-  return 0;
+  return check_rates(gd, t, dydt, m->nstate + m->nledger, NULL);
+}
+
+/* The same on this MPI rank's packed part yl of the state: the full state
+ * gets yl and the neighbour's last compartment, the model evaluates this
+ * rank's compartments, and their rates are packed into fl. */
+static int local_rhs(void *ctx, double t, const double *yl, double *fl) {
+  guard_t *gd = ctx;
+  gs_model *m = &gd->c->model;
+  gs_dist_unpack(gd->dist, yl, gd->Y);
+  gs_dist_sync(gd->dist, gd->Y);
+  m->in_integrator = 1;
+  gs_model_rhs(m, t, gd->Y, gd->F, gd->F + m->nstate);
+  m->in_integrator = 0;
+  gs_dist_pack(gd->dist, gd->F, fl);
+  return check_rates(gd, t, fl, gd->dist->nlocal, gd->dist);
 }
 
 /* The case's preconditioner, reached through the guard's case. */
@@ -59,6 +83,64 @@ static int guarded_psolve(void *ctx, double t, const double *y, double gamma, co
 static void guarded_hold(void *ctx, int on) {
   guard_t *gd = ctx;
   gd->c->ode.hold(gd->c->ode.ctx, on);
+}
+
+/* Step agreement across MPI ranks. */
+static double guarded_max(void *ctx, double v) { return gs_dist_max(((guard_t *)ctx)->dist, v); }
+
+/* What advances the state: the case's integrator on the full vector, or,
+ * under MPI, an integrator of this rank's own on its packed part. */
+typedef struct {
+  gs_integrator own; /* MPI only */
+  gs_integrator *it;
+  gs_ode ode;
+  gs_dist *local; /* MPI only */
+  double *yl, *scale;
+} stepper_t;
+
+static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs_error *err) {
+  memset(s, 0, sizeof *s);
+  s->ode = c->ode;
+  s->ode.ctx = guard;
+  if (d->size < 2) {
+    s->it = &c->integrator;
+    s->ode.f = guarded_rhs;
+    if (s->ode.psolve) s->ode.psolve = guarded_psolve;
+    if (s->ode.hold) s->ode.hold = guarded_hold;
+    return GS_OK;
+  }
+  s->local = d;
+  s->yl = gs_malloc(d->nlocal * sizeof(double), err);
+  s->scale = gs_malloc(d->nlocal * sizeof(double), err);
+  guard->F = gs_malloc(c->ode.n * sizeof(double), err);
+  if (!s->yl || !s->scale || !guard->F) return GS_ENOMEM;
+  gs_dist_pack(d, c->abs_scale, s->scale);
+  /* numbers and carried volumes come first in the packed vector too */
+  s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max};
+  s->it = &s->own;
+  return gs_integrator_create(gs_cfg_get(gs_cfg_root(c->cfg), "solver"), &s->ode, &s->own, err);
+}
+
+static int stepper_advance(stepper_t *s, double *t, double t_out, double *Y, gs_error *err) {
+  if (!s->local) return s->it->type->advance(s->it->self, &s->ode, t, t_out, Y, err);
+  gs_dist_pack(s->local, Y, s->yl);
+  int rc = s->it->type->advance(s->it->self, &s->ode, t, t_out, s->yl, err);
+  gs_dist_unpack(s->local, s->yl, Y);
+  return rc;
+}
+
+static void stepper_free(stepper_t *s) {
+  if (s->local) gs_integrator_free(&s->own);
+  free(s->yl);
+  free(s->scale);
+}
+
+/* Every rank leaves together: when another rank failed, say so here. */
+static int agree(gs_dist *d, int rc, gs_error *err) {
+  if (d->size < 2) return rc;
+  int worst = (int)gs_dist_max(d, (double)rc);
+  if (worst && !rc) rc = gs_error_set(err, worst, "the run failed on another MPI rank");
+  return rc;
 }
 
 static int check_state(const gs_case *c, const double *Y, const double *M1_0, double t,
@@ -192,22 +274,36 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   for (size_t comp = 0; comp < g->ncomp; comp++)
     for (int k = 0; k < m->nvol; k++) M1_0[comp * (size_t)m->nvol + (size_t)k] = gs_model_held(m, c->y0, comp, k);
   double t = c->t0, ymax_seen = 0;
-  int show = opt && opt->progress >= 0 ? opt->progress : isatty(STDERR_FILENO);
+  /* under MPI each rank evaluates its own block of compartments; rank 0
+   * alone writes files and progress (every rank holds the full state at
+   * output times, so the checks below run everywhere on the same numbers) */
+  gs_dist dist;
+  int rc = gs_dist_init(&dist, m, err);
+  if (rc) {
+    free(Y);
+    free(M1_0);
+    return rc;
+  }
+  const int root = dist.rank == 0;
+  int show = root && (opt && opt->progress >= 0 ? opt->progress : isatty(STDERR_FILENO));
   gs_output *out = NULL;
-  int rc = GS_OK;
-  if (opt && opt->out_dir) {
+  if (opt && opt->out_dir && root) {
     out = opt->resume ? gs_output_resume(opt->out_dir, m, &t, Y, Y + m->nstate, err)
                       : gs_output_open(opt->out_dir, m, gs_cfg_source(c->cfg), gs_cfg_name(c->cfg), err);
     if (!out) rc = err->code;
   }
+  rc = agree(&dist, rc, err);
+  if (!rc && opt && opt->resume && dist.size > 1) { /* the state rank 0 read back */
+    gs_parallel_broadcast(&t, 1);
+    gs_parallel_broadcast(Y, n);
+  }
   if (!rc) rc = check_state(c, Y, M1_0, t, &ymax_seen, &rep, err);
   if (!rc && out && !(opt && opt->resume)) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
-  guard_t guard = {c, 0, 0, 0};
-  gs_ode ode = c->ode;
-  ode.f = guarded_rhs;
-  ode.ctx = &guard;
-  if (ode.psolve) ode.psolve = guarded_psolve;
-  if (ode.hold) ode.hold = guarded_hold;
+  rc = agree(&dist, rc, err);
+  guard_t guard = {c, &dist, Y, NULL, 0, 0, 0};
+  stepper_t step;
+  memset(&step, 0, sizeof step);
+  if (!rc) rc = agree(&dist, stepper_init(&step, c, &dist, &guard, err), err);
   double start = now_seconds(), t_end = c->times[c->ntimes - 1];
   gs_integrator_stats st = {0};
   for (size_t i = 0; !rc && i < c->ntimes; i++) {
@@ -216,7 +312,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
      * feeds): an integrator cannot step over a jump in f to tolerance */
     while (!rc && t < c->times[i]) {
       double stop = fmin(c->times[i], gs_model_next_switch(m, t));
-      rc = c->integrator.type->advance(c->integrator.self, &ode, &t, stop, Y, err);
+      rc = stepper_advance(&step, &t, stop, Y, err);
     }
     if (rc && guard.bad) {
       char where[512];
@@ -226,9 +322,12 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
       else snprintf(where, sizeof where, "volume ledger entry %zu", idx - m->nstate);
       rc = gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: the rate of change is not finite (NaN or infinity); check kernel and mechanism parameters", guard.bad_t, where);
     }
+    /* integrator failures are agreed already; gather only a good state */
+    if (!rc) rc = gs_dist_gather(&dist, Y, err);
     if (!rc) rc = check_state(c, Y, M1_0, t, &ymax_seen, &rep, err);
     if (!rc && out) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
-    c->integrator.type->get_stats(c->integrator.self, &st);
+    rc = agree(&dist, rc, err);
+    step.it->type->get_stats(step.it->self, &st);
     if (show) progress(c, t, t_end, &st, now_seconds() - start);
   }
   if (show) fprintf(stderr, "\n");
@@ -240,6 +339,12 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
       rc = frc;
     }
   }
+  rc = agree(&dist, rc, err);
+  stepper_free(&step);
+  free(guard.F);
+  m->comp_lo = 0; /* the model is whole again for whoever uses it next */
+  m->comp_hi = g->ncomp;
+  gs_dist_free(&dist);
   rep.t_end = t;
   rep.stats = st;
   rep.wall_seconds = now_seconds() - start;

@@ -72,7 +72,7 @@ static void feed_rhs(void *self, const gs_model *m, double t, const double *y, d
   (void)y;
   const feed_t *F = self;
   const gs_grid *g = &m->grid;
-  if (t < F->start || t >= F->end) return;
+  if (t < F->start || t >= F->end || F->comp < m->comp_lo || F->comp >= m->comp_hi) return;
   double *d = dydt + F->comp * g->ncells;
   for (size_t c = 0; c < g->ncells; c++) d[c] += F->rate[c];
   for (int q = 0; q < m->ncarried; q++) {
@@ -162,7 +162,7 @@ static void transfer_rhs(void *self, const gs_model *m, double t, const double *
   /* each compartment writes only its own rates and ledger (what leaves it,
    * and what comes in from the one before), so compartments run in parallel */
 #pragma omp parallel for schedule(static) if (g->ncomp * n * (size_t)(1 + m->ncarried) > 20000)
-  for (size_t comp = 0; comp < g->ncomp; comp++) {
+  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
     double *d = dydt + comp * n, moved_out[GS_MAX_VOL] = {0}, moved_in[GS_MAX_VOL] = {0};
     for (int from = comp > 0 ? -1 : 0; from <= 0; from++) { /* -1: inflow from comp - 1 */
       const size_t sc = from == 0 ? comp : comp - 1; /* source compartment */

@@ -1,0 +1,115 @@
+/* See gransim/parallel.h.  GRANSIM_HAVE_MPI is defined by CMake with
+ * -DGRANSIM_MPI=ON. */
+#include "gransim/parallel.h"
+
+#include <limits.h>
+#include <stdlib.h>
+
+#ifdef GRANSIM_HAVE_MPI
+#include <mpi.h>
+
+static int started; /* 1: this process called MPI_Init */
+
+/* Launched by mpirun (Open MPI, MPICH/PMI, PMIx)?  Only then is MPI started:
+ * a singleton MPI_Init would make every plain run depend on the runtime. */
+static int under_mpirun(void) {
+  static const char *const vars[] = {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", NULL};
+  for (const char *const *v = vars; *v; v++)
+    if (getenv(*v)) return 1;
+  return 0;
+}
+
+void gs_parallel_init(int *argc, char ***argv) {
+  int up = 0;
+  MPI_Initialized(&up);
+  if (up || !under_mpirun()) return;
+  int provided;
+  /* threads inside a rank never call MPI */
+  MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
+  started = 1;
+}
+
+void gs_parallel_finalize(void) {
+  int down = 0;
+  MPI_Finalized(&down);
+  if (started && !down) MPI_Finalize();
+  started = 0;
+}
+
+int gs_parallel_have_mpi(void) { return 1; }
+
+static int mpi_up(void) {
+  int up = 0, down = 0;
+  MPI_Initialized(&up);
+  if (up) MPI_Finalized(&down);
+  return up && !down;
+}
+
+int gs_parallel_rank(void) {
+  int r = 0;
+  if (mpi_up()) MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+
+int gs_parallel_size(void) {
+  int s = 1;
+  if (mpi_up()) MPI_Comm_size(MPI_COMM_WORLD, &s);
+  return s;
+}
+
+double gs_parallel_max(double v) {
+  if (gs_parallel_size() > 1) MPI_Allreduce(MPI_IN_PLACE, &v, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  return v;
+}
+
+/* MPI counts are int: long buffers go in chunks. */
+#define CHUNK ((size_t)INT_MAX / 8)
+
+void gs_parallel_sum(double *v, size_t n) {
+  if (gs_parallel_size() < 2) return;
+  for (size_t i = 0; i < n; i += CHUNK) {
+    size_t k = n - i < CHUNK ? n - i : CHUNK;
+    MPI_Allreduce(MPI_IN_PLACE, v + i, (int)k, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  }
+}
+
+void gs_parallel_broadcast(double *v, size_t n) {
+  if (gs_parallel_size() < 2) return;
+  for (size_t i = 0; i < n; i += CHUNK) {
+    size_t k = n - i < CHUNK ? n - i : CHUNK;
+    MPI_Bcast(v + i, (int)k, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  }
+}
+
+void gs_parallel_broadcast_bytes(void *v, size_t n) {
+  if (gs_parallel_size() < 2) return;
+  for (size_t i = 0; i < n; i += CHUNK) {
+    size_t k = n - i < CHUNK ? n - i : CHUNK;
+    MPI_Bcast((char *)v + i, (int)k, MPI_BYTE, 0, MPI_COMM_WORLD);
+  }
+}
+
+#else /* one process */
+
+void gs_parallel_init(int *argc, char ***argv) {
+  (void)argc;
+  (void)argv;
+}
+void gs_parallel_finalize(void) {}
+int gs_parallel_have_mpi(void) { return 0; }
+int gs_parallel_rank(void) { return 0; }
+int gs_parallel_size(void) { return 1; }
+double gs_parallel_max(double v) { return v; }
+void gs_parallel_sum(double *v, size_t n) {
+  (void)v;
+  (void)n;
+}
+void gs_parallel_broadcast(double *v, size_t n) {
+  (void)v;
+  (void)n;
+}
+void gs_parallel_broadcast_bytes(void *v, size_t n) {
+  (void)v;
+  (void)n;
+}
+#endif

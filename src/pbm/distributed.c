@@ -1,0 +1,121 @@
+/* See distributed.h.  Compiled with MPI when GRANSIM_HAVE_MPI is defined
+ * (cmake -DGRANSIM_MPI=ON); otherwise one process owns every compartment. */
+#include "pbm/distributed.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "gransim/parallel.h"
+
+#ifdef GRANSIM_HAVE_MPI
+#include <mpi.h>
+#endif
+
+int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err) {
+  d->rank = gs_parallel_rank();
+  d->size = gs_parallel_size();
+  d->m = m;
+  const size_t ncomp = m->grid.ncomp;
+  if ((size_t)d->size > ncomp)
+    return gs_error_set(err, GS_EINPUT, "%d MPI ranks for %zu compartments: use at most one rank per compartment",
+                        d->size, ncomp);
+  d->lo = gs_malloc(((size_t)d->size + 1) * sizeof(size_t), err);
+  if (!d->lo) return GS_ENOMEM;
+  for (int r = 0; r <= d->size; r++) d->lo[r] = ncomp * (size_t)r / (size_t)d->size; /* contiguous, balanced */
+  m->comp_lo = d->lo[d->rank];
+  m->comp_hi = d->lo[d->rank + 1];
+  /* per compartment: ncells numbers, ncarried * ncells carried, 2 nvol ledger */
+  const size_t unit[3] = {m->grid.ncells, (size_t)m->ncarried * m->grid.ncells, 2 * (size_t)m->nvol};
+  const size_t base[3] = {0, m->nnum, m->nstate};
+  d->nlocal = 0;
+  for (int s = 0; s < 3; s++) {
+    d->off[s] = base[s] + m->comp_lo * unit[s];
+    d->len[s] = (m->comp_hi - m->comp_lo) * unit[s];
+    d->nlocal += d->len[s];
+  }
+  return GS_OK;
+}
+
+void gs_dist_pack(const gs_dist *d, const double *full, double *local) {
+  for (int s = 0; s < 3; s++) {
+    memcpy(local, full + d->off[s], d->len[s] * sizeof(double));
+    local += d->len[s];
+  }
+}
+
+void gs_dist_unpack(const gs_dist *d, const double *local, double *full) {
+  for (int s = 0; s < 3; s++) {
+    memcpy(full + d->off[s], local, d->len[s] * sizeof(double));
+    local += d->len[s];
+  }
+}
+
+size_t gs_dist_full_index(const gs_dist *d, size_t i) {
+  int s = 0;
+  while (s < 2 && i >= d->len[s]) i -= d->len[s++];
+  return d->off[s] + i;
+}
+
+void gs_dist_free(gs_dist *d) {
+  free(d->lo);
+  d->lo = NULL;
+}
+
+#ifdef GRANSIM_HAVE_MPI
+/* Numbers and carried totals of compartment comp are two separate runs of y. */
+static void exchange(const gs_model *m, double *y, size_t send_comp, int to, size_t recv_comp, int from) {
+  const size_t n = m->grid.ncells, nq = (size_t)m->ncarried * n;
+  MPI_Sendrecv(y + send_comp * n, (int)n, MPI_DOUBLE, to, 0, y + recv_comp * n, (int)n, MPI_DOUBLE, from, 0,
+               MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  if (nq)
+    MPI_Sendrecv(y + m->nnum + send_comp * nq, (int)nq, MPI_DOUBLE, to, 1, y + m->nnum + recv_comp * nq,
+                 (int)nq, MPI_DOUBLE, from, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+}
+#endif
+
+void gs_dist_sync(gs_dist *d, double *y) {
+#ifdef GRANSIM_HAVE_MPI
+  if (d->size < 2) return;
+  const int r = d->rank;
+  int to = r + 1 < d->size ? r + 1 : MPI_PROC_NULL, from = r > 0 ? r - 1 : MPI_PROC_NULL;
+  size_t send = d->lo[r + 1] - 1, recv = d->lo[r] > 0 ? d->lo[r] - 1 : 0;
+  exchange(d->m, y, send, to, recv, from);
+#else
+  (void)d;
+  (void)y;
+#endif
+}
+
+double gs_dist_max(gs_dist *d, double v) { return d->size > 1 ? gs_parallel_max(v) : v; }
+
+int gs_dist_gather(gs_dist *d, double *y, gs_error *err) {
+#ifdef GRANSIM_HAVE_MPI
+  if (d->size < 2) return GS_OK;
+  const gs_model *m = d->m;
+  /* three runs of y per block: numbers, carried, ledger; units per compartment */
+  const size_t unit[3] = {m->grid.ncells, (size_t)m->ncarried * m->grid.ncells, 2 * (size_t)m->nvol};
+  const size_t base[3] = {0, m->nnum, m->nstate};
+  int *counts = malloc((size_t)d->size * sizeof(int)), *displs = malloc((size_t)d->size * sizeof(int));
+  if (!counts || !displs) {
+    free(counts);
+    free(displs);
+    return gs_error_set(err, GS_ENOMEM, "out of memory gathering the state");
+  }
+  for (int part = 0; part < 3; part++) {
+    if (!unit[part]) continue;
+    for (int r = 0; r < d->size; r++) {
+      counts[r] = (int)((d->lo[r + 1] - d->lo[r]) * unit[part]);
+      displs[r] = (int)(d->lo[r] * unit[part]);
+    }
+    MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, y + base[part], counts, displs, MPI_DOUBLE,
+                   MPI_COMM_WORLD);
+  }
+  free(counts);
+  free(displs);
+#else
+  (void)d;
+  (void)y;
+  (void)err;
+#endif
+  return GS_OK;
+}

@@ -1,0 +1,42 @@
+/* Compartments distributed over MPI ranks (seed 000's parallel scheme,
+ * without its master bottleneck): each rank owns a contiguous block of
+ * compartments, integrates only its own part of the state (its numbers,
+ * carried volumes and ledger: three contiguous segments of the full state
+ * vector, packed into one local vector) and evaluates only their rates;
+ * before each right-hand side the last compartment of every block goes to
+ * the next rank (the inflow of transfer); the integrators agree on every
+ * step with all-reduces (max); the full state is assembled on every rank
+ * only at output times.  Without MPI (or outside mpirun, or on one rank)
+ * one block holds everything. */
+#ifndef GRANSIM_DISTRIBUTED_H
+#define GRANSIM_DISTRIBUTED_H
+
+#include "gransim/error.h"
+#include "gransim/pbm.h"
+
+typedef struct {
+  int rank, size;
+  const gs_model *m;
+  size_t *lo;     /* size + 1: rank r owns compartments [lo[r], lo[r + 1]) */
+  size_t off[3];  /* this rank's segments of the full vector: numbers, */
+  size_t len[3];  /* carried volumes, ledger */
+  size_t nlocal;  /* len[0] + len[1] + len[2] */
+} gs_dist;
+
+/* Split the compartments of m over the ranks and set m's comp_lo/comp_hi. */
+int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err);
+void gs_dist_free(gs_dist *d);
+/* This rank's parts of a full vector <-> the packed local vector. */
+void gs_dist_pack(const gs_dist *d, const double *full, double *local);
+void gs_dist_unpack(const gs_dist *d, const double *local, double *full);
+/* Index in the full vector of entry i of the local vector. */
+size_t gs_dist_full_index(const gs_dist *d, size_t i);
+/* Receive the compartment before this block (numbers and carried totals)
+ * from the previous rank; send the last one to the next. */
+void gs_dist_sync(gs_dist *d, double *y);
+/* Maximum of v over the ranks (v itself on one rank). */
+double gs_dist_max(gs_dist *d, double v);
+/* Every rank receives every block of the full vector y (numbers, carried,
+ * ledger), each rank's own parts being current. */
+int gs_dist_gather(gs_dist *d, double *y, gs_error *err);
+#endif

@@ -1,0 +1,104 @@
+# gransim run of sectional cases on MPI ranks (built with -DGRANSIM_MPI=ON): each
+# rank owns a contiguous block of compartments; the results must not depend on
+# the number of ranks or threads.  Checks: the seed-000 example (rk) on 1, 2 and
+# 3 ranks (blocks 2+2 and 1+1+2) and on 2 ranks x 2 threads gives the same
+# summary.csv and the same numbers, carried volumes and ledger in result.h5 to
+# 1e-12 relative (they are identical in practice); a 2-D case with the seed's
+# adaptive Euler the same; only rank 0 prints; cvode and more ranks than
+# compartments are refused with a message; an Euler step that goes negative on
+# rank 1 only stops every rank with status 1 and rank 1's message, without
+# hanging.
+#
+# Usage: bash mpi_sectional.sh GRANSIM_BINARY SOURCE_DIR MPIEXEC [MPIEXEC_OPTIONS...]
+source "$(dirname "$0")/cli-lib.sh" "$1" "$2"
+shift 2
+[ $# -ge 1 ] || fail "no MPI launcher given (usage: bash $0 GRANSIM_BINARY SOURCE_DIR MPIEXEC [OPTIONS...])"
+MPI=("$@")
+# ranks that sleep instead of spinning keep the test quick on a busy machine
+export OMPI_MCA_mpi_yield_when_idle=1 OMP_WAIT_POLICY=passive
+
+# values of a dataset of DIR/result.h5, one per line, in full precision
+values() {
+  h5dump -y -m %.17g -d "$2" "$1/result.h5" |
+    awk '/DATA \{/ { on = 1; next } on && /^ *\}/ { on = 0 } on' | tr ',' '\n' | awk 'NF { print $1 }'
+}
+# same_results DIR_A DIR_B WHAT: summary.csv and the full state agree to 1e-12
+same_results() {
+  csv_rows_close "$1/summary.csv" "$2/summary.csv" 1e-12
+  local ds
+  for ds in /number /ledger ${3:-}; do
+    values "$1" "$ds" >"$WORK/a"
+    values "$2" "$ds" >"$WORK/b"
+    [ -s "$WORK/a" ] || fail "no values in $ds of $1/result.h5"
+    paste -d, "$WORK/a" "$WORK/b" | awk -F, -v ds="$ds" '
+      function abs(v) { return v < 0 ? -v : v }
+      { m = abs($1); if (abs($2) > m) m = abs($2)
+        if ($1 != $2 && abs($1 - $2) > 1e-12 * m) { printf "%s value %d: %s vs %s\n", ds, NR, $1, $2; bad = 1 } }
+      END { exit bad }' || fail "$1 and $2 differ in $ds by more than 1e-12 relative"
+  done
+}
+
+ex="$SRC/examples/corimix-continuous.yaml"
+run_rc 0 "$BIN" run "$ex" --out "$WORK/serial" --quiet --threads 1
+run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2" --quiet --threads 1
+stderr_has "done to t = 85"
+[ "$(grep -c 'done to t' "$WORK/stderr")" = 1 ] || { show_output; fail "expected one final message (rank 0's) on 2 ranks"; }
+same_results "$WORK/serial" "$WORK/np2" /carried
+run_rc 0 "${MPI[@]}" -np 3 "$BIN" run "$ex" --out "$WORK/np3" --quiet --threads 1
+same_results "$WORK/serial" "$WORK/np3" /carried
+run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2t2" --quiet --threads 2
+same_results "$WORK/serial" "$WORK/np2t2" /carried
+
+# the adaptive Euler of seed 000: one step size agreed by all ranks
+c=$(write_case euler.yaml "title: Euler on ranks (2-D, four compartments, feed, transfer)
+grid:
+  compartments: 4
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 20, zero_first: true}
+    - {name: liquid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 20, zero_first: true}
+initial: {type: exponential, number: 1, mean: [0.05, 0.02]}
+mechanisms:
+  - type: feed
+    compartment: 1
+    distribution: {type: exponential, number: 2, mean: [0.05, 0.02]}
+  - type: aggregation
+    kernel: {type: sum, beta0: 0.5}
+  - type: transfer
+    rate: 0.5
+solver: {method: euler, safety: 0.05}
+output: {end: 2, count: 5}")
+run_rc 0 "$BIN" run "$c" --out "$WORK/e1" --quiet --threads 1
+run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$c" --out "$WORK/e2" --quiet --threads 1
+same_results "$WORK/e1" "$WORK/e2"
+
+# refused: cvode on several ranks; more ranks than compartments
+sed 's/method: euler, safety: 0.05/method: cvode/' "$c" >"$WORK/cvode.yaml"
+run_rc 1 timeout 120 "${MPI[@]}" -np 2 "$BIN" run "$WORK/cvode.yaml" --out "$WORK/cv" --quiet
+stderr_has "needs solver.method rk or euler"
+no_result_files "$WORK/cv"
+run_rc 1 timeout 120 "${MPI[@]}" -np 5 "$BIN" run "$c" --out "$WORK/five" --quiet
+stderr_has "5 MPI ranks for 4 compartments"
+
+# a failure on rank 1 only: material fed into compartment 3, drained fast by
+# transfer, with Euler steps held too long; rank 0 (compartments 1-2, empty)
+# must stop too
+cat >"$WORK/neg.yaml" <<YAML
+title: a negative density on rank 1 only
+grid:
+  compartments: 4
+  axes:
+    - {name: v, type: geometric, min: 1.0e-3, ratio: 2, cells: 12, zero_first: true}
+mechanisms:
+  - type: feed
+    compartment: 3
+    distribution: {type: exponential, number: 1, mean: 0.1}
+  - type: transfer
+    rate: 50
+solver: {method: euler, initial_step: 0.1, min_step: 0.1, max_step: 0.1}
+output: {end: 1, count: 3}
+YAML
+run_rc 1 timeout 120 "${MPI[@]}" -np 2 "$BIN" run "$WORK/neg.yaml" --out "$WORK/neg" --quiet
+stderr_has "negative number density" "failed on another MPI rank"
+no_result_files "$WORK/neg"
+
+echo "mpi_sectional: ok"
