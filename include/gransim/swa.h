@@ -197,7 +197,10 @@ void gs_swa_report_free(gs_swa_report *r);
 /* Run all runs (OpenMP over runs), write DIR/result.h5 and DIR/summary.csv
  * (out_dir NULL: no files).  mean/ci (may be NULL) receive the ensemble mean
  * and CI half-width of every summary column: [time][comp][col], columns as
- * gs_swa_columns() lists. */
+ * gs_swa_columns() lists.  Under MPI (gransim/parallel.h) it is collective:
+ * every rank calls it, the runs are spread over the ranks, every rank gets
+ * the same mean, ci, report and status (results identical for any number of
+ * ranks and threads), and only rank 0 writes files and prints progress. */
 int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *mean,
                     double *ci, gs_swa_report *rep, gs_error *err);
 /* Number of summary columns (M0..d90, mean_*, total_*) and their names. */

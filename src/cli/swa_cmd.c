@@ -4,21 +4,26 @@
 #include <unistd.h>
 
 #include "cli/commands.h"
+#include "gransim/parallel.h"
 #include "gransim/swa.h"
 
+/* Under mpirun every rank runs its share of the runs (gs_swa_case_run) and
+ * returns the same status; only rank 0 prints. */
 int gs_cmd_run_swa(gs_cfg *cfg, const char *path, const char *out, int progress, int resume) {
   gs_error err = {0};
   gs_swa_case c;
+  int root = gs_parallel_rank() == 0;
   if (resume) {
-    fprintf(stderr, "gransim: %s: --resume is not available with the swa solver (runs are rerun from their seeds)\n", path);
+    if (root)
+      fprintf(stderr, "gransim: %s: --resume is not available with the swa solver (runs are rerun from their seeds)\n", path);
     gs_cfg_free(cfg);
     return 2;
   }
   int rc = gs_swa_case_from_cfg(cfg, &c, &err);
   gs_swa_report rep = {0};
   if (!rc) rc = gs_swa_case_run(&c, out, progress < 0 ? isatty(2) : progress, NULL, NULL, &rep, &err);
-  if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
-  else
+  if (root && rc) fprintf(stderr, "gransim: %s\n", err.msg);
+  else if (root)
     fprintf(stderr,
             "gransim: %s: swa, %zu runs of %zu particles done to t = %g in %.3f s (%llu jumps, %.3g per "
             "second, %llu fictitious, %llu doublings, %llu contractions); results in %s/result.h5 and "

@@ -1,14 +1,19 @@
-/* Independent runs in parallel (OpenMP over runs, per-run seeds), ensemble
- * means and 90 % confidence half-widths c = 1.64 sqrt(sum_r (M_r - mean)^2)
- * / n_runs (seed 001 eqs. 64-65), and the result files.  Every run keeps its
- * own observations and they are reduced in run order, so the results do not
- * depend on the number of threads. */
+/* Independent runs in parallel (MPI ranks and OpenMP over runs, per-run
+ * seeds), ensemble means and 90 % confidence half-widths c = 1.64
+ * sqrt(sum_r (M_r - mean)^2) / n_runs (seed 001 eqs. 64-65), and the result
+ * files.  Run r is executed by rank r % size, OpenMP spreads a rank's runs over
+ * its threads.  Every run keeps its own observations in run-major arrays that
+ * are zero for the runs other ranks execute; summing them over the ranks
+ * (adding zeros is exact) gives every rank every run's observations, which
+ * are then reduced in run order, so the results do not depend on the number
+ * of ranks or threads.  Only rank 0 writes files and prints progress. */
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "gransim/parallel.h"
 #include "swa/output.h"
 #include "swa/sim.h"
 
@@ -97,6 +102,29 @@ static void reduce(const double *v, size_t runs, size_t n, double *mean, double 
   }
 }
 
+/* Collective: every rank calls it with its own status.  If any rank failed,
+ * every rank returns the failure of the lowest failing rank, with its code and
+ * message (sent as doubles summed with zeros from the other ranks: exact). */
+static int agree(int rc, gs_error *err) {
+  int size = gs_parallel_size(), rank = gs_parallel_rank();
+  if (size < 2) return rc;
+  double k = gs_parallel_max(rc ? (double)(size - rank) : 0.0);
+  if (k == 0) return GS_OK;
+  int from = size - (int)k;
+  enum { NMSG = sizeof err->msg };
+  double buf[1 + NMSG] = {0};
+  if (rank == from) {
+    buf[0] = rc;
+    for (size_t i = 0; i < NMSG && err->msg[i]; i++) buf[1 + i] = (unsigned char)err->msg[i];
+  }
+  gs_parallel_sum(buf, 1 + NMSG);
+  err->code = (int)buf[0];
+  for (size_t i = 0; i < NMSG; i++) err->msg[i] = (char)(unsigned char)buf[1 + i];
+  err->msg[NMSG - 1] = '\0';
+  if (!err->msg[0]) snprintf(err->msg, sizeof err->msg, "a run failed on rank %d", from);
+  return err->code;
+}
+
 int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *mean_out,
                     double *ci_out, gs_swa_report *rep, gs_error *err) {
   const gs_swa_model *m = &c->model;
@@ -112,7 +140,7 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
   double *obs = gs_calloc(runs * nobs, sizeof(double), err);
   double *hist = gs_calloc(runs * nhist, sizeof(double), err);
   double *extra = gs_calloc(runs * nextra, sizeof(double), err);
-  gs_swa_stats *st = gs_calloc(runs, sizeof *st, err);
+  double *st = gs_calloc(runs * 4, sizeof(double), err); /* per run: jumps, fictitious, doublings, contractions */
   double *mean = gs_calloc(nobs, sizeof(double), err), *ci = gs_calloc(nobs, sizeof(double), err);
   double *hm = gs_calloc(nhist, sizeof(double), err), *hc = gs_calloc(nhist, sizeof(double), err);
   double *em = gs_calloc(nextra, sizeof(double), err);
@@ -122,31 +150,55 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
   R.sieve_ci = gs_calloc(nsv, sizeof(double), err);
   int rc = (!obs || !hist || !extra || !st || !mean || !ci || !hm || !hc || !em || !sv || !R.sieve_mean ||
             !R.sieve_ci) ? GS_ENOMEM : GS_OK;
+  int rank = gs_parallel_rank(), size = gs_parallel_size();
+  size_t mine = runs / (size_t)size + ((size_t)rank < runs % (size_t)size); /* runs r with r % size == rank */
+  if (rank) progress = 0;
   double wall0 = omp_get_wtime();
   size_t done = 0;
   gs_error first = {0};
-  if (!rc) {
+  if (!rc && mine) {
 #pragma omp parallel for schedule(dynamic, 1)
-    for (size_t r = 0; r < runs; r++) {
+    for (size_t k = 0; k < mine; k++) {
+      size_t r = (size_t)rank + k * (size_t)size;
       gs_error e = {0};
       int failed;
 #pragma omp atomic read
       failed = first.code;
       if (failed) continue;
-      int code = one_run(c, r, obs + r * nobs, hist + r * nhist, extra + r * nextra, sv + r * nsv, &st[r], &e);
+      gs_swa_stats s1 = {0};
+      int code = one_run(c, r, obs + r * nobs, hist + r * nhist, extra + r * nextra, sv + r * nsv, &s1, &e);
+      double *sr = st + 4 * r;
+      sr[0] = (double)s1.jumps;
+      sr[1] = (double)s1.fictitious;
+      sr[2] = (double)s1.doublings;
+      sr[3] = (double)s1.contractions;
 #pragma omp critical(gs_swa_runs)
       {
         if (code && !first.code) first = e;
         done++;
-        if (progress)
-          fprintf(stderr, "\rgransim: swa run %zu/%zu done (%.1f s)%s", done, runs, omp_get_wtime() - wall0,
-                  done == runs ? "\n" : "");
+        if (progress) {
+          if (size > 1)
+            fprintf(stderr, "\rgransim: swa run %zu/%zu of rank 0 done (%zu runs on %d ranks, %.1f s)%s", done,
+                    mine, runs, size, omp_get_wtime() - wall0, done == mine ? "\n" : "");
+          else
+            fprintf(stderr, "\rgransim: swa run %zu/%zu done (%.1f s)%s", done, runs, omp_get_wtime() - wall0,
+                    done == runs ? "\n" : "");
+        }
       }
     }
     if (first.code) {
       *err = first;
       rc = first.code;
     }
+  }
+  /* every rank gets here: agree on failures, then gather every run's observations */
+  rc = agree(rc, err);
+  if (!rc) {
+    gs_parallel_sum(obs, runs * nobs);
+    gs_parallel_sum(hist, runs * nhist);
+    gs_parallel_sum(extra, runs * nextra);
+    gs_parallel_sum(sv, runs * nsv);
+    gs_parallel_sum(st, runs * 4);
   }
   if (!rc) {
     reduce(obs, runs, nobs, mean, ci);
@@ -158,20 +210,21 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
       outs[i] = em[2 * i];
       parts[i] = em[2 * i + 1];
     }
-    for (size_t r = 0; r < runs; r++) {
-      R.stats.jumps += st[r].jumps;
-      R.stats.fictitious += st[r].fictitious;
-      R.stats.doublings += st[r].doublings;
-      R.stats.contractions += st[r].contractions;
+    for (size_t r = 0; r < runs; r++) { /* counts < 2^53 are exact as doubles */
+      R.stats.jumps += (uint64_t)st[4 * r];
+      R.stats.fictitious += (uint64_t)st[4 * r + 1];
+      R.stats.doublings += (uint64_t)st[4 * r + 2];
+      R.stats.contractions += (uint64_t)st[4 * r + 3];
     }
     R.runs = runs;
     gs_swa_results res = {mean, ci, hm, hc, outs, parts, R.sieve_mean, R.sieve_ci, R.stats};
     if (!parts || !outs) rc = GS_ENOMEM;
-    else if (out_dir) rc = gs_swa_write(c, out_dir, &res, err);
+    else if (out_dir && rank == 0) rc = gs_swa_write(c, out_dir, &res, err);
     free(parts);
     free(outs);
     if (mean_out) memcpy(mean_out, mean, nobs * sizeof(double));
     if (ci_out) memcpy(ci_out, ci, nobs * sizeof(double));
+    rc = agree(rc, err); /* rank 0's write, and memory on any rank */
   }
   R.wall_seconds = omp_get_wtime() - wall0;
   if (rep) *rep = R;
