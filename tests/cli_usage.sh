@@ -10,6 +10,7 @@ run_rc 0 "$BIN" --version
 version=$(sed -n 's/^project(gransim VERSION \([0-9.]*\).*/\1/p' "$SRC/CMakeLists.txt")
 [ -n "$version" ] || fail "cannot find the project version in $SRC/CMakeLists.txt"
 grep -qx "gransim $version" "$WORK/stdout" || { show_output; fail "--version should print 'gransim $version'"; }
+grep -Eqx "MPI: (yes|no)" "$WORK/stdout" || { show_output; fail "--version should say whether gransim was built with MPI"; }
 
 run_rc 0 "$BIN" run --help
 stdout_has "usage: gransim run CASE --out DIR" "--resume" "--threads" "result.h5" "summary.csv"

@@ -142,7 +142,7 @@ int main(int argc, char **argv) {
     return argc < 2 ? 2 : 0;
   }
   if (!strcmp(argv[1], "--version")) {
-    printf("gransim %s%s\n", GRANSIM_VERSION, gs_parallel_have_mpi() ? " (with MPI)" : "");
+    printf("gransim %s\nMPI: %s\n", GRANSIM_VERSION, gs_parallel_have_mpi() ? "yes" : "no");
     return 0;
   }
   if (!strcmp(argv[1], "run")) {
