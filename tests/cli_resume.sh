@@ -16,7 +16,7 @@ initial: {type: exponential, number: 1, mean: [0.1, 0.05]}
 mechanisms:
   - type: aggregation
     kernel: {type: sum, beta0: 1}
-output: {end: 1, count: 41}"
+output: {end: 1, count: 41, checkpoint: 0}   # commit every output time"
 c=$(write_case resume.yaml "$case_text")
 ntimes=41
 

@@ -35,6 +35,7 @@ typedef struct gs_case {
   double *abs_scale;   /* error-control scale per component (ledger excluded) */
   gs_integrator integrator;
   gs_checks checks;
+  double checkpoint;   /* output.checkpoint: seconds of wall time between commits */
 } gs_case;
 
 /* Read, validate and build a case from a file, or from an already loaded

@@ -15,7 +15,9 @@
  *   /case  attribute "text": the case file as read; attribute "file": its name
  *   attributes on /: gransim_version, status ("complete"), ntimes (output
  *   times completely written: the commit mark a resume trusts)
- * The datasets are extendible along time and flushed after every write.
+ * The datasets are extendible along time; output times are committed (written,
+ * flushed, counted in the attribute ntimes) in checkpoints, see
+ * gs_output_set_checkpoint.
  *
  * summary.csv: one row per output time and compartment:
  *   time,compartment,M0,M1,M2,d10,d50,d90,mean_<axis>...,total_<axis>...
@@ -38,6 +40,10 @@ gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_t
 /* Append one output time: state y (nstate) and ledger (nledger). */
 int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
                     const double *ledger, gs_error *err);
+/* Commit buffered output times once `seconds` of wall time have passed since
+ * the last commit (and when 64 MiB are buffered, and at the end); 0 (the
+ * default) commits every output time.  A killed run keeps what was committed. */
+void gs_output_set_checkpoint(gs_output *o, double seconds);
 /* Checkpoint/restart: reopen the partial files left in DIR by an interrupted
  * run of the same case (same grid; checked), read back the last written time,
  * state and ledger into *t, y, ledger, and continue appending after it.

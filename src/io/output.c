@@ -16,7 +16,15 @@
  *    and renamed to .result.h5.partial only once complete, so a run killed
  *    while opening leaves nothing that looks resumable.
  * The CSV is written after each HDF5 commit and regenerated from /summary on
- * resume, so it always agrees with result.h5. */
+ * resume, so it always agrees with result.h5.
+ *
+ * Checkpoints.  Output times are kept in memory and committed together (one
+ * write of several rows per dataset, two flushes) once `checkpoint` seconds of
+ * wall time have passed since the last commit, when the buffer is full
+ * (PENDING_BYTES) and at the end: per-time writes and flushes cost more than
+ * the integration of small cases (seed-000 example: 0.4 ms per output time,
+ * 86 of them in a 0.17 s run).  A killed run loses at most the last interval,
+ * which --resume recomputes.  checkpoint = 0 commits every output time. */
 #include "gransim/output.h"
 
 #include <errno.h>
@@ -27,6 +35,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #ifndef GRANSIM_VERSION
@@ -42,6 +51,7 @@
 #define RANK_MAX (3 + GS_MAX_DIM)              /* /carried: time, comp, quantity, axes */
 #define CHUNK_ROWS 64                          /* time rows per chunk of the small series */
 #define BLOCK_VALUES 65536                     /* doubles per read when copying or rebuilding */
+#define PENDING_BYTES ((size_t)64 << 20)       /* output times held before a commit, at most */
 
 enum { S_TIME, S_NUMBER, S_LEDGER, S_SUMMARY };
 
@@ -61,6 +71,10 @@ struct gs_output {
   size_t ncomp, nstate, nnum;
   int s_carried; /* index of the /carried series, or -1 */
   double *sbuf; /* ncol * ncomp: one output time of every summary column */
+  /* output times written but not yet committed (see Checkpoints above) */
+  double *pending[NSERIES_MAX]; /* cap rows of each series */
+  size_t cap, npending;
+  double checkpoint, last_commit; /* seconds of wall time */
 };
 
 static const char *colname(const gs_output *o, int c) {
@@ -441,6 +455,7 @@ static void output_free(gs_output *o) {
   free(o->csv_tmp);
   free(o->csv_final);
   free(o->sbuf);
+  for (int i = 0; i < NSERIES_MAX; i++) free(o->pending[i]);
   free(o);
 }
 
@@ -574,23 +589,52 @@ static void summarize_all(gs_output *o, const gs_model *m, double t, const doubl
   }
 }
 
-/* Writes one row of every series, then commits it (see the top of the file). */
-static int write_h5_time(gs_output *o, double t, const double *y, const double *ledger,
-                         gs_error *err) {
+static double wall_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* The pending buffers, sized on first use: as many output times as fit in
+ * PENDING_BYTES, at least one. */
+static int pending_alloc(gs_output *o, gs_error *err) {
+  size_t row = 0;
+  for (int i = 0; i < o->nseries; i++) row += o->rowlen[i] * sizeof(double);
+  o->cap = PENDING_BYTES / row ? PENDING_BYTES / row : 1;
+  for (int i = 0; i < o->nseries; i++)
+    if (!(o->pending[i] = gs_malloc(o->cap * o->rowlen[i] * sizeof(double), err))) return GS_ENOMEM;
+  return GS_OK;
+}
+
+/* Writes the pending rows of every series, then commits them (see the top
+ * of the file), then their summary.csv rows. */
+static int commit(gs_output *o, gs_error *err) {
   int rc = GS_OK;
-  for (int i = 0; i < o->nseries && !rc; i++) {
-    const double *row = i == S_TIME         ? &t
-                        : i == S_NUMBER     ? y
-                        : i == S_LEDGER     ? ledger
-                        : i == o->s_carried ? y + o->nnum
-                                            : o->sbuf + (size_t)(i - S_SUMMARY) * o->ncomp;
-    rc = write_rows(o, i, o->ntimes, 1, row, err);
-  }
+  const hsize_t n = o->npending;
+  if (!n) return GS_OK;
+  for (int i = 0; i < o->nseries && !rc; i++) rc = write_rows(o, i, o->ntimes, n, o->pending[i], err);
   if (!rc) rc = flush_h5(o, err);
-  if (!rc && put_i64_attr(o->file, "ntimes", (long long)o->ntimes + 1) < 0)
+  if (!rc && put_i64_attr(o->file, "ntimes", (long long)(o->ntimes + n)) < 0)
     rc = h5_error(err, o->h5_path, "write the attribute ntimes of /");
   if (!rc) rc = flush_h5(o, err);
+  if (rc) return rc;
+  o->ntimes += n;
+  /* summary rows: column c of pending row r is pending[S_SUMMARY + c] + r * ncomp */
+  for (hsize_t r = 0; r < n && !rc; r++) {
+    for (int c = 0; c < o->ncol; c++)
+      memcpy(o->sbuf + (size_t)c * o->ncomp, o->pending[S_SUMMARY + c] + r * o->ncomp, o->ncomp * sizeof(double));
+    rc = csv_rows(o, o->sbuf, o->ncomp, 0, err);
+  }
+  if (!rc) rc = csv_flush(o, err);
+  o->npending = 0;
+  o->last_commit = wall_seconds();
   return rc;
+}
+
+void gs_output_set_checkpoint(gs_output *o, double seconds) {
+  if (!o) return;
+  o->checkpoint = seconds > 0 ? seconds : 0;
+  o->last_commit = wall_seconds();
 }
 
 int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
@@ -598,12 +642,20 @@ int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
   if (m->nstate != o->nstate || m->grid.ncomp != o->ncomp)
     return gs_error_set(err, GS_EINPUT, "output to %s: the model does not match the result file",
                         o->dir);
+  if (!o->cap && pending_alloc(o, err)) return GS_ENOMEM;
   summarize_all(o, m, t, y);
-  int rc = write_h5_time(o, t, y, ledger, err);
-  if (rc) return rc;
-  o->ntimes++;
-  rc = csv_rows(o, o->sbuf, o->ncomp, 0, err);
-  return rc ? rc : csv_flush(o, err);
+  const size_t r = o->npending;
+  for (int i = 0; i < o->nseries; i++) {
+    const double *row = i == S_TIME         ? &t
+                        : i == S_NUMBER     ? y
+                        : i == S_LEDGER     ? ledger
+                        : i == o->s_carried ? y + o->nnum
+                                            : o->sbuf + (size_t)(i - S_SUMMARY) * o->ncomp;
+    memcpy(o->pending[i] + r * o->rowlen[i], row, o->rowlen[i] * sizeof(double));
+  }
+  o->npending++;
+  if (o->npending < o->cap && wall_seconds() - o->last_commit < o->checkpoint) return GS_OK;
+  return commit(o, err);
 }
 
 static int rename_final(const char *from, const char *to, gs_error *err) {
@@ -618,8 +670,8 @@ static int remove_partial(const char *path, gs_error *err) {
 
 int gs_output_finish(gs_output *o, int ok, gs_error *err) {
   if (!o) return GS_OK;
-  int rc = GS_OK;
-  if (ok && set_str_attr(o->file, "status", "complete") < 0)
+  int rc = ok ? commit(o, err) : GS_OK;
+  if (!rc && ok && set_str_attr(o->file, "status", "complete") < 0)
     rc = h5_error(err, o->h5_path, "write the attribute status of /");
   int crc = output_close(o, rc ? NULL : err);
   if (!rc) rc = crc;

@@ -291,6 +291,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     out = opt->resume ? gs_output_resume(opt->out_dir, m, &t, Y, Y + m->nstate, err)
                       : gs_output_open(opt->out_dir, m, gs_cfg_source(c->cfg), gs_cfg_name(c->cfg), err);
     if (!out) rc = err->code;
+    gs_output_set_checkpoint(out, c->checkpoint);
   }
   rc = agree(&dist, rc, err);
   if (!rc && opt && opt->resume && dist.size > 1) { /* the state rank 0 read back */
