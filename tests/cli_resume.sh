@@ -79,4 +79,18 @@ if command -v h5ls >/dev/null 2>&1; then
   grep -Eq "\\{$ntimes(/Inf)?\\}" "$WORK/h5ls" || { cat "$WORK/h5ls" >&2; fail "/time of the resumed result.h5 does not have $ntimes entries"; }
 fi
 
+# checkpoints: committing all output times together at the end (a long
+# checkpoint interval) writes the same files as committing each one
+sed 's/checkpoint: 0}/checkpoint: 1000}/' "$c" >"$WORK/batched.yaml"
+grep -q "checkpoint: 1000}" "$WORK/batched.yaml" || fail "could not set output.checkpoint in the case"
+run_rc 0 "$BIN" run "$WORK/batched.yaml" --out "$WORK/batched" --threads 1 --quiet
+cmp -s "$WORK/ref/summary.csv" "$WORK/batched/summary.csv" || fail "checkpoint 1000 and 0 give different summary.csv"
+if command -v h5dump >/dev/null 2>&1; then
+  for ds in /time /number /ledger /summary/d50; do
+    h5dump -m %.17g -d "$ds" "$WORK/ref/result.h5" | tail -n +3 >"$WORK/a"
+    h5dump -m %.17g -d "$ds" "$WORK/batched/result.h5" | tail -n +3 >"$WORK/b"
+    cmp -s "$WORK/a" "$WORK/b" || fail "checkpoint 1000 and 0 give different $ds in result.h5"
+  done
+fi
+
 echo "cli_resume: ok (killed after $done_rows of $ntimes output times)"
