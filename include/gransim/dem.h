@@ -186,6 +186,17 @@ void gs_dem_counters_reset(gs_dem *d);
  * (the last bin takes everything above). */
 const uint64_t *gs_dem_impact_histogram(const gs_dem *d, size_t wall, int cls, int *nbins,
                                         double *dv);
+/* Impacts slower than this [m/s] are resting contacts (a particle placed
+ * touching a wall): they count as impacts but their speed is not recorded,
+ * as `gransim dem-reduce` leaves them out of its fits (min_speed). */
+#define GS_DEM_MIN_IMPACT_SPEED 1e-3
+/* The speed of every wall impact since the last gs_dem_counters_reset:
+ * U = |v - v_wall|, the particle's velocity relative to the wall material at
+ * the contact point when the contact began.  Returns their number; for impact
+ * k, wall_class[k] = wall * nclass + class and ln_u[k] = ln U [ln(m/s)].
+ * Ordered by step and, within a step, by particle id, so the record does not
+ * depend on the number of threads.  Valid until the next step or reset. */
+size_t gs_dem_impact_speeds(const gs_dem *d, const int **wall_class, const double **ln_u);
 
 /* Number of particle-particle contacts currently active. */
 size_t gs_dem_ncontacts(const gs_dem *d);

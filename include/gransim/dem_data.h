@@ -101,6 +101,18 @@ int gs_dem_data_write_table(const gs_dem_data *d, const char *path, gs_error *er
 int gs_dem_data_write_impacts(const gs_dem_data *d, const char *path, gs_error *err);
 void gs_dem_data_free(gs_dem_data *d);
 
+/* Lognormal fit of impact speeds from their logarithms ln_u: mu = mean and
+ * sigma = sample standard deviation of ln U (GSL); both NAN below 2 samples.
+ * Used by the dump reducer and by `gransim dem` (src/dem/stats.c). */
+void gs_dem_lognormal_fit(const double *ln_u, size_t n, double *mu, double *sigma);
+/* Write the table the `dem_impact` selection function reads
+ * (src/kernel/selection_dem.c): the comment lines (each starting with '#',
+ * may be NULL), a line naming the measure of the edges, `edges, e0, ..., en`,
+ * then the rows rate, mu and sigma with one value per class. */
+int gs_dem_impact_table_write(const char *path, const char *comment, size_t nclass, const double *edges,
+                              int edges_volume, const double *rate, const double *mu, const double *sigma,
+                              gs_error *err);
+
 /* Duration of a head-on Hertz contact (s): effective mass meff (kg), radius reff (m), modulus estar
  * (Pa, 1/E* = sum (1 - nu^2)/E), impact speed v (m/s), restitution e (>= 1 or <= 0: elastic,
  * 2.868 (meff^2 / (reff estar^2 v))^(1/5); else the LIGGGHTS viscoelastic damping for e, contact

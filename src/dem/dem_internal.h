@@ -121,6 +121,13 @@ struct gs_dem {
   double *wall_vn_sum, *wall_vn2_sum, *wall_vt_sum;
   uint64_t *impact_hist; /* nwalls*nclass*GS_DEM_IMPACT_BINS */
   double impact_dv;
+  /* ln U of every wall impact since the last counters reset, in the order of
+   * the steps and, within a step, of the particle ids (so the record does not
+   * depend on the thread count): wall*nclass + class, and ln U */
+  int *imp_q;
+  double *imp_lnu;
+  size_t nimp, imp_cap;
+  int oom; /* a force loop ran out of memory (reported by gs_dem_run) */
   uint64_t lost, rebuilds;
   double t_reset;
   /* particles removed by the predicate since the last gs_dem_take_removed */

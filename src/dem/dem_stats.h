@@ -11,7 +11,9 @@ typedef struct {
   double t0;
   long nsamples;
   double *num_sum;                    /* per class */
-  double *cv_n, *cv_s, *cv_s2, *cv_a; /* per class x compartment */
+  double *cv_n, *cv_s, *cv_s2, *cv_a; /* per class x compartment: samples, sums of speed,
+                                          speed^2 and axial velocity */
+  double *cv_v, *cv_v2;               /* 3 per class x compartment: sums of vx, vy, vz and squares */
   double hold_n_sum, hold_m_sum;
   double *rt;                         /* residence times of removed particles */
   int *rt_cls;
@@ -22,14 +24,24 @@ typedef struct {
 int gs_dem_stats_init(gs_dem_stats *s, const gs_dem_case *c, gs_error *err);
 void gs_dem_stats_free(gs_dem_stats *s);
 /* Forget everything and restart the window at time t (also resets the
- * engine's event counters). */
+ * engine's event counters and discards the particles removed before t). */
 void gs_dem_stats_reset(gs_dem_stats *s, gs_dem_case *c, double t);
+/* The steady-state detector (seed 000): 1 when, over the last w of the n
+ * samples, both series a (hold-up mass) and b (collision rate) stay within
+ * tol * mean of their window means, and both means are > 0. */
+int gs_dem_is_steady(const double *a, const double *b, long n, long w, double tol);
 /* Hold-up of the case (number and mass in the hold-up region, or all). */
 void gs_dem_holdup(const gs_dem_case *c, double *n, double *m);
 /* One sample of the state; takes the removed particles' residence times. */
 int gs_dem_stats_sample(gs_dem_stats *s, gs_dem_case *c, gs_error *err);
-/* Write collisions.csv, collision_kernel.csv, impacts.csv,
- * impact_velocity.csv, velocity.csv, residence.csv into dir. */
+/* Write collisions.csv, collision_kernel.csv, impacts.csv, impact_table.csv
+ * (and impact_table_WALL.csv per wall), impact_velocity.csv, velocity.csv,
+ * residence.csv and residence_class.csv into dir.  t_steady < 0: the steady
+ * state was not detected.  Without a statistics window (start: steady never
+ * fired, or no sample in the window) the rates are written as nan with a
+ * note in each file's header. */
 int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *dir, double t_end,
                        double t_steady, gs_error *err);
+/* 1 if the window holds statistics (gs_dem_stats_write writes rates). */
+int gs_dem_stats_have_window(const gs_dem_stats *s, const gs_dem_case *c, double t_end, double t_steady);
 #endif

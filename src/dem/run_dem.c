@@ -52,22 +52,6 @@ static double wall_seconds(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-/* Steady when, over the last `window` samples, hold-up mass and collision rate
- * each stay within tol of their window mean (seed 000's criterion). */
-static int is_steady(const double *a, const double *b, long n, long w, double tol) {
-  if (n < w) return 0;
-  const double *s[2] = {a + n - w, b + n - w};
-  for (int q = 0; q < 2; q++) {
-    double mean = 0;
-    for (long k = 0; k < w; k++) mean += s[q][k];
-    mean /= (double)w;
-    if (!(mean > 0)) return 0;
-    for (long k = 0; k < w; k++)
-      if (fabs(s[q][k] - mean) > tol * mean) return 0;
-  }
-  return 1;
-}
-
 int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err) {
   if (mkdir(dir, 0777) && errno != EEXIST)
     return gs_error_set(err, GS_EIO, "%s: cannot create output folder: %s", dir, strerror(errno));
@@ -99,9 +83,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
     if (!rc && progress) fprintf(stderr, "gransim dem: fill[%zu]: %ld particles, %.4g kg\n", k, n, m);
   }
   if (c->noutlets) gs_dem_remove_if(d, in_outlet, c);
-  if (!rc && gs_dem_rayleigh_time(d) < HUGE_VAL && dt > 0.2 * gs_dem_rayleigh_time(d))
-    fprintf(stderr, "gransim: warning: time step %g s is %.0f %% of the Rayleigh time\n", dt,
-            100 * dt / gs_dem_rayleigh_time(d));
+  /* (the time step was checked against the Rayleigh time when the case was read) */
 
   snprintf(path, sizeof path, "%s/timeseries.csv", dir);
   FILE *ts = rc ? NULL : fopen(path, "w");
@@ -172,7 +154,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
         ns++;
         prev_events = ev;
       }
-      if (!rc && !steady && is_steady(ser_m, ser_c, ns, c->steady_window, c->steady_tol)) {
+      if (!rc && !steady && gs_dem_is_steady(ser_m, ser_c, ns, c->steady_window, c->steady_tol)) {
         steady = 1;
         t_steady = gs_dem_time(d);
         if (progress) fprintf(stderr, "gransim dem: steady state at t = %.6g s\n", t_steady);
@@ -250,6 +232,17 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
             t_steady >= 0 ? "" : "; steady state not reached");
   }
   if (ts) fclose(ts);
+  if (!rc && !gs_dem_stats_have_window(&st, c, gs_dem_time(d), t_steady)) {
+    if (c->start_steady)
+      fprintf(stderr, "gransim: warning: %s: statistics.start is 'steady' but the steady state was not reached "
+              "by t = %.6g s (hold-up mass and collision rate within %g of their means over %ld samples): there "
+              "is no statistics window, so the rates in the tables are nan; run longer, or set statistics.start "
+              "to a time or loosen statistics.steady\n", c->path, gs_dem_time(d), c->steady_tol, c->steady_window);
+    else
+      fprintf(stderr, "gransim: warning: %s: no sample in the statistics window (statistics.start %.6g s, "
+              "sample_every %.6g s, duration %.6g s): the rates in the tables are nan\n", c->path, c->stats_start,
+              c->sample_every, c->duration);
+  }
   if (!rc) rc = gs_dem_stats_write(&st, c, dir, gs_dem_time(d), t_steady, err);
   gs_dem_stats_free(&st);
   free(ser_m);

@@ -74,6 +74,8 @@ void gs_dem_free(gs_dem *d) {
   free(d->wall_vn2_sum);
   free(d->wall_vt_sum);
   free(d->impact_hist);
+  free(d->imp_q);
+  free(d->imp_lnu);
   free(d->rm_cls);
   free(d->rm_rt);
   free(d->rm_m);
@@ -235,9 +237,11 @@ int gs_dem_prepare(gs_dem *d, gs_error *err) {
   return GS_OK;
 }
 
-static void compute_forces(gs_dem *d) {
+static int compute_forces(gs_dem *d, gs_error *err) {
   gs_dem_pair_forces(d);
   gs_dem_wall_forces(d);
+  if (d->oom) return gs_error_set(err, GS_ENOMEM, "DEM: out of memory for the contact counters");
+  return GS_OK;
 }
 
 int gs_dem_run(gs_dem *d, long nsteps, gs_error *err) {
@@ -257,7 +261,7 @@ int gs_dem_run(gs_dem *d, long nsteps, gs_error *err) {
       p->fz[i] = p->m[i] * g2;
       p->tx[i] = p->ty[i] = p->tz[i] = 0;
     }
-    compute_forces(d);
+    if ((rc = compute_forces(d, err))) return rc;
   }
   for (long s = 0; s < nsteps; s++) {
     gs_dem_particles *p = &d->p;
@@ -299,7 +303,7 @@ int gs_dem_run(gs_dem *d, long nsteps, gs_error *err) {
       p = &d->p;
       n = p->n;
     }
-    compute_forces(d);
+    if ((rc = compute_forces(d, err))) return rc;
     int bad = 0;
 #pragma omp parallel for reduction(| : bad) schedule(static) if (n >= d->par_min)
     for (size_t i = 0; i < n; i++) {
@@ -355,7 +359,14 @@ void gs_dem_counters_reset(gs_dem *d) {
   memset(d->wall_vn2_sum, 0, nwc * sizeof(double));
   memset(d->wall_vt_sum, 0, nwc * sizeof(double));
   memset(d->impact_hist, 0, nwc * GS_DEM_IMPACT_BINS * sizeof(uint64_t));
+  d->nimp = 0;
   d->t_reset = d->t;
+}
+
+size_t gs_dem_impact_speeds(const gs_dem *d, const int **wall_class, const double **ln_u) {
+  *wall_class = d->imp_q;
+  *ln_u = d->imp_lnu;
+  return d->nimp;
 }
 
 const uint64_t *gs_dem_impact_histogram(const gs_dem *d, size_t wall, int cls, int *nbins,

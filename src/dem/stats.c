@@ -6,7 +6,10 @@
  * and N_i the mean number of class-i particles over the samples, as in
  * seed 000 eq. (9).  collision_kernel.csv holds C in the format of the PBM's
  * `table` kernel (src/kernel/kernel_table.c) with class edges in particle
- * diameter (use `measure: diameter` there). */
+ * diameter (use `measure: diameter` there); impact_table.csv holds the wall
+ * impacts in the format of the `dem_impact` breakage selection
+ * (src/kernel/selection_dem.c), written and fitted by the same functions as
+ * `gransim dem-reduce --impacts` (include/gransim/dem_data.h). */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -14,6 +17,7 @@
 #include <string.h>
 
 #include "dem/dem_stats.h"
+#include "gransim/dem_data.h"
 
 int gs_dem_stats_init(gs_dem_stats *s, const gs_dem_case *c, gs_error *err) {
   memset(s, 0, sizeof *s);
@@ -25,7 +29,9 @@ int gs_dem_stats_init(gs_dem_stats *s, const gs_dem_case *c, gs_error *err) {
   s->cv_s = calloc(n, sizeof(double));
   s->cv_s2 = calloc(n, sizeof(double));
   s->cv_a = calloc(n, sizeof(double));
-  if (!s->num_sum || !s->cv_n || !s->cv_s || !s->cv_s2 || !s->cv_a)
+  s->cv_v = calloc(3 * n, sizeof(double));
+  s->cv_v2 = calloc(3 * n, sizeof(double));
+  if (!s->num_sum || !s->cv_n || !s->cv_s || !s->cv_s2 || !s->cv_a || !s->cv_v || !s->cv_v2)
     return gs_error_set(err, GS_ENOMEM, "out of memory");
   return GS_OK;
 }
@@ -36,6 +42,8 @@ void gs_dem_stats_free(gs_dem_stats *s) {
   free(s->cv_s);
   free(s->cv_s2);
   free(s->cv_a);
+  free(s->cv_v);
+  free(s->cv_v2);
   free(s->rt);
   free(s->rt_cls);
   memset(s, 0, sizeof *s);
@@ -50,10 +58,30 @@ void gs_dem_stats_reset(gs_dem_stats *s, gs_dem_case *c, double t) {
   memset(s->cv_s, 0, n * sizeof(double));
   memset(s->cv_s2, 0, n * sizeof(double));
   memset(s->cv_a, 0, n * sizeof(double));
+  memset(s->cv_v, 0, 3 * n * sizeof(double));
+  memset(s->cv_v2, 0, 3 * n * sizeof(double));
   s->hold_n_sum = s->hold_m_sum = 0;
   s->nrt = 0;
   s->out_mass = 0;
+  /* particles that left before t belong to no window */
+  const int *cls;
+  const double *rt, *ms;
+  (void)gs_dem_take_removed(c->dem, &cls, &rt, &ms);
   gs_dem_counters_reset(c->dem);
+}
+
+int gs_dem_is_steady(const double *a, const double *b, long n, long w, double tol) {
+  if (w < 1 || n < w) return 0;
+  const double *s[2] = {a + n - w, b + n - w};
+  for (int q = 0; q < 2; q++) {
+    double mean = 0;
+    for (long k = 0; k < w; k++) mean += s[q][k];
+    mean /= (double)w;
+    if (!(mean > 0)) return 0;
+    for (long k = 0; k < w; k++)
+      if (!(fabs(s[q][k] - mean) <= tol * mean)) return 0;
+  }
+  return 1;
 }
 
 void gs_dem_holdup(const gs_dem_case *c, double *n, double *m) {
@@ -81,12 +109,17 @@ int gs_dem_stats_sample(gs_dem_stats *s, gs_dem_case *c, gs_error *err) {
     if (pos < c->cmp_edges[0] || pos >= c->cmp_edges[c->ncmp]) continue;
     size_t q = 0;
     while (q + 1 < c->ncmp && pos >= c->cmp_edges[q + 1]) q++;
-    double sp2 = v.vx[i] * v.vx[i] + v.vy[i] * v.vy[i] + v.vz[i] * v.vz[i];
+    const double vel[3] = {v.vx[i], v.vy[i], v.vz[i]};
+    double sp2 = vel[0] * vel[0] + vel[1] * vel[1] + vel[2] * vel[2];
     size_t at = (size_t)k * s->ncmp + q;
     s->cv_n[at] += 1;
     s->cv_s[at] += sqrt(sp2);
     s->cv_s2[at] += sp2;
-    s->cv_a[at] += v.vx[i] * ax[0] + v.vy[i] * ax[1] + v.vz[i] * ax[2];
+    s->cv_a[at] += vel[0] * ax[0] + vel[1] * ax[1] + vel[2] * ax[2];
+    for (int a = 0; a < 3; a++) {
+      s->cv_v[3 * at + a] += vel[a];
+      s->cv_v2[3 * at + a] += vel[a] * vel[a];
+    }
   }
   double hn, hm;
   gs_dem_holdup(c, &hn, &hm);
@@ -114,6 +147,11 @@ int gs_dem_stats_sample(gs_dem_stats *s, gs_dem_case *c, gs_error *err) {
   return GS_OK;
 }
 
+int gs_dem_stats_have_window(const gs_dem_stats *s, const gs_dem_case *c, double t_end, double t_steady) {
+  if (c->start_steady && t_steady < 0) return 0;
+  return s->nsamples > 0 && t_end > s->t0;
+}
+
 static FILE *open_table(const char *dir, const char *name, char *path, size_t n, gs_error *err) {
   snprintf(path, n, "%s/%s", dir, name);
   FILE *fp = fopen(path, "w");
@@ -127,73 +165,168 @@ static int close_table(FILE *fp, const char *path, gs_error *err) {
   return GS_OK;
 }
 
+/* The class edges of the written tables, in particle diameter: halfway
+ * between neighbouring classes' radius ranges, the outer edges just outside
+ * the smallest and largest diameters. */
+static void class_edges(const gs_dem_case *c, double *e) {
+  const int ncl = (int)c->nclass;
+  for (int i = 0; i <= ncl; i++) {
+    if (i == 0) e[i] = 2 * c->cls[0].rmin * 0.999;
+    else if (i == ncl) e[i] = 2 * c->cls[ncl - 1].rmax * 1.001;
+    else e[i] = c->cls[i - 1].rmax + c->cls[i].rmin; /* halfway in diameter */
+    if (i > 0 && i < ncl && !(c->cls[i].rmin > c->cls[i - 1].rmax))
+      e[i] = c->cls[i - 1].rmax * 2 * (1 + 1e-6 * i); /* overlapping classes: keep edges increasing */
+  }
+}
+
+/* impact_table.csv (wall < 0: all walls) or impact_table_WALL.csv */
+static int write_impact_table(const gs_dem_stats *s, const gs_dem_case *c, const char *dir, long wall,
+                              double win, int have, const char *note, gs_error *err) {
+  const int ncl = s->ncl;
+  gs_dem_counters k;
+  gs_dem_get_counters(c->dem, &k);
+  const int *wc;
+  const double *lnu;
+  size_t nimp = gs_dem_impact_speeds(c->dem, &wc, &lnu);
+  double *buf = malloc((nimp + 1) * sizeof(double)), *e = malloc((4 * (size_t)ncl + 1) * sizeof(double));
+  if (!buf || !e) {
+    free(buf);
+    free(e);
+    return gs_error_set(err, GS_ENOMEM, "out of memory");
+  }
+  double *rate = e + ncl + 1, *mu = rate + ncl, *sigma = mu + ncl;
+  class_edges(c, e);
+  const double ns = s->nsamples ? (double)s->nsamples : 1;
+  uint64_t nall = 0;
+  for (int i = 0; i < ncl; i++) {
+    uint64_t n = 0;
+    for (size_t w = 0; w < k.nwalls; w++)
+      if (wall < 0 || (size_t)wall == w) n += k.wall_impacts[w * (size_t)ncl + i];
+    nall += n;
+    double Ni = s->num_sum[i] / ns;
+    rate[i] = !have ? NAN : Ni > 0 ? (double)n / (Ni * win) : 0;
+  }
+  /* fits per class, then the pooled fit for classes with too few speeds */
+  size_t npool = 0, m = 0;
+  for (size_t q = 0; q < nimp; q++)
+    if (wall < 0 || wc[q] / ncl == wall) buf[npool++] = lnu[q];
+  double pmu, psig;
+  gs_dem_lognormal_fit(buf, npool, &pmu, &psig);
+  size_t pooled_classes = 0;
+  for (int i = 0; i < ncl; i++) {
+    m = 0;
+    for (size_t q = 0; q < nimp; q++)
+      if (wc[q] % ncl == i && (wall < 0 || wc[q] / ncl == wall)) buf[m++] = lnu[q];
+    gs_dem_lognormal_fit(buf, m, &mu[i], &sigma[i]);
+    if (!(isfinite(mu[i]) && sigma[i] > 0)) {
+      mu[i] = pmu;
+      sigma[i] = psig;
+      pooled_classes++;
+    }
+    if (!have) mu[i] = sigma[i] = NAN;
+  }
+  char name[200], path[4200], comment[2048];
+  if (wall < 0) snprintf(name, sizeof name, "impact_table.csv");
+  else snprintf(name, sizeof name, "impact_table_%s.csv", gs_dem_wall_name(c->dem, (size_t)wall));
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  int len = snprintf(comment, sizeof comment,
+                     "# gransim dem: wall impacts (contacts that began) on %s%s, per class, from t = %.9g s (window %.9g s)%s\n"
+                     "# rows: impacts per particle per second (impacts / (N_i window));\n"
+                     "# mu, sigma of the lognormal fit of the impact speed U = |v - v_wall| (mean and sample sd of ln U,\n"
+                     "# ln m/s; %zu of %llu impacts fitted, those slower than %g m/s left out; %zu class(es) with fewer than\n"
+                     "# 2 fitted impacts or sigma 0 take the pooled fit of all classes, mu %.6g, sigma %.6g)\n",
+                     wall < 0 ? "all walls" : "wall ", wall < 0 ? "" : gs_dem_wall_name(c->dem, (size_t)wall),
+                     s->t0, win, note, npool, (unsigned long long)nall, GS_DEM_MIN_IMPACT_SPEED, pooled_classes,
+                     pmu, psig);
+  if (have && !(isfinite(pmu) && psig > 0) && len > 0 && (size_t)len < sizeof comment)
+    snprintf(comment + len, sizeof comment - (size_t)len,
+             "# no lognormal fit: fewer than 2 impact speeds (or all equal); mu and sigma are nan\n");
+  int rc = gs_dem_impact_table_write(path, comment, (size_t)ncl, e, 0, rate, mu, sigma, err);
+  free(buf);
+  free(e);
+  return rc;
+}
+
 int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *dir, double t_end,
                        double t_steady, gs_error *err) {
   const int ncl = s->ncl;
   const double win = t_end - s->t0, ns = s->nsamples ? (double)s->nsamples : 1;
+  const int have = gs_dem_stats_have_window(s, c, t_end, t_steady);
+  /* why there are no rates, for every file's header */
+  const char *note = have ? ""
+                     : c->start_steady && t_steady < 0
+                         ? "; NO STATISTICS WINDOW: statistics.start is 'steady' and the steady state was not "
+                           "reached, so every rate and mean below is nan"
+                         : "; NO STATISTICS WINDOW: no sample was taken in it, so every rate and mean below is nan";
   gs_dem_counters k;
   gs_dem_get_counters(c->dem, &k);
   char path[4200];
   FILE *fp;
   int rc;
-  double *C = calloc((size_t)ncl * ncl, sizeof(double));
-  if (!C) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  double *C = calloc((size_t)ncl * ncl, sizeof(double)), *e = malloc(((size_t)ncl + 1) * sizeof(double));
+  if (!C || !e) {
+    free(C);
+    free(e);
+    return gs_error_set(err, GS_ENOMEM, "out of memory");
+  }
 
   /* collisions per class pair */
-  if (!(fp = open_table(dir, "collisions.csv", path, sizeof path, err))) { free(C); return err->code; }
-  fprintf(fp, "# collision events (contacts that began) from t = %.9g to %.9g s (%.9g s, %ld samples)%s\n",
-          s->t0, t_end, win, s->nsamples, t_steady >= 0 ? "" : "; steady state not detected");
+  if (!(fp = open_table(dir, "collisions.csv", path, sizeof path, err))) { free(C); free(e); return err->code; }
+  fprintf(fp, "# collision events (contacts that began) from t = %.9g to %.9g s (%.9g s, %ld samples)%s%s\n",
+          s->t0, t_end, win, s->nsamples, t_steady >= 0 ? "" : "; steady state not detected", note);
   fprintf(fp, "class_i,class_j,name_i,name_j,events,N_i,N_j,window_s,events_per_s,C_ij\n");
   for (int i = 0; i < ncl; i++)
     for (int j = i; j < ncl; j++) {
-      double ev = (double)k.pair_events[i * ncl + j], Ni = s->num_sum[i] / ns, Nj = s->num_sum[j] / ns;
-      double cij = Ni > 0 && Nj > 0 && win > 0 ? ev / (Ni * Nj * win) : 0;
+      double ev = (double)k.pair_events[i * ncl + j];
+      double Ni = have ? s->num_sum[i] / ns : NAN, Nj = have ? s->num_sum[j] / ns : NAN;
+      double cij = !have ? NAN : Ni > 0 && Nj > 0 ? ev / (Ni * Nj * win) : 0;
       C[i * ncl + j] = C[j * ncl + i] = cij;
       fprintf(fp, "%d,%d,%s,%s,%.0f,%.6g,%.6g,%.9g,%.9g,%.9g\n", i + 1, j + 1, c->cls[i].name,
-              c->cls[j].name, ev, Ni, Nj, win, win > 0 ? ev / win : 0, cij);
+              c->cls[j].name, ev, Ni, Nj, win, have ? ev / win : NAN, cij);
     }
-  if ((rc = close_table(fp, path, err))) { free(C); return rc; }
+  if ((rc = close_table(fp, path, err))) { free(C); free(e); return rc; }
 
   /* the same as a PBM kernel table: edges in diameter halfway between classes */
-  if (!(fp = open_table(dir, "collision_kernel.csv", path, sizeof path, err))) { free(C); return err->code; }
-  fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt) [1/s], window %.9g s;\n"
+  if (!(fp = open_table(dir, "collision_kernel.csv", path, sizeof path, err))) { free(C); free(e); return err->code; }
+  fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt) [1/s], window %.9g s%s;\n"
           "# edges are particle diameters [m]: use `kernel: {type: table, measure: diameter, ...}`\n"
-          "edges", win);
-  for (int i = 0; i <= ncl; i++) {
-    double e;
-    if (i == 0) e = 2 * c->cls[0].rmin * 0.999;
-    else if (i == ncl) e = 2 * c->cls[ncl - 1].rmax * 1.001;
-    else e = c->cls[i - 1].rmax + c->cls[i].rmin; /* halfway in diameter */
-    if (i > 0 && i < ncl && !(c->cls[i].rmin > c->cls[i - 1].rmax))
-      e = c->cls[i - 1].rmax * 2 * (1 + 1e-6 * i); /* overlapping classes: keep edges increasing */
-    fprintf(fp, ", %.9g", e);
-  }
+          "edges", win, note);
+  class_edges(c, e);
+  for (int i = 0; i <= ncl; i++) fprintf(fp, ", %.9g", e[i]);
   fprintf(fp, "\n");
   for (int i = 0; i < ncl; i++) {
     for (int j = 0; j < ncl; j++) fprintf(fp, "%s%.9g", j ? ", " : "", C[i * ncl + j]);
     fprintf(fp, "\n");
   }
   free(C);
+  free(e);
   if ((rc = close_table(fp, path, err))) return rc;
 
   /* impacts per wall and class */
   if (!(fp = open_table(dir, "impacts.csv", path, sizeof path, err))) return err->code;
+  fprintf(fp, "# wall impacts (contacts that began) from t = %.9g to %.9g s (%.9g s)%s; vn: normal speed "
+          "relative to the wall, vt: tangential speed of the contact point\n", s->t0, t_end, win, note);
   fprintf(fp, "wall,class,name,impacts,impacts_per_s,impacts_per_particle_s,mean_vn,std_vn,mean_vt\n");
   for (size_t w = 0; w < k.nwalls; w++)
     for (int i = 0; i < ncl; i++) {
       size_t q = w * (size_t)ncl + i;
       double n = (double)k.wall_impacts[q], Ni = s->num_sum[i] / ns;
-      double mv = n > 0 ? k.wall_vn_sum[q] / n : 0;
-      double sv = n > 1 ? sqrt(fmax(0, (k.wall_vn2_sum[q] - n * mv * mv) / (n - 1))) : 0;
+      double mv = n > 0 ? k.wall_vn_sum[q] / n : NAN;
+      double sv = n > 1 ? sqrt(fmax(0, (k.wall_vn2_sum[q] - n * mv * mv) / (n - 1))) : NAN;
       fprintf(fp, "%s,%d,%s,%.0f,%.9g,%.9g,%.6g,%.6g,%.6g\n", gs_dem_wall_name(c->dem, w), i + 1,
-              c->cls[i].name, n, win > 0 ? n / win : 0, win > 0 && Ni > 0 ? n / (Ni * win) : 0, mv, sv,
-              n > 0 ? k.wall_vt_sum[q] / n : 0);
+              c->cls[i].name, n, have ? n / win : NAN, !have ? NAN : Ni > 0 ? n / (Ni * win) : 0, mv, sv,
+              n > 0 ? k.wall_vt_sum[q] / n : NAN);
     }
   if ((rc = close_table(fp, path, err))) return rc;
 
+  /* the breakage selection's table: all walls, and each wall alone */
+  if ((rc = write_impact_table(s, c, dir, -1, win, have, note, err))) return rc;
+  for (size_t w = 0; w < k.nwalls; w++)
+    if ((rc = write_impact_table(s, c, dir, (long)w, win, have, note, err))) return rc;
+
   if (!(fp = open_table(dir, "impact_velocity.csv", path, sizeof path, err))) return err->code;
-  fprintf(fp, "# normal impact speed distributions (the last bin holds everything above)\n"
-          "wall,class,vn_lo,vn_hi,impacts\n");
+  fprintf(fp, "# normal impact speed distributions (the last bin holds everything above)%s\n"
+          "wall,class,vn_lo,vn_hi,impacts\n", note);
   for (size_t w = 0; w < k.nwalls; w++)
     for (int i = 0; i < ncl; i++) {
       int nb;
@@ -207,36 +340,73 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
 
   /* velocities per class and compartment */
   if (!(fp = open_table(dir, "velocity.csv", path, sizeof path, err))) return err->code;
-  fprintf(fp, "class,name,compartment,from,to,mean_number,mean_speed,std_speed,mean_axial_velocity\n");
+  fprintf(fp, "# over the %ld samples from t = %.9g to %.9g s, every particle of the class in the compartment "
+          "once per sample: speed |v|, velocity components and the axial component v.axis; std: sample "
+          "standard deviation (n - 1)%s\n", s->nsamples, s->t0, t_end, note);
+  fprintf(fp, "class,name,compartment,from,to,mean_number,mean_speed,std_speed,mean_axial_velocity,"
+          "mean_vx,mean_vy,mean_vz,std_vx,std_vy,std_vz\n");
   for (int i = 0; i < ncl; i++)
     for (size_t q = 0; q < s->ncmp; q++) {
       size_t at = (size_t)i * s->ncmp + q;
-      double n = s->cv_n[at], m = n > 0 ? s->cv_s[at] / n : 0;
-      double sd = n > 1 ? sqrt(fmax(0, (s->cv_s2[at] - n * m * m) / (n - 1))) : 0;
-      fprintf(fp, "%d,%s,%zu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", i + 1, c->cls[i].name, q + 1,
-              c->cmp_edges[q], c->cmp_edges[q + 1], n / ns, m, sd, n > 0 ? s->cv_a[at] / n : 0);
+      double n = s->cv_n[at], m = n > 0 ? s->cv_s[at] / n : NAN;
+      double sd = n > 1 ? sqrt(fmax(0, (s->cv_s2[at] - n * m * m) / (n - 1))) : NAN;
+      fprintf(fp, "%d,%s,%zu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", i + 1, c->cls[i].name, q + 1, c->cmp_edges[q],
+              c->cmp_edges[q + 1], have ? n / ns : NAN, m, sd, n > 0 ? s->cv_a[at] / n : NAN);
+      double mc[3];
+      for (int a = 0; a < 3; a++) {
+        mc[a] = n > 0 ? s->cv_v[3 * at + a] / n : NAN;
+        fprintf(fp, ",%.6g", mc[a]);
+      }
+      for (int a = 0; a < 3; a++)
+        fprintf(fp, ",%.6g", n > 1 ? sqrt(fmax(0, (s->cv_v2[3 * at + a] - n * mc[a] * mc[a]) / (n - 1))) : NAN);
+      fprintf(fp, "\n");
     }
   if ((rc = close_table(fp, path, err))) return rc;
 
-  /* residence times of particles that left through an outlet */
-  if (!(fp = open_table(dir, "residence.csv", path, sizeof path, err))) return err->code;
+  /* residence times of particles that left through an outlet: all, and per class */
   double mx = 0, sum = 0;
   for (size_t r = 0; r < s->nrt; r++) {
     mx = fmax(mx, s->rt[r]);
     sum += s->rt[r];
   }
-  fprintf(fp, "# %zu particles left through outlets (%.6g kg) from t = %.9g to %.9g s; mean residence %.6g s;"
-          " mean hold-up %.6g particles, %.6g kg\n",
-          s->nrt, s->out_mass, s->t0, t_end, s->nrt ? sum / (double)s->nrt : 0, s->hold_n_sum / ns,
-          s->hold_m_sum / ns);
-  fprintf(fp, "t_lo,t_hi,count,fraction\n");
   const int nb = 50;
-  double bw = mx > 0 ? mx / nb * (1 + 1e-9) : 1;
+  const double bw = mx > 0 ? mx / nb * (1 + 1e-9) : 1;
+  if (!(fp = open_table(dir, "residence.csv", path, sizeof path, err))) return err->code;
+  fprintf(fp, "# %zu particles left through outlets (%.6g kg) from t = %.9g to %.9g s; mean residence %.6g s;"
+          " mean hold-up %.6g particles, %.6g kg%s\n",
+          s->nrt, s->out_mass, s->t0, t_end, s->nrt ? sum / (double)s->nrt : NAN, have ? s->hold_n_sum / ns : NAN,
+          have ? s->hold_m_sum / ns : NAN, note);
+  fprintf(fp, "t_lo,t_hi,count,fraction\n");
   for (int b = 0; b < nb && s->nrt; b++) {
     size_t cnt = 0;
     for (size_t r = 0; r < s->nrt; r++)
       if ((int)(s->rt[r] / bw) == b) cnt++;
     fprintf(fp, "%.6g,%.6g,%zu,%.6g\n", b * bw, (b + 1) * bw, cnt, (double)cnt / (double)s->nrt);
+  }
+  if ((rc = close_table(fp, path, err))) return rc;
+
+  if (!(fp = open_table(dir, "residence_class.csv", path, sizeof path, err))) return err->code;
+  fprintf(fp, "# residence-time distribution per class of the %zu particles that left through outlets from "
+          "t = %.9g to %.9g s, bins as in residence.csv; fraction: of the class%s\n", s->nrt, s->t0, t_end, note);
+  for (int i = 0; i < ncl; i++) {
+    size_t n = 0;
+    double si = 0;
+    for (size_t r = 0; r < s->nrt; r++)
+      if (s->rt_cls[r] == i) n++, si += s->rt[r];
+    fprintf(fp, "# class %d (%s): %zu particles, mean residence %.6g s\n", i + 1, c->cls[i].name, n,
+            n ? si / (double)n : NAN);
+  }
+  fprintf(fp, "class,name,t_lo,t_hi,count,fraction\n");
+  for (int i = 0; i < ncl && s->nrt; i++) {
+    size_t n = 0;
+    for (size_t r = 0; r < s->nrt; r++) n += s->rt_cls[r] == i;
+    for (int b = 0; b < nb; b++) {
+      size_t cnt = 0;
+      for (size_t r = 0; r < s->nrt; r++)
+        if (s->rt_cls[r] == i && (int)(s->rt[r] / bw) == b) cnt++;
+      fprintf(fp, "%d,%s,%.6g,%.6g,%zu,%.6g\n", i + 1, c->cls[i].name, b * bw, (b + 1) * bw, cnt,
+              n ? (double)cnt / (double)n : NAN);
+    }
   }
   return close_table(fp, path, err);
 }

@@ -11,7 +11,12 @@
  * a contact already kept on that mesh.
  *
  * Every particle writes only its own force, so the loop is parallel; wall
- * loads and impact counters are reduced per thread. */
+ * loads and impact counters are reduced per thread.  The impact speeds
+ * U = |v - v_wall| are kept one by one (for the lognormal fits of the PBM's
+ * breakage table): each thread collects its own, and a step's records are
+ * put in the order of the particle ids, so the record is the same for any
+ * number of threads. */
+#include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,6 +24,90 @@
 #include "dem/contact_hertz.h"
 
 #define MAXC 24
+
+/* one impact speed: particle id, order within the thread's record, class key, ln U */
+typedef struct {
+  long id;
+  size_t seq;
+  int q;
+  double lnu;
+} imp_rec;
+
+typedef struct {
+  imp_rec *r;
+  size_t n, cap;
+  int oom;
+} imp_buf;
+
+static void imp_push(imp_buf *b, long id, int q, double lnu) {
+  if (b->n == b->cap) {
+    size_t nc = b->cap ? 2 * b->cap : 64;
+    imp_rec *r = realloc(b->r, nc * sizeof *r);
+    if (!r) {
+      b->oom = 1;
+      return;
+    }
+    b->r = r;
+    b->cap = nc;
+  }
+  b->r[b->n].id = id;
+  b->r[b->n].seq = b->n;
+  b->r[b->n].q = q;
+  b->r[b->n].lnu = lnu;
+  b->n++;
+}
+
+static int cmp_rec(const void *a, const void *b) {
+  const imp_rec *x = a, *y = b;
+  if (x->id != y->id) return x->id < y->id ? -1 : 1;
+  return (x->seq > y->seq) - (x->seq < y->seq);
+}
+
+/* Append the step's impact speeds of all threads to the engine's record, in
+ * the order of the particle ids (a particle's own impacts keep their order). */
+static void imp_merge(gs_dem *d, imp_buf *ib, int nt) {
+  size_t tot = 0;
+  for (int t = 0; t < nt; t++) {
+    if (ib[t].oom) d->oom = 1;
+    tot += ib[t].n;
+  }
+  if (!tot) return;
+  imp_rec *all = ib[0].r;
+  if (nt > 1) {
+    all = malloc(tot * sizeof *all);
+    if (!all) {
+      d->oom = 1;
+      return;
+    }
+    size_t k = 0;
+    for (int t = 0; t < nt; t++)
+      for (size_t j = 0; j < ib[t].n; j++) {
+        all[k] = ib[t].r[j];
+        all[k].seq = k; /* a particle's records are consecutive in one thread's buffer */
+        k++;
+      }
+  }
+  if (tot > 1) qsort(all, tot, sizeof *all, cmp_rec);
+  if (d->nimp + tot > d->imp_cap) {
+    size_t nc = d->imp_cap ? d->imp_cap : 1024;
+    while (nc < d->nimp + tot) nc *= 2;
+    int *q = realloc(d->imp_q, nc * sizeof(int));
+    if (q) d->imp_q = q;
+    double *l = realloc(d->imp_lnu, nc * sizeof(double));
+    if (l) d->imp_lnu = l;
+    if (!q || !l) {
+      d->oom = 1;
+      if (nt > 1) free(all);
+      return;
+    }
+    d->imp_cap = nc;
+  }
+  for (size_t k = 0; k < tot; k++) {
+    d->imp_q[d->nimp] = all[k].q;
+    d->imp_lnu[d->nimp++] = all[k].lnu;
+  }
+  if (nt > 1) free(all);
+}
 
 typedef struct {
   int wall, feat;      /* feature: 0 face, 1..3 edge, 4..6 vertex, -1 analytic */
@@ -188,12 +277,22 @@ void gs_dem_wall_forces(gs_dem *d) {
   /* per thread: impacts, vn, vn2, vt sums, histogram, wall force+torque */
   const size_t stride = nctr * (4 + GS_DEM_IMPACT_BINS) + 6 * nw;
   double *acc = calloc((size_t)nt * stride, sizeof(double));
-  if (!acc) nt = 1;
+  imp_buf *ib = calloc((size_t)nt, sizeof *ib);
+  if (!acc || !ib) {
+    /* no counters without memory: gs_dem_run reports it */
+    d->oom = 1;
+    nt = 1;
+    free(acc);
+    free(ib);
+    acc = NULL;
+    ib = NULL;
+  }
   const double dt = d->prm.dt, dv = d->impact_dv;
 
 #pragma omp parallel num_threads(nt)
   {
     double *my = acc ? acc + (size_t)omp_get_thread_num() * stride : NULL;
+    imp_buf *mb = ib ? ib + omp_get_thread_num() : NULL;
     cand c[MAXC];
 #pragma omp for schedule(dynamic, 512)
     for (size_t i = 0; i < n; i++) {
@@ -252,6 +351,8 @@ void gs_dem_wall_forces(gs_dem *d) {
           int b = (int)(fabs(vn) / dv);
           if (b >= GS_DEM_IMPACT_BINS) b = GS_DEM_IMPACT_BINS - 1;
           my[4 * nctr + q * GS_DEM_IMPACT_BINS + b] += 1;
+          const double u = sqrt(vr[0] * vr[0] + vr[1] * vr[1] + vr[2] * vr[2]);
+          if (u >= GS_DEM_MIN_IMPACT_SPEED) imp_push(mb, p->id[i], (int)q, log(u));
         }
         mask |= bit;
         gs_dem_contact_force cf;
@@ -305,6 +406,11 @@ void gs_dem_wall_forces(gs_dem *d) {
         }
     }
     free(acc);
+  }
+  if (ib) {
+    imp_merge(d, ib, nt);
+    for (int t = 0; t < nt; t++) free(ib[t].r);
+    free(ib);
   }
 }
 

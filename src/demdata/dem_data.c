@@ -400,10 +400,10 @@ static int alloc_out(gs_dem_data *o, size_t n, size_t ns, gs_error *err) {
   return GS_OK;
 }
 
-static void lognormal_fit(const double *x, size_t n, double *mu, double *sigma) {
+void gs_dem_lognormal_fit(const double *ln_u, size_t n, double *mu, double *sigma) {
   if (n < 2) { *mu = *sigma = NAN; return; }
-  *mu = gsl_stats_mean(x, 1, n);
-  *sigma = gsl_stats_sd_m(x, 1, n, *mu);
+  *mu = gsl_stats_mean(ln_u, 1, n);
+  *sigma = gsl_stats_sd_m(ln_u, 1, n, *mu);
 }
 
 static int check_options(const gs_dem_options *o, gs_error *err) {
@@ -599,10 +599,10 @@ int gs_dem_data_read(const char *dir, const gs_dem_options *opt_in, gs_dem_data 
     for (size_t k = 0; k < a.nu; k++)
       if (a.u_cls[k] == i) buf[m++] = a.ln_u[k];
     out->nvel[i] = m;
-    lognormal_fit(buf, m, &out->vel_mu[i], &out->vel_sigma[i]);
+    gs_dem_lognormal_fit(buf, m, &out->vel_mu[i], &out->vel_sigma[i]);
   }
   out->all_nvel = a.nu;
-  lognormal_fit(a.ln_u, a.nu, &out->all_mu, &out->all_sigma);
+  gs_dem_lognormal_fit(a.ln_u, a.nu, &out->all_mu, &out->all_sigma);
 
   if (opt.edges) {
     if (!(out->edges = malloc((n + 1) * sizeof(double)))) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
@@ -655,37 +655,49 @@ static int table_edges(const gs_dem_data *d, const char *path, double *e, gs_err
   return GS_OK;
 }
 
+int gs_dem_impact_table_write(const char *path, const char *comment, size_t nclass, const double *edges,
+                              int edges_volume, const double *rate, const double *mu, const double *sigma,
+                              gs_error *err) {
+  FILE *fp = fopen(path, "w");
+  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  if (comment) fputs(comment, fp);
+  fprintf(fp, "# edges measure particle %s: use `selection: {type: dem_impact, measure: %s, file: ...}`\nedges",
+          edges_volume ? "volume [m^3]" : "diameter [m]", edges_volume ? "volume" : "diameter");
+  for (size_t i = 0; i <= nclass; i++) fprintf(fp, ", %.10g", edges[i]);
+  fprintf(fp, "\n");
+  const double *row[3] = {rate, mu, sigma};
+  for (int r = 0; r < 3; r++) {
+    for (size_t i = 0; i < nclass; i++) fprintf(fp, "%s%.10g", i ? ", " : "", row[r][i]);
+    fprintf(fp, "\n");
+  }
+  int bad = ferror(fp);
+  if (fclose(fp) || bad) return gs_error_set(err, GS_EIO, "%s: write failed", path);
+  return GS_OK;
+}
+
 int gs_dem_data_write_impacts(const gs_dem_data *d, const char *path, gs_error *err) {
   size_t n = d->nclass;
-  double *e = malloc((n + 1) * sizeof(double));
+  double *e = malloc((3 * n + 1) * sizeof(double));
   if (!e) return gs_error_set(err, GS_ENOMEM, "out of memory");
   int rc = table_edges(d, path, e, err);
-  FILE *fp = rc ? NULL : fopen(path, "w");
-  if (!rc && !fp) rc = gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
   if (rc) {
     free(e);
     return rc;
   }
-  fprintf(fp, "# gransim dem-reduce: wall impacts per class, mean of %zu snapshot(s) (steps %ld..%ld)\n"
-          "# rows: impacts per particle per second (current wall contacts / contact time / particles);\n"
-          "# mu, sigma of the lognormal fit of the impact speed (ln m/s; classes with < 2 samples: the pooled fit)\n"
-          "# edges measure particle %s: use `selection: {type: dem_impact, measure: %s, file: ...}`\nedges",
-          d->nsnap, d->nsnap ? d->steps[0] : 0, d->nsnap ? d->steps[d->nsnap - 1] : 0,
-          d->edges_volume ? "volume [m^3]" : "diameter [m]", d->edges_volume ? "volume" : "diameter");
-  for (size_t i = 0; i <= n; i++) fprintf(fp, ", %.10g", e[i]);
-  fprintf(fp, "\n");
-  for (size_t i = 0; i < n; i++) fprintf(fp, "%s%.10g", i ? ", " : "", d->impact_rate[i]);
-  fprintf(fp, "\n");
-  for (size_t i = 0; i < n; i++)
-    fprintf(fp, "%s%.10g", i ? ", " : "", isnan(d->vel_mu[i]) ? d->all_mu : d->vel_mu[i]);
-  fprintf(fp, "\n");
-  for (size_t i = 0; i < n; i++)
-    fprintf(fp, "%s%.10g", i ? ", " : "", isnan(d->vel_sigma[i]) ? d->all_sigma : d->vel_sigma[i]);
-  fprintf(fp, "\n");
+  double *mu = e + n + 1, *sigma = mu + n;
+  for (size_t i = 0; i < n; i++) {
+    mu[i] = isnan(d->vel_mu[i]) ? d->all_mu : d->vel_mu[i];
+    sigma[i] = isnan(d->vel_sigma[i]) ? d->all_sigma : d->vel_sigma[i];
+  }
+  char comment[1024];
+  snprintf(comment, sizeof comment,
+           "# gransim dem-reduce: wall impacts per class, mean of %zu snapshot(s) (steps %ld..%ld)\n"
+           "# rows: impacts per particle per second (current wall contacts / contact time / particles);\n"
+           "# mu, sigma of the lognormal fit of the impact speed (ln m/s; classes with < 2 samples: the pooled fit)\n",
+           d->nsnap, d->nsnap ? d->steps[0] : 0, d->nsnap ? d->steps[d->nsnap - 1] : 0);
+  rc = gs_dem_impact_table_write(path, comment, n, e, d->edges_volume, d->impact_rate, mu, sigma, err);
   free(e);
-  int bad = ferror(fp);
-  if (fclose(fp) || bad) return gs_error_set(err, GS_EIO, "%s: write failed", path);
-  return GS_OK;
+  return rc;
 }
 
 int gs_dem_data_write_table(const gs_dem_data *d, const char *path, gs_error *err) {
