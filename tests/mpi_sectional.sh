@@ -7,7 +7,7 @@
 # adaptive Euler the same; only rank 0 prints; cvode and more ranks than
 # compartments are refused with a message; an Euler step that goes negative on
 # rank 1 only stops every rank with status 1 and rank 1's message, without
-# hanging.
+# hanging; so does a non-finite rate on rank 1 only under rk.
 #
 # Usage: bash mpi_sectional.sh GRANSIM_BINARY SOURCE_DIR MPIEXEC [MPIEXEC_OPTIONS...]
 source "$(dirname "$0")/cli-lib.sh" "$1" "$2"
@@ -100,5 +100,25 @@ YAML
 run_rc 1 timeout 120 "${MPI[@]}" -np 2 "$BIN" run "$WORK/neg.yaml" --out "$WORK/neg" --quiet
 stderr_has "negative number density" "failed on another MPI rank"
 no_result_files "$WORK/neg"
+
+# rk: a non-finite rate in compartment 4 only (its kernel table overflows)
+printf 'edges, 0, 100\n1\n' >"$WORK/ok.csv"
+printf 'edges, 0, 100\n1e300\n' >"$WORK/huge.csv"
+cat >"$WORK/inf.yaml" <<YAML
+title: a non-finite rate on rank 1 only
+grid:
+  compartments: 4
+  axes:
+    - {name: v, type: geometric, min: 1.0e-3, ratio: 2, cells: 12, zero_first: true}
+initial: {type: exponential, number: 1.0e10, mean: 0.1}
+mechanisms:
+  - type: aggregation
+    kernel: {type: table, file: [ok.csv, ok.csv, ok.csv, huge.csv], beta0: 1.0e-12}
+  - {type: transfer, rate: 1}
+output: {end: 1, count: 3}
+YAML
+run_rc 1 timeout 120 "${MPI[@]}" -np 2 "$BIN" run "$WORK/inf.yaml" --out "$WORK/inf" --quiet
+stderr_has "compartment 4" "rate of change is not finite" "failed on another MPI rank"
+no_result_files "$WORK/inf"
 
 echo "mpi_sectional: ok"

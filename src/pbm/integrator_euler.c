@@ -117,11 +117,17 @@ static void gs_euler_first_call(gs_euler *self, double span) {
 static int gs_euler_step(gs_euler *self, const gs_ode *ode, double *t, double t_out,
                          double h_max, double *y, gs_error *err) {
   self->stats.rhs_evals++;
-  if (ode->f(ode->ctx, *t, y, self->f))
+  const int failed = ode->f(ode->ctx, *t, y, self->f) != 0;
+  if (failed && !ode->reduce_max)
     return gs_error_set(err, GS_ENUMERIC, "integrator euler: right-hand side failed at t = %.9g",
                         *t);
-  double m = gs_euler_rate(y, self->f, ode->npositive);
-  if (ode->reduce_max) m = ode->reduce_max(ode->ctx, m); /* one step for all ranks */
+  double m = failed ? 0 : gs_euler_rate(y, self->f, ode->npositive);
+  if (ode->reduce_max) { /* one step for all ranks; a failed f anywhere shows as +inf */
+    m = ode->reduce_max(ode->ctx, failed ? HUGE_VAL : m);
+    if (m == HUGE_VAL)
+      return gs_error_set(err, GS_ENUMERIC, "integrator euler: right-hand side failed at t = %.9g%s", *t,
+                          failed ? "" : " on another MPI rank (or a depletion rate overflowed)");
+  }
   gs_euler_adapt(self, m, h_max);
   int final = *t + self->dt >= t_out;
   double h = final ? t_out - *t : self->dt;

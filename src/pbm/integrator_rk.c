@@ -76,11 +76,21 @@ static int gs_rk_rhs(double t, const double y[], double dydt[], void *params) {
       self->fail_value = dydt[i];
     }
   }
-  /* every rank must give up on the same evaluation */
-  if (ode->reduce_max && ode->reduce_max(ode->ctx, self->rhs_failed ? 1.0 : 0.0) > 0 &&
-      !self->rhs_failed)
+  if (!self->rhs_failed) return GSL_SUCCESS;
+  if (!ode->reduce_max) return GSL_EBADFUNC;
+  /* Under MPI every rank must make the same calls: a failed evaluation gives
+   * zero rates and the step goes on; gs_rk_agree() then rolls it back on
+   * every rank (one agreement per step rather than per evaluation). */
+  memset(dydt, 0, self->n * sizeof *dydt);
+  return GSL_SUCCESS;
+}
+
+/* Under MPI: did f fail on any rank since the last call?  (3: on another.) */
+static int gs_rk_agree(gs_rk *self) {
+  const gs_ode *ode = self->ode;
+  if (ode->reduce_max && ode->reduce_max(ode->ctx, self->rhs_failed ? 1.0 : 0.0) > 0 && !self->rhs_failed)
     self->rhs_failed = 3;
-  return self->rhs_failed ? GSL_EBADFUNC : GSL_SUCCESS;
+  return self->rhs_failed;
 }
 
 /* ---- step-size control --------------------------------------------------- */
@@ -219,7 +229,7 @@ static int gs_rk_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_e
 static int gs_rk_initial_step(gs_rk *self, double t, double span, const double *y,
                               gs_error *err) {
   double *f = self->evolve->dydt_out; /* scratch: evolve overwrites it anyway */
-  if (gs_rk_rhs(t, y, f, self) != GSL_SUCCESS) return gs_rk_rhs_error(self, err);
+  if (gs_rk_rhs(t, y, f, self) != GSL_SUCCESS || gs_rk_agree(self)) return gs_rk_rhs_error(self, err);
   double d0 = 0, d1 = 0;
   for (size_t i = 0; i < self->n; i++) {
     if (self->scale[i] >= GS_RK_EXCLUDED_SCALE) continue;
@@ -263,7 +273,16 @@ static int gs_rk_fail(gs_rk *self, int status, double t0, double h, double *t, d
  * control (NaN never exceeds the tolerance), so roll such a step back. */
 static int gs_rk_check_finite(gs_rk *self, double t0, double *t, double *y, gs_error *err) {
   int ok = gs_rk_all_finite(y, self->n);
-  if (self->ode->reduce_max) ok = self->ode->reduce_max(self->ode->ctx, ok ? 0.0 : 1.0) == 0;
+  if (self->ode->reduce_max) { /* one agreement per step: a failed f anywhere, or a NaN */
+    double bad = self->ode->reduce_max(self->ode->ctx, self->rhs_failed ? 2.0 : ok ? 0.0 : 1.0);
+    if (bad == 2.0) {
+      if (!self->rhs_failed) self->rhs_failed = 3;
+      memcpy(y, self->evolve->y0, self->n * sizeof *y);
+      *t = t0;
+      return gs_rk_rhs_error(self, err);
+    }
+    ok = bad == 0.0;
+  }
   if (ok) return GS_OK;
   memcpy(y, self->evolve->y0, self->n * sizeof *y);
   *t = t0;
