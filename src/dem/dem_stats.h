@@ -14,6 +14,9 @@ typedef struct {
   double *cv_n, *cv_s, *cv_s2, *cv_a; /* per class x compartment: samples, sums of speed,
                                           speed^2 and axial velocity */
   double *cv_v, *cv_v2;               /* 3 per class x compartment: sums of vx, vy, vz and squares */
+  double *cv_ref;                     /* 4 per class x compartment: the first speed, vx, vy, vz seen;
+                                         the sums above are of differences from it (no cancellation
+                                         in the standard deviations of nearly constant values) */
   double hold_n_sum, hold_m_sum;
   double *rt;                         /* residence times of removed particles */
   int *rt_cls;

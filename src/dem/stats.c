@@ -31,7 +31,8 @@ int gs_dem_stats_init(gs_dem_stats *s, const gs_dem_case *c, gs_error *err) {
   s->cv_a = calloc(n, sizeof(double));
   s->cv_v = calloc(3 * n, sizeof(double));
   s->cv_v2 = calloc(3 * n, sizeof(double));
-  if (!s->num_sum || !s->cv_n || !s->cv_s || !s->cv_s2 || !s->cv_a || !s->cv_v || !s->cv_v2)
+  s->cv_ref = calloc(4 * n, sizeof(double));
+  if (!s->num_sum || !s->cv_n || !s->cv_s || !s->cv_s2 || !s->cv_a || !s->cv_v || !s->cv_v2 || !s->cv_ref)
     return gs_error_set(err, GS_ENOMEM, "out of memory");
   return GS_OK;
 }
@@ -44,6 +45,7 @@ void gs_dem_stats_free(gs_dem_stats *s) {
   free(s->cv_a);
   free(s->cv_v);
   free(s->cv_v2);
+  free(s->cv_ref);
   free(s->rt);
   free(s->rt_cls);
   memset(s, 0, sizeof *s);
@@ -60,6 +62,7 @@ void gs_dem_stats_reset(gs_dem_stats *s, gs_dem_case *c, double t) {
   memset(s->cv_a, 0, n * sizeof(double));
   memset(s->cv_v, 0, 3 * n * sizeof(double));
   memset(s->cv_v2, 0, 3 * n * sizeof(double));
+  memset(s->cv_ref, 0, 4 * n * sizeof(double));
   s->hold_n_sum = s->hold_m_sum = 0;
   s->nrt = 0;
   s->out_mass = 0;
@@ -110,15 +113,17 @@ int gs_dem_stats_sample(gs_dem_stats *s, gs_dem_case *c, gs_error *err) {
     size_t q = 0;
     while (q + 1 < c->ncmp && pos >= c->cmp_edges[q + 1]) q++;
     const double vel[3] = {v.vx[i], v.vy[i], v.vz[i]};
-    double sp2 = vel[0] * vel[0] + vel[1] * vel[1] + vel[2] * vel[2];
+    const double sp = sqrt(vel[0] * vel[0] + vel[1] * vel[1] + vel[2] * vel[2]);
     size_t at = (size_t)k * s->ncmp + q;
+    double *ref = s->cv_ref + 4 * at;
+    if (s->cv_n[at] == 0) ref[0] = sp, ref[1] = vel[0], ref[2] = vel[1], ref[3] = vel[2];
     s->cv_n[at] += 1;
-    s->cv_s[at] += sqrt(sp2);
-    s->cv_s2[at] += sp2;
+    s->cv_s[at] += sp - ref[0];
+    s->cv_s2[at] += (sp - ref[0]) * (sp - ref[0]);
     s->cv_a[at] += vel[0] * ax[0] + vel[1] * ax[1] + vel[2] * ax[2];
     for (int a = 0; a < 3; a++) {
-      s->cv_v[3 * at + a] += vel[a];
-      s->cv_v2[3 * at + a] += vel[a] * vel[a];
+      s->cv_v[3 * at + a] += vel[a] - ref[1 + a];
+      s->cv_v2[3 * at + a] += (vel[a] - ref[1 + a]) * (vel[a] - ref[1 + a]);
     }
   }
   double hn, hm;
@@ -348,14 +353,17 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
   for (int i = 0; i < ncl; i++)
     for (size_t q = 0; q < s->ncmp; q++) {
       size_t at = (size_t)i * s->ncmp + q;
-      double n = s->cv_n[at], m = n > 0 ? s->cv_s[at] / n : NAN;
+      const double n = s->cv_n[at], *ref = s->cv_ref + 4 * at;
+      /* sums of differences d from the reference: mean = ref + sum d / n,
+       * sd^2 = (sum d^2 - (sum d)^2 / n) / (n - 1) */
+      double m = n > 0 ? s->cv_s[at] / n : NAN;
       double sd = n > 1 ? sqrt(fmax(0, (s->cv_s2[at] - n * m * m) / (n - 1))) : NAN;
       fprintf(fp, "%d,%s,%zu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", i + 1, c->cls[i].name, q + 1, c->cmp_edges[q],
-              c->cmp_edges[q + 1], have ? n / ns : NAN, m, sd, n > 0 ? s->cv_a[at] / n : NAN);
+              c->cmp_edges[q + 1], have ? n / ns : NAN, ref[0] + m, sd, n > 0 ? s->cv_a[at] / n : NAN);
       double mc[3];
       for (int a = 0; a < 3; a++) {
         mc[a] = n > 0 ? s->cv_v[3 * at + a] / n : NAN;
-        fprintf(fp, ",%.6g", mc[a]);
+        fprintf(fp, ",%.6g", ref[1 + a] + mc[a]);
       }
       for (int a = 0; a < 3; a++)
         fprintf(fp, ",%.6g", n > 1 ? sqrt(fmax(0, (s->cv_v2[3 * at + a] - n * mc[a] * mc[a]) / (n - 1))) : NAN);

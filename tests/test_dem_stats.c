@@ -1,0 +1,356 @@
+/* Statistics of `gransim dem` runs (src/dem/stats.c, run_dem.c):
+ *  - the steady-state detector fires on steady synthetic signals, at the first
+ *    sample whose window is steady, and not on a ramp or without collisions;
+ *  - residence times: particles that left before statistics.start are not
+ *    counted (they were, at the first sample), and the per-class distribution
+ *    books every particle under its class;
+ *  - velocity statistics per axial compartment for a prescribed velocity
+ *    field: mean number, mean and sample sd of the speed and of each velocity
+ *    component, mean axial velocity;
+ *  - with `start: steady` that never fires, a warning on stderr, a note in the
+ *    headers and nan rates instead of zeros. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "dem/dem_case.h"
+#include "dem/dem_stats.h"
+#include "gransim/dem.h"
+
+static char dir[] = "/tmp/gransim-test-dem-stats-XXXXXX";
+
+static gs_dem_case *load(const char *name, const char *yaml) {
+  char path[600];
+  snprintf(path, sizeof path, "%s/%s.yaml", dir, name);
+  FILE *fp = fopen(path, "w");
+  fputs(yaml, fp);
+  fclose(fp);
+  gs_error err = {0};
+  gs_dem_case *c = gs_dem_case_load(path, &err);
+  if (!c) fprintf(stderr, "%s\n", err.msg);
+  CHECK(c != NULL);
+  return c;
+}
+
+static int run(gs_dem_case *c, const char *name) {
+  char out[600];
+  snprintf(out, sizeof out, "%s/%s", dir, name);
+  gs_error err = {0};
+  int rc = gs_dem_case_run(c, out, 0, &err);
+  if (rc) fprintf(stderr, "%s\n", err.msg);
+  CHECK(rc == 0);
+  return rc;
+}
+
+static char *slurp(const char *name, const char *file) {
+  char path[800];
+  snprintf(path, sizeof path, "%s/%s/%s", dir, name, file);
+  FILE *fp = fopen(path, "r");
+  if (!fp) {
+    fprintf(stderr, "cannot read %s\n", path);
+    CHECK(!"output file missing");
+    return calloc(1, 1);
+  }
+  fseek(fp, 0, SEEK_END);
+  long n = ftell(fp);
+  rewind(fp);
+  char *s = calloc((size_t)n + 1, 1);
+  if (fread(s, 1, (size_t)n, fp) != (size_t)n) CHECK(!"short read");
+  fclose(fp);
+  return s;
+}
+
+/* the numbers of the first data line starting with prefix (up to max) */
+static int row(const char *text, const char *prefix, double *v, int max) {
+  const char *p = text;
+  size_t lp = strlen(prefix);
+  while (p && *p) {
+    if (!strncmp(p, prefix, lp)) {
+      int n = 0;
+      const char *q = p;
+      while (n < max && *q && *q != '\n') {
+        char *end;
+        double x = strtod(q, &end);
+        if (end != q) v[n++] = x, q = end;
+        else if (!strncmp(q, "nan", 3)) v[n++] = NAN, q += 3;
+        else {
+          while (*q && *q != ',' && *q != '\n') q++; /* a name */
+        }
+        if (*q == ',') q++;
+      }
+      return n;
+    }
+    p = strchr(p, '\n');
+    if (p) p++;
+  }
+  return 0;
+}
+
+/* ---- steady-state detector ----------------------------------------------- */
+static void test_detector(void) {
+  enum { N = 60 };
+  double a[N], b[N], zero[N];
+  for (int k = 0; k < N; k++) {
+    a[k] = 2.0 * (1 + 0.05 * sin(1.3 * k)); /* hold-up mass within 5 % */
+    b[k] = 1e4 * (1 + 0.08 * cos(0.7 * k)); /* collision rate within 8 % */
+    zero[k] = 0;
+  }
+  CHECK(gs_dem_is_steady(a, b, N, 10, 0.1) == 1);
+  CHECK(gs_dem_is_steady(a, b, 9, 10, 0.1) == 0);   /* fewer samples than the window */
+  CHECK(gs_dem_is_steady(a, b, N, 10, 0.06) == 0);  /* the rate varies by 8 % */
+  CHECK(gs_dem_is_steady(a, zero, N, 10, 0.1) == 0); /* no collisions: nothing to be steady about */
+  /* a ramp of 3 % per sample: over any 10 samples the ends lie 13-14 % from
+   * the mean */
+  double ramp[N];
+  for (int k = 0; k < N; k++) ramp[k] = pow(1.03, k);
+  int fired = 0;
+  for (int n = 1; n <= N; n++) fired |= gs_dem_is_steady(ramp, b, n, 10, 0.1);
+  CHECK(!fired);
+  for (int n = 1; n <= N; n++) fired |= gs_dem_is_steady(a, ramp, n, 10, 0.1);
+  CHECK(!fired);
+  /* a ramp that levels off at sample 20: with window 5 and tolerance 1e-9 the
+   * first steady window is samples 20..24, i.e. n = 25 */
+  double lvl[N];
+  for (int k = 0; k < N; k++) lvl[k] = k < 20 ? 0.05 * k : 1.0;
+  int first = 0;
+  for (int n = 1; n <= N && !first; n++)
+    if (gs_dem_is_steady(lvl, lvl, n, 5, 1e-9)) first = n;
+  fprintf(stderr, "detector: steady signal fires, ramps do not; levelling ramp first steady at n = %d\n", first);
+  CHECK(first == 25);
+}
+
+/* ---- residence times ----------------------------------------------------- */
+static const char *RES =
+    "dem:\n"
+    "  time_step: 2.0e-6\n"
+    "  duration: 0.06\n"
+    "  gravity: [0, 0, 0]\n"
+    "  skin: 2.0e-4\n"
+    "  box: {lo: [-0.03, -0.03, -0.02], hi: [0.03, 0.03, 0.06]}\n"
+    "materials:\n"
+    "  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, density: 500}\n"
+    "classes:\n"
+    "  - {name: low, radius: 1.0e-3, material: g}\n"
+    "  - {name: high, radius: 1.0e-3, material: g}\n"
+    "fill:\n"
+    "  - {region: {box: {lo: [-0.02, -0.02, 0.01], hi: [0.02, 0.02, 0.03]}}, count: 40, fractions: [1, 0],"
+    " velocity: [0, 0, -1]}\n"
+    "  - {region: {box: {lo: [-0.02, -0.02, 0.03], hi: [0.02, 0.02, 0.05]}}, count: 30, fractions: [0, 1],"
+    " velocity: [0, 0, -1]}\n"
+    "outlets:\n"
+    "  - {region: {box: {lo: [-0.03, -0.03, -0.02], hi: [0.03, 0.03, 0.0]}}}\n"
+    "statistics: {start: 0.02, sample_every: 0.001}\n"
+    "output: {every: 0.01}\n";
+
+static void test_residence(void) {
+  gs_dem_case *c = load("res", RES);
+  if (!c || run(c, "res")) {
+    gs_dem_case_free(c);
+    return;
+  }
+  gs_dem_view v;
+  gs_dem_get_view(c->dem, &v);
+  CHECK(v.n == 0); /* everything left at 1 m/s within 0.05 s */
+  gs_dem_case_free(c);
+  /* particles present when the window opened: the time series row at 0.02 s */
+  char *ts = slurp("res", "timeseries.csv");
+  double r[3] = {0};
+  CHECK(row(ts, "0.02,", r, 2) == 2);
+  long at_start = (long)r[1];
+  free(ts);
+  char *res = slurp("res", "residence.csv"), *cls = slurp("res", "residence_class.csv");
+  long pooled = -1, n_low = -1, n_high = -1;
+  double mean_low = 0, mean_high = 0;
+  CHECK(sscanf(res, "# %ld particles left", &pooled) == 1);
+  const char *p = strstr(cls, "# class 1 (low): "), *q = strstr(cls, "# class 2 (high): ");
+  CHECK(p && q);
+  if (p) CHECK(sscanf(p, "# class 1 (low): %ld particles, mean residence %lf", &n_low, &mean_low) == 2);
+  if (q) CHECK(sscanf(q, "# class 2 (high): %ld particles, mean residence %lf", &n_high, &mean_high) == 2);
+  fprintf(stderr, "residence: %ld particles present at the window start, %ld counted (%ld low, %ld high; mean "
+          "residence %.4f, %.4f s)\n", at_start, pooled, n_low, n_high, mean_low, mean_high);
+  /* all 30 'high' particles start above 0.03 m and leave inside the window;
+   * of the 'low' ones, only those still there at 0.02 s count */
+  CHECK(at_start > 30 && at_start < 70);
+  CHECK(pooled == at_start);
+  CHECK(n_high == 30);
+  CHECK(n_low == at_start - 30);
+  /* per class: residence ~ the fall time from the start height (+ up to 1e-4 s
+   * to the next list rebuild): low in [0.02, 0.03], high in [0.03, 0.05] */
+  int bad = 0;
+  long cnt[2] = {0, 0};
+  for (const char *l = strstr(cls, "\nclass,"); l && (l = strchr(l + 1, '\n')) && l[1];) {
+    int k;
+    double lo, hi, f;
+    long n;
+    if (sscanf(l + 1, "%d,%*[^,],%lf,%lf,%ld,%lf", &k, &lo, &hi, &n, &f) != 5) continue;
+    if (n == 0) continue;
+    cnt[k - 1] += n;
+    if (k == 1 && (hi < 0.0199 || lo > 0.0302)) bad++;
+    if (k == 2 && (hi < 0.0299 || lo > 0.0502)) bad++;
+  }
+  CHECK(cnt[0] == n_low && cnt[1] == n_high);
+  CHECK(bad == 0);
+  CHECK(mean_low > 0.02 && mean_low < 0.0302);
+  CHECK(mean_high > 0.03 && mean_high < 0.0502);
+  free(res);
+  free(cls);
+}
+
+/* ---- velocities per compartment ------------------------------------------- */
+static const char *VEL =
+    "dem:\n"
+    "  time_step: 5.0e-6\n"
+    "  duration: 0.002\n"
+    "  gravity: [0, 0, 0]\n"
+    "  seed: 3\n"
+    "  box: {lo: [-0.01, -0.01, -0.01], hi: [0.11, 0.05, 0.05]}\n"
+    "materials:\n"
+    "  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, density: 500}\n"
+    "classes:\n"
+    "  - {name: a, radius: 1.0e-3, material: g}\n"
+    "  - {name: b, radius: 1.5e-3, material: g}\n"
+    "fill:\n"
+    "  - {region: {box: {lo: [0.005, 0, 0], hi: [0.045, 0.04, 0.04]}}, count: 40, fractions: [1, 0],"
+    " velocity: [0.2, 0, 0]}\n"
+    "  - {region: {box: {lo: [0.005, 0, 0], hi: [0.045, 0.04, 0.04]}}, count: 60, fractions: [1, 0],"
+    " velocity: [0, 0.1, 0]}\n"
+    "  - {region: {box: {lo: [0.055, 0, 0], hi: [0.095, 0.04, 0.04]}}, count: 50, fractions: [1, 0],"
+    " velocity: [-0.1, 0, 0.3]}\n"
+    "  - {region: {box: {lo: [0.055, 0, 0], hi: [0.095, 0.04, 0.04]}}, count: 30, fractions: [0, 1],"
+    " velocity: [0, 0, -0.05]}\n"
+    "statistics:\n"
+    "  sample_every: 2.0e-4\n"
+    "  compartments: {axis: [1, 0, 0], origin: [0, 0, 0], edges: [0, 0.05, 0.1]}\n";
+
+/* sample mean and sd over ns samples of the values x[k] held by n[k] particles */
+static void stats_of(const double *x, const int *n, int m, int ns, double *mean, double *sd) {
+  double N = 0, s = 0, s2 = 0;
+  for (int k = 0; k < m; k++) N += n[k], s += n[k] * x[k];
+  *mean = s / N;
+  for (int k = 0; k < m; k++) s2 += n[k] * (x[k] - *mean) * (x[k] - *mean);
+  *sd = sqrt(s2 * ns / (N * ns - 1));
+}
+
+static void test_velocity(void) {
+  gs_dem_case *c = load("vel", VEL);
+  if (!c || run(c, "vel")) {
+    gs_dem_case_free(c);
+    return;
+  }
+  gs_dem_case_free(c);
+  char *col = slurp("vel", "collisions.csv"), *vel = slurp("vel", "velocity.csv");
+  double e[10] = {0};
+  /* class_i, class_j, events, ... (names skipped): nobody met, so the velocities stay as prescribed */
+  CHECK(row(col, "1,1,", e, 10) == 8 && e[2] == 0);
+  CHECK(row(col, "1,2,", e, 10) == 8 && e[2] == 0);
+  /* expected: compartment 1 holds class a with 40 at (0.2,0,0) and 60 at (0,0.1,0); compartment 2
+   * class a with 50 at (-0.1,0,0.3) and class b with 30 at (0,0,-0.05); 10 samples */
+  const int ns = 10;
+  struct {
+    const char *prefix;
+    int m, n[2];
+    double v[2][3];
+  } want[4] = {{"1,a,1,", 2, {40, 60}, {{0.2, 0, 0}, {0, 0.1, 0}}},
+               {"1,a,2,", 1, {50, 0}, {{-0.1, 0, 0.3}, {0}}},
+               {"2,b,1,", 0, {0, 0}, {{0}}},
+               {"2,b,2,", 1, {30, 0}, {{0, 0, -0.05}, {0}}}};
+  for (int w = 0; w < 4; w++) {
+    double f[16]; /* f[k]: column k of the file (f[0] unused: the name is skipped) */
+    int got = row(vel, want[w].prefix, f + 1, 15);
+    CHECK(got == 14);
+    if (got != 14) continue;
+    /* columns: class, (name), compartment, from, to, mean_number, mean_speed, std_speed, mean_axial,
+     * mean_vx, mean_vy, mean_vz, std_vx, std_vy, std_vz; class lands in f[1], compartment in f[2] */
+    const int m = want[w].m;
+    double N = want[w].n[0] + want[w].n[1];
+    fprintf(stderr, "velocity class %s compartment: n %.6g, speed %.6g +- %.6g, axial %.6g, v (%.4g %.4g %.4g) +- "
+            "(%.4g %.4g %.4g)\n", want[w].prefix, f[5], f[6], f[7], f[8], f[9], f[10], f[11], f[12], f[13], f[14]);
+    CHECK_ABS(f[3], w % 2 ? 0.05 : 0, 1e-12);
+    CHECK_ABS(f[4], w % 2 ? 0.1 : 0.05, 1e-12);
+    CHECK_ABS(f[5], N, 1e-9);
+    if (!m) {
+      for (int k = 6; k <= 14; k++) CHECK(isnan(f[k]));
+      continue;
+    }
+    double sp[2], mean, sd;
+    for (int k = 0; k < m; k++) sp[k] = sqrt(want[w].v[k][0] * want[w].v[k][0] + want[w].v[k][1] * want[w].v[k][1] +
+                                             want[w].v[k][2] * want[w].v[k][2]);
+    stats_of(sp, want[w].n, m, ns, &mean, &sd);
+    CHECK_ABS(f[6], mean, 1e-6 * mean);
+    CHECK_ABS(f[7], sd, 1e-6 * mean);
+    for (int a = 0; a < 3; a++) {
+      double x[2] = {want[w].v[0][a], want[w].v[1][a]};
+      stats_of(x, want[w].n, m, ns, &mean, &sd);
+      CHECK_ABS(f[9 + a], mean, 1e-6);
+      CHECK_ABS(f[12 + a], sd, 1e-6);
+      if (a == 0) CHECK_ABS(f[8], mean, 1e-6); /* the axis is x */
+    }
+  }
+  free(col);
+  free(vel);
+}
+
+/* ---- start: steady that never fires ---------------------------------------- */
+static const char *NEVER =
+    "dem:\n"
+    "  time_step: 5.0e-6\n"
+    "  duration: 0.01\n"
+    "  gravity: [0, 0, 0]\n"
+    "  box: {lo: [0, 0, 0], hi: [0.05, 0.05, 0.05]}\n"
+    "materials:\n"
+    "  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, density: 500}\n"
+    "classes:\n"
+    "  - {name: a, radius: 1.0e-3, material: g}\n"
+    "fill:\n"
+    "  - {region: {box: {lo: [0.01, 0.01, 0.01], hi: [0.04, 0.04, 0.04]}}, count: 20}\n"
+    "statistics: {start: steady, sample_every: 0.001, steady: {window: 3, tolerance: 0.5}}\n";
+
+static void test_never_steady(void) {
+  gs_dem_case *c = load("never", NEVER);
+  if (!c) return;
+  char log[700];
+  snprintf(log, sizeof log, "%s/never.log", dir);
+  fflush(stderr);
+  int fd = dup(2);
+  FILE *fp = freopen(log, "w", stderr);
+  CHECK(fp != NULL);
+  int rc = run(c, "never");
+  fflush(stderr);
+  dup2(fd, 2);
+  close(fd);
+  gs_dem_case_free(c);
+  if (rc) return;
+  char *msg = slurp("never", "../never.log");
+  char *col = slurp("never", "collisions.csv"), *ker = slurp("never", "collision_kernel.csv");
+  char *imp = slurp("never", "impact_table.csv");
+  fprintf(stderr, "never steady: stderr: %s", msg);
+  CHECK(strstr(msg, "warning") && strstr(msg, "steady state was not reached"));
+  CHECK(strstr(col, "NO STATISTICS WINDOW") && strstr(ker, "NO STATISTICS WINDOW") &&
+        strstr(imp, "NO STATISTICS WINDOW"));
+  double r[10] = {0};
+  CHECK(row(col, "1,1,", r, 10) == 8); /* class_i, class_j, events, N_i, N_j, window, per s, C (names skipped) */
+  CHECK(isnan(r[3]) && isnan(r[6]) && isnan(r[7]));
+  CHECK(strstr(ker, "\nnan\n") != NULL);
+  free(msg);
+  free(col);
+  free(ker);
+  free(imp);
+}
+
+int main(void) {
+  if (!mkdtemp(dir)) {
+    CHECK(!"mkdtemp");
+    TEST_EXIT();
+  }
+  test_detector();
+  test_residence();
+  test_velocity();
+  test_never_steady();
+  char cmd[200];
+  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+  if (!check_failures) CHECK(system(cmd) == 0);
+  TEST_EXIT();
+}
