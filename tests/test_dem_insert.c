@@ -38,7 +38,7 @@ int main(void) {
   reg.s1 = 0.04;
   int types[2] = {t0, t1};
   double rmin[2] = {1e-3, 2e-3}, rmax[2] = {1e-3, 2e-3}, frac[2] = {0.5, 0.5};
-  gs_dem_psd psd = {2, types, rmin, rmax, frac, 1};
+  gs_dem_psd psd = {2, types, rmin, rmax, frac, 1, NULL, NULL};
   uint64_t seed = 3;
   long n;
   double mass;

@@ -67,7 +67,7 @@ static double pour(double mu_r, size_t *n_out) {
   reg.a[2] = 1;
   reg.R = 0.006;
   double rmin = r * 0.95, rmax = r * 1.05, frac = 1;
-  gs_dem_psd psd = {1, &t, &rmin, &rmax, &frac, 0};
+  gs_dem_psd psd = {1, &t, &rmin, &rmax, &frac, 0, NULL, NULL};
   uint64_t seed = 42;
   long total = 0;
   /* rain 4 particles every 2.5 ms, 1000 in all, from a little above the

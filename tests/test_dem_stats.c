@@ -205,25 +205,25 @@ static const char *VEL =
     "  time_step: 5.0e-6\n"
     "  duration: 0.002\n"
     "  gravity: [0, 0, 0]\n"
-    "  seed: 3\n"
     "  box: {lo: [-0.01, -0.01, -0.01], hi: [0.11, 0.05, 0.05]}\n"
     "materials:\n"
     "  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, density: 500}\n"
     "classes:\n"
     "  - {name: a, radius: 1.0e-3, material: g}\n"
     "  - {name: b, radius: 1.5e-3, material: g}\n"
-    "fill:\n"
-    "  - {region: {box: {lo: [0.005, 0, 0], hi: [0.045, 0.04, 0.04]}}, count: 40, fractions: [1, 0],"
-    " velocity: [0.2, 0, 0]}\n"
-    "  - {region: {box: {lo: [0.005, 0, 0], hi: [0.045, 0.04, 0.04]}}, count: 60, fractions: [1, 0],"
-    " velocity: [0, 0.1, 0]}\n"
-    "  - {region: {box: {lo: [0.055, 0, 0], hi: [0.095, 0.04, 0.04]}}, count: 50, fractions: [1, 0],"
-    " velocity: [-0.1, 0, 0.3]}\n"
-    "  - {region: {box: {lo: [0.055, 0, 0], hi: [0.095, 0.04, 0.04]}}, count: 30, fractions: [0, 1],"
-    " velocity: [0, 0, -0.05]}\n"
     "statistics:\n"
     "  sample_every: 2.0e-4\n"
     "  compartments: {axis: [1, 0, 0], origin: [0, 0, 0], edges: [0, 0.05, 0.1]}\n";
+
+/* n particles of class cls on a lattice (5 mm apart: in 2 ms at <= 0.3 m/s
+ * none can reach another) from x0 along x, all with velocity v */
+static void lattice(gs_dem_case *c, int cls, int n, double x0, const double v[3], int *site) {
+  gs_error err = {0};
+  for (int k = 0; k < n; k++, (*site)++) {
+    double x[3] = {x0 + 0.005 * (*site % 7), 0.005 * (*site / 7 % 7), 0.005 * (*site / 49)};
+    CHECK(gs_dem_add_particle(c->dem, c->cls[cls].type, cls ? 1.5e-3 : 1.0e-3, x, v, NULL, &err) >= 0);
+  }
+}
 
 /* sample mean and sd over ns samples of the values x[k] held by n[k] particles */
 static void stats_of(const double *x, const int *n, int m, int ns, double *mean, double *sd) {
@@ -236,6 +236,16 @@ static void stats_of(const double *x, const int *n, int m, int ns, double *mean,
 
 static void test_velocity(void) {
   gs_dem_case *c = load("vel", VEL);
+  if (c) {
+    /* compartment 1 (x 0..0.05): class a, 40 at (0.2, 0, 0) and 60 at (0, 0.1, 0);
+     * compartment 2 (x 0.05..0.1): class a, 50 at (-0.1, 0, 0.3), class b, 30 at (0, 0, -0.05) */
+    const double v1[3] = {0.2, 0, 0}, v2[3] = {0, 0.1, 0}, v3[3] = {-0.1, 0, 0.3}, v4[3] = {0, 0, -0.05};
+    int s1 = 0, s2 = 0;
+    lattice(c, 0, 40, 0.01, v1, &s1);
+    lattice(c, 0, 60, 0.01, v2, &s1);
+    lattice(c, 0, 50, 0.06, v3, &s2);
+    lattice(c, 1, 30, 0.06, v4, &s2);
+  }
   if (!c || run(c, "vel")) {
     gs_dem_case_free(c);
     return;

@@ -115,21 +115,33 @@ int gs_dem_region_contains(const gs_dem_region *g, const double x[3]);
 void gs_dem_region_point(const gs_dem_region *g, const double u[3], double x[3]);
 double gs_dem_region_volume(const gs_dem_region *g);
 
-/* A size distribution over particle types: entry k inserts type[k] with a
- * radius uniform in [rmin[k], rmax[k]], with number or mass fraction frac[k]. */
+/* A size distribution over particle types: entry k inserts type[k] with
+ * number or mass fraction frac[k] and a radius uniform in [rmin[k], rmax[k]],
+ * or, where gsd is given and gsd[k] > 1, lognormal with median median[k] and
+ * geometric standard deviation gsd[k] (ln r normal with mean ln median and
+ * sd ln gsd), truncated to [rmin[k], rmax[k]] (drawn with gsl_ran_lognormal,
+ * draws outside the range are redrawn). */
 typedef struct {
   size_t n;
   const int *type;
   const double *rmin, *rmax, *frac;
   int by_mass;
+  const double *median, *gsd; /* NULL: every entry fixed or uniform */
 } gs_dem_psd;
+/* Mean r^3 of entry k of the distribution (for mass fractions), and the
+ * share of the untruncated lognormal inside [rmin, rmax] (1 for a uniform
+ * entry); either output may be NULL. */
+void gs_dem_psd_moment3(const gs_dem_psd *psd, size_t k, double *mean_r3, double *share);
 
 /* Insert up to `count` particles and at most `mass` kg (either may be
  * infinite, not both) at random points of the region, none overlapping a
- * particle (present or pending) or a wall; each drawn particle gets 50 tries
- * at a free spot, and insertion stops after 20 particles in a row found none.
- * v: initial velocity (NULL = 0).  rng_state: a caller-held seed updated in
- * place.  *n_out, *m_out: what was inserted (may be less: region full). */
+ * particle (present or pending) or a wall.  A drawn particle (class and
+ * radius) is kept until it finds a free spot, so a crowded region does not
+ * bias the size distribution; after 20 rounds of 50 spots for one particle
+ * the region counts as full and insertion stops.
+ * v: initial velocity (NULL = 0).  rng_state: a caller-held seed, advanced
+ * once per call; the call's draws come from a GSL mt19937 generator seeded
+ * from it.  *n_out, *m_out: what was inserted (may be less: region full). */
 int gs_dem_insert(gs_dem *d, const gs_dem_region *reg, const gs_dem_psd *psd, long count,
                   double mass, const double v[3], uint64_t *rng_state, long *n_out, double *m_out,
                   gs_error *err);

@@ -70,6 +70,36 @@ static int read_region(gs_cfg_node *n, gs_dem_region *g, gs_error *err) {
   return rc;
 }
 
+/* radius: {type: lognormal, median, gsd, min, max}; without min and max the
+ * distribution is truncated to median * gsd^(-/+3) (99.73 % of it), since the
+ * cells and mesh bins need a largest radius */
+static int read_lognormal(gs_cfg_node *n, gs_dem_class *cl, gs_error *err) {
+  static const char *const types[] = {"lognormal", NULL};
+  int type = 0;
+  double med, gsd;
+  int rc = gs_cfg_get(n, "type") ? gs_cfg_enum_opt(n, "type", types, 0, &type, err)
+                                  : gs_cfg_fail(n, err, "missing key 'type' (a radius distribution: lognormal)");
+  if (!rc) rc = gs_cfg_double_range(n, "median", 1, 0, 0, 1, HUGE_VAL, 0, &med, err);
+  if (!rc) rc = gs_cfg_double_range(n, "gsd", 1, 0, 1, 1, HUGE_VAL, 0, &gsd, err);
+  if (rc) return rc;
+  double s3 = pow(gsd, 3);
+  if (!rc) rc = gs_cfg_double_range(n, "min", 0, med / s3, 0, 1, HUGE_VAL, 0, &cl->rmin, err);
+  if (!rc) rc = gs_cfg_double_range(n, "max", 0, med * s3, cl->rmin, 1, HUGE_VAL, 0, &cl->rmax, err);
+  if (!rc) rc = gs_cfg_check_unused(n, err);
+  if (rc) return rc;
+  cl->median = med;
+  cl->gsd = gsd;
+  /* rejection sampling: the range must hold a fair share of the distribution */
+  int t = 0;
+  double rmin = cl->rmin, rmax = cl->rmax, share;
+  gs_dem_psd one = {1, &t, &rmin, &rmax, NULL, 0, &med, &gsd};
+  gs_dem_psd_moment3(&one, 0, NULL, &share);
+  if (!(share >= 0.01))
+    return gs_cfg_fail(n, err, "the range [min, max] = [%g, %g] holds only %.3g of the lognormal (median %g, gsd %g); "
+                       "expected at least 1 %%", cl->rmin, cl->rmax, share, med, gsd);
+  return GS_OK;
+}
+
 static int read_material(gs_cfg_node *n, named_mat *nm, gs_error *err) {
   int rc = gs_cfg_require_kind(n, GS_CFG_MAP, err);
   gs_dem_material *m = &nm->m;
@@ -325,16 +355,21 @@ static int load(gs_dem_case *c, gs_error *err) {
       break;
     }
     snprintf(c->cls[k].name, sizeof c->cls[k].name, "%s", name);
-    double *r = NULL;
-    size_t nr = 0;
-    if ((rc = gs_cfg_doubles_req(cn, "radius", 1, &r, &nr, err))) break;
     gs_cfg_node *rn = gs_cfg_get(cn, "radius");
-    if (nr == 1) c->cls[k].rmin = c->cls[k].rmax = r[0];
-    else if (nr == 2) c->cls[k].rmin = r[0], c->cls[k].rmax = r[1];
-    free(r);
-    if (nr > 2 || !(c->cls[k].rmin > 0) || c->cls[k].rmax < c->cls[k].rmin) {
-      rc = gs_cfg_fail(rn, err, "expected a radius > 0 [m] or a range [min, max]");
-      break;
+    if (rn && gs_cfg_kind_of(rn) == GS_CFG_MAP) {
+      if ((rc = read_lognormal(rn, &c->cls[k], err))) break;
+    } else {
+      double *r = NULL;
+      size_t nr = 0;
+      if ((rc = gs_cfg_doubles_req(cn, "radius", 1, &r, &nr, err))) break;
+      if (nr == 1) c->cls[k].rmin = c->cls[k].rmax = r[0];
+      else if (nr == 2) c->cls[k].rmin = r[0], c->cls[k].rmax = r[1];
+      free(r);
+      if (nr > 2 || !(c->cls[k].rmin > 0) || c->cls[k].rmax < c->cls[k].rmin) {
+        rc = gs_cfg_fail(rn, err, "expected a radius > 0 [m], a range [min, max] or "
+                         "{type: lognormal, median, gsd, min, max}");
+        break;
+      }
     }
     rmin_all = fmin(rmin_all, c->cls[k].rmin);
     rmax_all = fmax(rmax_all, c->cls[k].rmax);

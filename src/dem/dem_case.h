@@ -23,7 +23,8 @@ typedef struct {
 typedef struct {
   char name[64];
   int type;
-  double rmin, rmax;
+  double rmin, rmax;   /* fixed (equal), uniform range, or the lognormal's truncation */
+  double median, gsd;  /* lognormal radius when gsd > 1 (else 0) */
 } gs_dem_class;
 
 struct gs_dem_case_s {

@@ -3,21 +3,47 @@
  * Candidates are checked against the particles already there (present and
  * pending) through a temporary grid over the region, and against the walls
  * with the same contact search the forces use.  Radii and types are drawn
- * from the size distribution; mass fractions are turned into number
- * fractions with each entry's mean particle mass. */
+ * from the size distribution (fixed, uniform, or truncated lognormal); mass
+ * fractions are turned into number fractions with each entry's mean particle
+ * mass.  Random numbers: GSL's mt19937, seeded per call from the caller's
+ * state (advanced by a splitmix64 step, so successive calls differ). */
+#include <gsl/gsl_cdf.h>
+#include <gsl/gsl_randist.h>
+#include <gsl/gsl_rng.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "dem/dem_internal.h"
 
-/* splitmix64: small, seedable, good enough for placing particles */
-static double urand(uint64_t *s) {
+static uint64_t splitmix(uint64_t *s) {
   uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  z ^= z >> 31;
-  return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+  return z ^ (z >> 31);
+}
+
+static int lognormal_entry(const gs_dem_psd *psd, size_t k) {
+  return psd->gsd && psd->median && psd->gsd[k] > 1;
+}
+
+void gs_dem_psd_moment3(const gs_dem_psd *psd, size_t k, double *mean_r3, double *share) {
+  const double r0 = psd->rmin[k], r1 = psd->rmax[k];
+  double m3, sh = 1;
+  if (lognormal_entry(psd, k)) {
+    /* ln r ~ N(mu, s) truncated to [a, b]:
+     * E[r^3] = exp(3 mu + 9 s^2 / 2) (P(b - 3 s) - P(a - 3 s)) / (P(b) - P(a)),
+     * P the standard normal CDF of (ln x - mu) / s shifted as written */
+    const double mu = log(psd->median[k]), sg = log(psd->gsd[k]);
+    const double a = r0 > 0 ? (log(r0) - mu) / sg : -HUGE_VAL, b = (log(r1) - mu) / sg;
+    sh = gsl_cdf_ugaussian_P(b) - gsl_cdf_ugaussian_P(a);
+    double num = gsl_cdf_ugaussian_P(b - 3 * sg) - gsl_cdf_ugaussian_P(a - 3 * sg);
+    m3 = sh > 0 ? exp(3 * mu + 4.5 * sg * sg) * num / sh : r0 * r0 * r0;
+  } else {
+    m3 = r1 > r0 ? (pow(r1, 4) - pow(r0, 4)) / (4 * (r1 - r0)) : r0 * r0 * r0;
+  }
+  if (mean_r3) *mean_r3 = m3;
+  if (share) *share = sh;
 }
 
 typedef struct {
@@ -90,7 +116,7 @@ static void region_bounds(const gs_dem_region *reg, double lo[3], double hi[3]) 
 }
 
 int gs_dem_insert(gs_dem *d, const gs_dem_region *reg, const gs_dem_psd *psd, long count,
-                  double mass, const double v[3], uint64_t *rng, long *n_out, double *m_out,
+                  double mass, const double v[3], uint64_t *rng_state, long *n_out, double *m_out,
                   gs_error *err) {
   *n_out = 0;
   *m_out = 0;
@@ -100,9 +126,18 @@ int gs_dem_insert(gs_dem *d, const gs_dem_region *reg, const gs_dem_psd *psd, lo
   if (!cum) return gs_error_set(err, GS_ENOMEM, "out of memory");
   for (size_t k = 0; k < psd->n; k++) {
     double w = psd->frac[k];
+    if (lognormal_entry(psd, k)) {
+      double share;
+      gs_dem_psd_moment3(psd, k, NULL, &share);
+      if (!(share >= 1e-6)) {
+        free(cum);
+        return gs_error_set(err, GS_EINPUT, "lognormal radius (median %g, gsd %g): the range [%g, %g] holds "
+                            "only %.3g of it", psd->median[k], psd->gsd[k], psd->rmin[k], psd->rmax[k], share);
+      }
+    }
     if (psd->by_mass) {
-      double r0 = psd->rmin[k], r1 = psd->rmax[k];
-      double r3 = r1 > r0 ? (pow(r1, 4) - pow(r0, 4)) / (4 * (r1 - r0)) : r0 * r0 * r0;
+      double r3;
+      gs_dem_psd_moment3(psd, k, &r3, NULL);
       w /= d->types[psd->type[k]].mat.density * r3;
     }
     tot += w;
@@ -128,6 +163,9 @@ int gs_dem_insert(gs_dem *d, const gs_dem_region *reg, const gs_dem_psd *psd, lo
   }
   g.head = rc ? NULL : malloc(ncell * sizeof(int));
   if (!rc && !g.head) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  gsl_rng *rng = rc ? NULL : gsl_rng_alloc(gsl_rng_mt19937);
+  if (!rc && !rng) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  if (rng) gsl_rng_set(rng, (unsigned long)(splitmix(rng_state) >> 32));
   if (!rc) memset(g.head, 0xff, ncell * sizeof(int));
   for (int src = 0; src < 2 && !rc; src++) {
     const gs_dem_particles *p = src ? &d->pend : &d->p;
@@ -137,18 +175,31 @@ int gs_dem_insert(gs_dem *d, const gs_dem_region *reg, const gs_dem_psd *psd, lo
     }
   }
   /* Draw the class and size first, then look for a free spot for that very
-   * particle: redrawing the class after a failed spot would favour small
-   * particles in a crowded region and bias the size distribution. */
+   * particle, and keep it until it is placed: redrawing the class after a
+   * failed spot would favour small particles in a crowded region and bias the
+   * size distribution.  20 rounds of 50 spots without success: region full. */
   long fails = 0;
+  int drawn = 0;
+  size_t k = 0;
+  double r = 0;
   while (!rc && *n_out < count && *m_out < mass && fails < 20) {
-    double u = urand(rng) * tot;
-    size_t k = 0;
-    while (k + 1 < psd->n && u > cum[k]) k++;
-    double r = psd->rmin[k] + urand(rng) * (psd->rmax[k] - psd->rmin[k]);
+    if (!drawn) {
+      double u = gsl_rng_uniform(rng) * tot;
+      k = 0;
+      while (k + 1 < psd->n && u > cum[k]) k++;
+      if (lognormal_entry(psd, k)) {
+        const double mu = log(psd->median[k]), sg = log(psd->gsd[k]);
+        do r = gsl_ran_lognormal(rng, mu, sg);
+        while (r < psd->rmin[k] || r > psd->rmax[k]);
+      } else {
+        r = psd->rmin[k] + gsl_rng_uniform(rng) * (psd->rmax[k] - psd->rmin[k]);
+      }
+      drawn = 1;
+    }
     double x[3];
     int ok = 0;
     for (int attempt = 0; attempt < 50 && !ok; attempt++) {
-      double uu[3] = {urand(rng), urand(rng), urand(rng)};
+      double uu[3] = {gsl_rng_uniform(rng), gsl_rng_uniform(rng), gsl_rng_uniform(rng)};
       gs_dem_region_point(reg, uu, x);
       ok = !grid_overlaps(&g, x, r) && !gs_dem_touches_wall(d, x, r);
     }
@@ -157,6 +208,7 @@ int gs_dem_insert(gs_dem *d, const gs_dem_region *reg, const gs_dem_psd *psd, lo
       continue;
     }
     fails = 0;
+    drawn = 0;
     if (gs_dem_add_particle(d, psd->type[k], r, x, v, NULL, err) < 0) rc = err->code;
     else if (grid_add(&g, x, r) < 0) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
     else {
@@ -164,6 +216,7 @@ int gs_dem_insert(gs_dem *d, const gs_dem_region *reg, const gs_dem_psd *psd, lo
       *m_out += d->pend.m[d->pend.n - 1];
     }
   }
+  gsl_rng_free(rng);
   free(cum);
   free(g.head);
   free(g.next);

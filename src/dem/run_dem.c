@@ -27,13 +27,15 @@ static int in_outlet(const double x[3], void *ctx) {
 static int insert(gs_dem_case *c, gs_dem_inserter *in, long count, double mass, uint64_t *rng,
                   long *n, double *m, gs_error *err) {
   int types[GS_DEM_MAX_CLASSES];
-  double rmin[GS_DEM_MAX_CLASSES], rmax[GS_DEM_MAX_CLASSES];
+  double rmin[GS_DEM_MAX_CLASSES], rmax[GS_DEM_MAX_CLASSES], med[GS_DEM_MAX_CLASSES], gsd[GS_DEM_MAX_CLASSES];
   for (size_t k = 0; k < c->nclass; k++) {
     types[k] = c->cls[k].type;
     rmin[k] = c->cls[k].rmin;
     rmax[k] = c->cls[k].rmax;
+    med[k] = c->cls[k].median;
+    gsd[k] = c->cls[k].gsd;
   }
-  gs_dem_psd psd = {c->nclass, types, rmin, rmax, in->frac, in->by_mass};
+  gs_dem_psd psd = {c->nclass, types, rmin, rmax, in->frac, in->by_mass, med, gsd};
   return gs_dem_insert(c->dem, &in->reg, &psd, count, mass, in->v, rng, n, m, err);
 }
 
