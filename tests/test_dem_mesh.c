@@ -2,7 +2,9 @@
  * pressed onto a face, an edge or a vertex of a cube feels exactly one Hertz
  * contact (shared edges and vertices are not counted twice, and neighbouring
  * coplanar triangles add nothing); a moving mesh pushes with its own velocity;
- * the real CoriMix meshes load. */
+ * a mesh turning at a given rpm (and translating) has its vertices exactly
+ * where the rigid motion puts them; a sphere resting on a turning disk is
+ * carried at the wall velocity omega x r; the real CoriMix meshes load. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -10,6 +12,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "dem/dem_case.h"
 #include "gransim/dem.h"
 
 /* unit cube [0,1]^3 as 12 outward triangles */
@@ -183,6 +186,119 @@ static void test_moving(void) {
   gs_dem_free(d);
 }
 
+/* Rodrigues rotation of v by angle th about unit axis k. */
+static void rotate(const double k[3], double th, const double v[3], double out[3]) {
+  double c = cos(th), s = sin(th), kd = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+  double kx[3] = {k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]};
+  for (int i = 0; i < 3; i++) out[i] = v[i] * c + kx[i] * s + k[i] * kd * (1 - c);
+}
+
+/* A mesh wall of a case file rotating at 300 rpm about a tilted axis through
+ * a point off the origin, and one also translating: after n steps every
+ * vertex is where the rigid motion puts it at t = n dt. */
+static void test_rotation(void) {
+  double t[108];
+  cube(t);
+  for (int k = 0; k < 108; k++) t[k] = 0.01 * t[k] + 0.002;
+  write_stl("/tmp/gransim_test_rot.stl", t, 0);
+  FILE *fp = fopen("/tmp/gransim_test_rot.yaml", "w");
+  fprintf(fp, "dem:\n  time_step: 1.0e-5\n  duration: 0.01\n  gravity: [0, 0, 0]\n"
+              "  box: {lo: [-0.05, -0.05, -0.05], hi: [0.05, 0.05, 0.05]}\n"
+              "materials:\n  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, density: 500}\n"
+              "classes:\n  - {name: a, radius: 1.0e-3, material: g}\n"
+              "walls:\n"
+              "  - {name: turn, mesh: gransim_test_rot.stl, material: g,\n"
+              "     rotation: {origin: [0.004, -0.003, 0.001], axis: [1, 2, 2], rpm: 300}}\n"
+              "  - {name: screw, mesh: gransim_test_rot.stl, material: g, velocity: [0.1, 0, -0.2],\n"
+              "     rotation: {origin: [0, 0, 0.005], axis: [0, 0, 1], rad_per_s: -20}}\n");
+  fclose(fp);
+  gs_error err = {0};
+  gs_dem_case *c = gs_dem_case_load("/tmp/gransim_test_rot.yaml", &err);
+  CHECK(c != NULL);
+  if (!c) {
+    fprintf(stderr, "%s\n", err.msg);
+    return;
+  }
+  gs_dem *d = c->dem;
+  const long n = 1234;
+  CHECK(gs_dem_run(d, n, &err) == 0);
+  const double tt = gs_dem_time(d);
+  CHECK_REL(tt, n * 1e-5, 1e-12);
+  double out[108], worst[2] = {0, 0};
+  const double ax0[3] = {1 / 3.0, 2 / 3.0, 2 / 3.0}, o0[3] = {0.004, -0.003, 0.001};
+  const double ax1[3] = {0, 0, 1}, o1[3] = {0, 0, 0.005}, v1[3] = {0.1, 0, -0.2};
+  for (int w = 0; w < 2; w++) {
+    CHECK(gs_dem_wall_triangles(d, (size_t)w, out) == 12);
+    const double *ax = w ? ax1 : ax0, *o = w ? o1 : o0, th = w ? -20 * tt : 300 * 2 * M_PI / 60 * tt;
+    for (int k = 0; k < 36; k++) {
+      double rel[3] = {t[3 * k] - o[0], t[3 * k + 1] - o[1], t[3 * k + 2] - o[2]}, q[3];
+      rotate(ax, th, rel, q);
+      for (int a = 0; a < 3; a++)
+        worst[w] = fmax(worst[w], fabs(out[3 * k + a] - (q[a] + o[a] + (w ? v1[a] * tt : 0))));
+    }
+  }
+  fprintf(stderr, "mesh after %ld steps (%.4f s): 300 rpm about (1,2,2): largest vertex error %.3g m; -20 rad/s "
+          "while translating: %.3g m\n", n, tt, worst[0], worst[1]);
+  CHECK(worst[0] < 1e-13);
+  CHECK(worst[1] < 1e-13);
+  gs_dem_case_free(c);
+  remove("/tmp/gransim_test_rot.stl");
+  remove("/tmp/gransim_test_rot.yaml");
+}
+
+/* A sphere at rest on a horizontal disk (64 triangles) that turns at 60 rpm
+ * about z: friction drags it along, rolling friction stops its rolling, and
+ * it ends up carried by the disk: the sphere's material at the contact point
+ * moves with the wall velocity omega x r there, and the centre with
+ * omega x r_centre.  (The contact law has no twisting torque, so the sphere
+ * does not take up the disk's spin about z.) */
+static void test_turntable(void) {
+  gs_dem_params p;
+  memset(&p, 0, sizeof p);
+  p.dt = 2e-6;
+  p.skin = 2e-4;
+  p.gravity[2] = -9.81;
+  for (int a = 0; a < 3; a++) p.lo[a] = -0.05, p.hi[a] = 0.05;
+  p.nclass = 1;
+  gs_error err = {0};
+  gs_dem *d = gs_dem_alloc(&p, &err);
+  const gs_dem_material m = {8e6, 0.2, 0.4, 0.5, 0.2, 500};
+  int t = gs_dem_add_type(d, &m, 0, &err);
+  const double R = 0.03;
+  double tri[64 * 9];
+  for (int k = 0; k < 64; k++) {
+    double a0 = 2 * M_PI * k / 64, a1 = 2 * M_PI * (k + 1) / 64;
+    double t9[9] = {0, 0, 0, R * cos(a0), R * sin(a0), 0, R * cos(a1), R * sin(a1), 0};
+    memcpy(tri + 9 * k, t9, sizeof t9);
+  }
+  int w = gs_dem_add_mesh(d, "disk", gs_dem_mesh_from_triangles(tri, 64, &err), &m, &err);
+  const double omega = 2 * M_PI, o[3] = {0, 0, 0}, z[3] = {0, 0, 1};
+  CHECK(gs_dem_wall_set_motion(d, w, o, z, omega, NULL, &err) == 0);
+  const double r = 1e-3, rho0 = 0.015, phi = 2 * M_PI * 10.5 / 64; /* mid-sector */
+  double x[3] = {rho0 * cos(phi), rho0 * sin(phi), r};
+  gs_dem_add_particle(d, t, r, x, NULL, NULL, &err);
+  CHECK(gs_dem_run(d, 50000, &err) == 0); /* 0.1 s */
+  gs_dem_view v;
+  gs_dem_get_view(d, &v);
+  /* contact point below the centre (the disk is flat) */
+  const double cp[3] = {v.x[0], v.y[0], 0};
+  const double vw[3] = {-omega * cp[1], omega * cp[0], 0};
+  const double vcp[3] = {v.vx[0] + v.wy[0] * (-r), v.vy[0] - v.wx[0] * (-r), v.vz[0]};
+  double dv = sqrt((vcp[0] - vw[0]) * (vcp[0] - vw[0]) + (vcp[1] - vw[1]) * (vcp[1] - vw[1]) +
+                   (vcp[2] - vw[2]) * (vcp[2] - vw[2]));
+  double vc = sqrt((v.vx[0] + omega * v.y[0]) * (v.vx[0] + omega * v.y[0]) +
+                   (v.vy[0] - omega * v.x[0]) * (v.vy[0] - omega * v.x[0]));
+  double rho = hypot(v.x[0], v.y[0]), speed = omega * rho;
+  fprintf(stderr, "turntable 60 rpm: sphere at radius %.5f m (started %.5f), wall speed %.5f m/s; contact-point "
+          "velocity off by %.3g m/s, centre off omega x r by %.3g m/s, spin (%.3g %.3g %.4f) rad/s\n", rho, rho0, speed,
+          dv, vc, v.wx[0], v.wy[0], v.wz[0]);
+  CHECK(v.n == 1);
+  CHECK(dv < 1e-3 * speed);
+  CHECK(vc < 1e-3 * speed);
+  CHECK(fabs(rho - rho0) < 0.01 * rho0); /* carried round, not flung out */
+  gs_dem_free(d);
+}
+
 /* The Lödige CoriMix meshes (when the shared data is present). */
 static void test_corimix(void) {
   const char *dir = getenv("GRANSIM_SOURCE_DIR");
@@ -213,6 +329,8 @@ int main(void) {
   test_stl();
   test_features();
   test_moving();
+  test_rotation();
+  test_turntable();
   test_corimix();
   TEST_EXIT();
 }
