@@ -1,7 +1,8 @@
 # `gransim dem`: the CoriMix example runs and writes its tables; the collision
-# table is one the PBM's `table` kernel reads; case-file errors name
-# file:line, key and value; --check validates the DEM examples of
-# docs/case-files.md (blocks starting "# dem-example: NAME").
+# table is one the PBM's `table` kernel reads and the impact table one its
+# `dem_impact` breakage selection reads; case-file errors name file:line, key
+# and value; a too large time step is warned about once; --check validates the
+# DEM examples of docs/case-files.md (blocks starting "# dem-example: NAME").
 source "$(dirname "$0")/cli-lib.sh" "$@"
 
 run_rc 0 "$BIN" dem --help
@@ -13,7 +14,8 @@ sed 's/duration: 0.02/duration: 0.01/; s/vtk_every: 0.01/vtk_every: 0.005/' \
 if [ -f "$SRC/../shared/data/corimix/shell.stl" ]; then
   run_rc 0 "$BIN" dem "$WORK/corimix.yaml" --out "$WORK/out" --quiet
   for f in timeseries.csv collisions.csv collision_kernel.csv impacts.csv impact_velocity.csv \
-           velocity.csv residence.csv vtk/particles_000001.vtk vtk/impeller_000001.vtk; do
+           impact_table.csv impact_table_impeller.csv impact_table_shell.csv velocity.csv residence.csv \
+           residence_class.csv vtk/particles_000001.vtk vtk/impeller_000001.vtk; do
     [ -s "$WORK/out/$f" ] || fail "missing $f"
   done
   # collisions happened between every pair of classes, and impacts on the impeller
@@ -40,6 +42,30 @@ YAML
     cat "$WORK/pbm.out" >&2
     fail "the PBM does not accept collision_kernel.csv"
   fi
+  # ... and the impact tables as its breakage selection (all walls, the impeller alone)
+  cp "$WORK/out/impact_table.csv" "$WORK/I.csv"
+  cp "$WORK/out/impact_table_impeller.csv" "$WORK/Iimp.csv"
+  for t in I.csv Iimp.csv; do
+    cat > "$WORK/pbm-break.yaml" <<YAML
+title: DEM wall impacts as the breakage selection
+grid:
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-11, max: 1.0e-6, cells: 20, zero_first: true}
+initial:
+  type: exponential
+  number: 1
+  mean: 4.0e-9
+mechanisms:
+  - type: breakage
+    selection: {type: dem_impact, file: $t, measure: diameter, u_break: 2.0}
+    daughters: {type: halves}
+output: {end: 1, count: 2}
+YAML
+    if "$BIN" check "$WORK/pbm-break.yaml" > "$WORK/pbm.out" 2>&1; then :; else
+      cat "$WORK/pbm.out" "$WORK/$t" >&2
+      fail "the PBM does not accept $t (impact table) as a dem_impact selection"
+    fi
+  done
 else
   echo "cli_dem: shared CoriMix meshes not present; skipping the example run"
 fi
@@ -60,6 +86,24 @@ stderr_has "bad.yaml:6: materials[0].E = '-5'"
 sed -i 's/E: -5/E: 8.0e6/; s/radius: 1.0e-3/radius: 1.0e-3, colour: red/' "$WORK/bad.yaml"
 run_rc 1 "$BIN" dem "$WORK/bad.yaml" --out "$WORK/bad"
 stderr_has "unknown key 'colour'"
+
+# a time step above 20 % of the Rayleigh time: one warning, from reading the case
+cat > "$WORK/big-step.yaml" <<'YAML'
+dem:
+  time_step: 2.0e-5
+  duration: 1.0e-4
+  gravity: [0, 0, -9.81]
+  box: {lo: [0, 0, 0], hi: [0.02, 0.02, 0.02]}
+materials:
+  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, density: 500}
+classes:
+  - {name: a, radius: 1.0e-3, material: g}
+fill:
+  - {region: {box: {lo: [0.002, 0.002, 0.002], hi: [0.018, 0.018, 0.018]}}, count: 5}
+YAML
+run_rc 0 "$BIN" dem "$WORK/big-step.yaml" --out "$WORK/big" --quiet
+stderr_has "of the Rayleigh time"
+[ "$(grep -c 'Rayleigh' "$WORK/stderr")" = 1 ] || { show_output; fail "the Rayleigh-time warning is not printed exactly once"; }
 
 # DEM examples of the case-file documentation
 ex=$WORK/doc

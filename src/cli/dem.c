@@ -16,8 +16,12 @@ static void dem_usage(FILE *fp) {
           "  collisions.csv       collision events per class pair, numbers per class, C_ij\n"
           "  collision_kernel.csv C_ij as a table for the PBM kernel `table` (measure: diameter)\n"
           "  impacts.csv, impact_velocity.csv  wall impacts per class, impact speeds\n"
-          "  velocity.csv         speed per class and axial compartment\n"
+          "  impact_table.csv     impacts per particle and second and lognormal fits of the impact\n"
+          "                       speed per class, for the breakage selection `dem_impact`\n"
+          "                       (measure: diameter); impact_table_WALL.csv: one wall alone\n"
+          "  velocity.csv         speed and velocity components per class and axial compartment\n"
           "  residence.csv        residence-time distribution of particles leaving through outlets\n"
+          "                       (residence_class.csv: per class)\n"
           "  vtk/                 particles and moving meshes for ParaView (output.vtk_every)\n"
           "--check validates CASE (reads meshes) without running it.  --threads sets the OpenMP\n"
           "threads (default: OMP_NUM_THREADS or all).\n");
