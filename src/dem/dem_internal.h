@@ -1,7 +1,8 @@
 /* Internal state of the DEM engine, shared by the files of src/dem/.
  * Particles are structure-of-arrays; every per-particle array has capacity
- * `cap` and the first `n` entries are live, kept in cell order (sorted at each
- * neighbour-list rebuild) so that neighbours are close in memory. */
+ * `cap` and the first `n` entries are live, kept in cell order (re-sorted at
+ * every 8th neighbour-list rebuild and whenever particles are added or
+ * removed) so that neighbours are close in memory. */
 #ifndef GRANSIM_DEM_INTERNAL_H
 #define GRANSIM_DEM_INTERNAL_H
 
