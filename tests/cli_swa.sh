@@ -70,6 +70,14 @@ output: {end: 1}")
 run_rc 1 "$BIN" check "$bad"
 stderr_has "bad3.yaml:5: mechanisms[0].type = 'growth': unknown mechanism (swa solver) type; expected one of: aggregation"
 
+bad=$(write_case bad4.yaml "grid:
+  axes: [{name: solid, type: linear, min: 0, max: 10, cells: 10}]
+initial: {type: point, number: 10, at: 1}
+solver: {method: swa, contraction: shrink}
+output: {end: 1}")
+run_rc 1 "$BIN" check "$bad"
+stderr_has "bad4.yaml:4: solver.contraction = 'shrink': expected one of: merge, drop"
+
 empty=$(write_case empty.yaml "grid:
   axes: [{name: solid, type: linear, min: 0, max: 10, cells: 10}]
 mechanisms:

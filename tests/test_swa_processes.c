@@ -1,10 +1,12 @@
 /* SWA processes one jump at a time: exact mass conservation of every
- * coagulation (with compaction), breakage, nucleation and transfer jump;
+ * coagulation (with compaction), breakage, nucleation and transfer jump,
+ * contractions of full compartments included;
  * the single immersion-nucleation event of seed 001 (reference section 7,
  * case 5); compaction reaching the target porosity; the closed-form
  * penetration against an ODE solver; inception unbiased for EWI and VWI;
  * breakage number growth; inception + transport steady state (c_z = R tau);
- * doubling and contraction. */
+ * doubling and contraction (merge: mass exact; merge and drop: unbiased, the
+ * new particle included). */
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_odeiv2.h>
 #include <math.h>
@@ -72,6 +74,8 @@ static void mass_per_jump(void) {
   for (int it = 0; it < 4000; it++) {
     size_t p = (size_t)it % m->nproc, z = p == 3 ? 0 : (size_t)(it / 4) % 2;
     double before = total_mass(s);
+    /* the droplet's weight is w_drop times the inflow scale when the jump starts */
+    double droplet = 0.01 * gs_swa_gain(s, 0) * vdrop * 998 / gs_swa_vsamp(s, 0);
     gs_swa_stats st0 = gs_swa_sim_stats(s);
     if (m->proc[p].type->rate(m->proc[p].self, s, z) <= 0) continue;
     if (m->proc[p].type->jump(m->proc[p].self, s, z, &e)) {
@@ -81,22 +85,19 @@ static void mass_per_jump(void) {
     }
     gs_swa_stats st1 = gs_swa_sim_stats(s);
     if (st1.fictitious == st0.fictitious) jumped[p]++;
-    /* a contraction (adding to a full compartment drops a random particle)
-     * is unbiased, not exact: those events are not compared */
-    if (st1.contractions != st0.contractions) {
-      contracted++;
-      continue;
-    }
+    /* a jump that adds to a full compartment merges two particles first: compared too */
+    contracted += st1.contractions != st0.contractions;
     double after = total_mass(s);
     /* nucleation adds the droplet's liquid; transfer out of the last compartment removes product */
-    if (p == 3) before += 0.01 * vdrop * 998 / gs_swa_vsamp(s, 0);
+    if (p == 3) before += droplet;
     if (p == 2 && z == 1) continue;
     double err = fabs(after - before) / before;
     worst = fmax(worst, err);
   }
   fprintf(stderr, "mass per jump: worst relative change %.3g; accepted jumps coag %d break %d transfer %d nuc %d "
-          "(%d with a contraction not compared)\n", worst, jumped[0], jumped[1], jumped[2], jumped[3], contracted);
+          "(%d with a contraction)\n", worst, jumped[0], jumped[1], jumped[2], jumped[3], contracted);
   CHECK(worst < 1e-12);
+  CHECK(contracted > 50); /* the merges were exercised */
   for (int p = 0; p < 4; p++) CHECK(jumped[p] > 10);
   /* every particle stays physical: non-negative coordinates, l_i <= p after compaction/nucleation */
   int bad = 0;
@@ -270,7 +271,7 @@ static void transport_steady(void) {
   gs_swa_case_free(&c);
 }
 
-/* Doubling keeps every estimate; contraction keeps them in expectation. */
+/* Doubling keeps every estimate; a merge contraction keeps the mass exactly. */
 static void doubling(void) {
   gs_swa_case c;
   sw_case(sw_fmt("grid:\n  axes: [{name: v, type: linear, min: 0, max: 10, cells: 5}]\n"
@@ -285,15 +286,81 @@ static void doubling(void) {
   CHECK_REL(total_number(s, 0), n, 1e-14);
   CHECK_REL(total_mass(s), mass, 1e-14);
   CHECK_REL(gs_swa_vsamp(s, 0), 2 * 16 / 500.0, 1e-14);
-  /* adding to a full compartment: one particle dropped, V scaled by 63/64 */
+  /* adding to a full compartment: two particles merged, V kept, later inflow 64/63 heavier */
   for (int k = 0; k < 32; k++) CHECK(gs_swa_add(s, 0, (double[]){1.0}, 1.0, NULL) == 0);
   CHECK(gs_swa_count(s, 0) == 64);
   double v = gs_swa_vsamp(s, 0);
+  mass = total_mass(s);
+  CHECK(gs_swa_gain(s, 0) == 1);
   CHECK(gs_swa_add(s, 0, (double[]){1.0}, 1.0, NULL) == 0);
   CHECK(gs_swa_count(s, 0) == 64);
-  CHECK_REL(gs_swa_vsamp(s, 0), v * 63 / 64, 1e-14);
+  CHECK(gs_swa_vsamp(s, 0) == v);
+  CHECK_REL(total_mass(s), mass + 1.0 / v, 1e-14);
+  CHECK_REL(gs_swa_gain(s, 0), 64.0 / 63, 1e-15);
   CHECK(gs_swa_sim_stats(s).contractions == 1 && gs_swa_sim_stats(s).doublings == 1);
   gs_swa_sim_free(s);
+  gs_swa_case_free(&c);
+}
+
+/* Adding one particle (x = 1.3, w = 0.9) to a full compartment of 64 fixed
+ * particles with unequal sizes and weights, 20000 times with different seeds:
+ * the mean change of the number, mass and Σ w x² estimates must be the new
+ * particle's w/V, w x/V, w x²/V within 4 standard errors, for both
+ * contractions; merge keeps the mass exactly in every trial.  The former
+ * contraction (drop first, then add with the weight meant for the old V)
+ * over-weighted the new particle by 64/63, a number bias of w/(63 V), which
+ * the test checks it resolves (4 standard errors below it). */
+static void contraction_unbiased(const char *mode) {
+  gs_swa_case c;
+  sw_case(sw_fmt("grid:\n  axes: [{name: v, type: linear, min: 0, max: 4, cells: 4}]\n"
+                 "solver: {method: swa, particles: 64, reference_number: 1, contraction: %s}\n"
+                 "output: {end: 1}\n", mode), &c);
+  enum { TRIALS = 20000, N = 64 };
+  const double V = 2.0, xn = 1.3, wn = 0.9;
+  double sum[3] = {0}, sq[3] = {0}, worst_mass = 0;
+  for (int t = 0; t < TRIALS; t++) {
+    gs_error e = {0};
+    gs_swa_sim *s = gs_swa_sim_alloc(&c.model, (uint64_t)t + 1, &e);
+    if (!s) exit(1);
+    gs_swa_set_vsamp(s, 0, V);
+    for (int i = 0; i < N; i++) {
+      double x = 0.2 + 3.0 * i / N, w = 0.5 + (i % 7) / 6.0;
+      CHECK(gs_swa_sim_place(s, 0, &x, w, &e) == 0);
+    }
+    double before[3] = {0}, after[3] = {0};
+    for (int pass = 0; pass < 2; pass++) {
+      double *acc = pass ? after : before;
+      double v = gs_swa_vsamp(s, 0);
+      for (size_t i = 0; i < gs_swa_count(s, 0); i++) {
+        double w = gs_swa_w(s, 0, i), x = gs_swa_x(s, 0, i)[0];
+        acc[0] += w / v;
+        acc[1] += w * x / v;
+        acc[2] += w * x * x / v;
+      }
+      if (!pass) CHECK(gs_swa_add(s, 0, &xn, wn, &e) == 0);
+    }
+    double want[3] = {wn / V, wn * xn / V, wn * xn * xn / V};
+    for (int k = 0; k < 3; k++) {
+      double d = after[k] - before[k] - want[k];
+      sum[k] += d;
+      sq[k] += d * d;
+    }
+    worst_mass = fmax(worst_mass, fabs(after[1] - before[1] - want[1]) / after[1]);
+    CHECK(gs_swa_count(s, 0) == N && gs_swa_sim_stats(s).contractions == 1);
+    gs_swa_sim_free(s);
+  }
+  const char *name[3] = {"number", "mass", "sum w x^2"};
+  double se_number = 0;
+  for (int k = 0; k < 3; k++) {
+    double mean = sum[k] / TRIALS, se = sqrt((sq[k] / TRIALS - mean * mean) / (TRIALS - 1));
+    if (k == 0) se_number = se;
+    fprintf(stderr, "contraction %s: %s: mean change - expected %.3g, standard error %.3g\n", mode, name[k], mean, se);
+    CHECK(fabs(mean) <= 4 * se + 1e-13);
+  }
+  fprintf(stderr, "contraction %s: worst relative mass error %.3g; the former bias w/(63 V) = %.3g is %.1f standard errors\n",
+          mode, worst_mass, wn / (63 * V), wn / (63 * V) / se_number);
+  if (!strcmp(mode, "merge")) CHECK(worst_mass < 1e-14);
+  CHECK(wn / (63 * V) > 4 * se_number);
   gs_swa_case_free(&c);
 }
 
@@ -376,6 +443,8 @@ int main(void) {
   breakage_rate();
   transport_steady();
   doubling();
+  contraction_unbiased("merge");
+  contraction_unbiased("drop");
   lpda();
   errors();
   TEST_EXIT();

@@ -36,6 +36,9 @@ extern "C" {
 #define GS_SWA_MAX_COORD 8 /* coordinates of the particle type space */
 #define GS_SWA_MAX_PROP 12 /* cached per-particle properties (column 0 is the weight) */
 
+/* contraction of a full compartment (solver.contraction) */
+enum { GS_SWA_MERGE, GS_SWA_DROP };
+
 typedef struct gs_swa_model gs_swa_model;
 typedef struct gs_swa_sim gs_swa_sim; /* the state of one run (opaque) */
 
@@ -82,6 +85,7 @@ struct gs_swa_model {
   double reference_number; /* physical count that fill_fraction*nmax weight-1 particles stand
                               for in a compartment that starts empty (0: none given) */
   double lpda_interval; /* deferment checkpoint spacing (0: output times only) */
+  int contraction;      /* GS_SWA_MERGE or GS_SWA_DROP: see gs_swa_add */
   gs_swa_process *proc;
   size_t nproc;
   int nprop;
@@ -114,6 +118,11 @@ double gs_swa_time(const gs_swa_sim *s);
 size_t gs_swa_count(const gs_swa_sim *s, size_t comp);
 double gs_swa_sum(const gs_swa_sim *s, size_t comp, int prop); /* sum of a property */
 double gs_swa_vsamp(const gs_swa_sim *s, size_t comp);
+/* Weight scale g of particles entering comp from outside (feed, droplets):
+ * they enter at rate R V / (w g) with weight w g.  1 at the start; every merge
+ * contraction multiplies it by nmax / (nmax - 1) (the growth of the mean
+ * weight), so the computational inflow adapts to the capacity. */
+double gs_swa_gain(const gs_swa_sim *s, size_t comp);
 void gs_swa_set_vsamp(gs_swa_sim *s, size_t comp, double v);
 /* Particle i, brought up to the current time first (LPDA).  The pointer is
  * valid until the next add/remove in comp. */
@@ -122,8 +131,16 @@ double gs_swa_w(const gs_swa_sim *s, size_t comp, size_t i);
 double gs_swa_prop(const gs_swa_sim *s, size_t comp, size_t i, int prop); /* cached value */
 /* After changing x (through gs_swa_x) and/or the weight: refresh the caches. */
 void gs_swa_update(gs_swa_sim *s, size_t comp, size_t i, double w);
-/* Add a particle (copied, time stamp now).  A full compartment first drops a
- * uniformly chosen particle and scales V by (nmax-1)/nmax (contraction). */
+/* Add a particle (copied, time stamp now) standing for w / V real particles.
+ * A full compartment contracts (model contraction):
+ *  - GS_SWA_MERGE: two particles k, j (k uniform, j the closest in mass m(x) of
+ *    a few uniform candidates) become one, x_k with probability
+ *    w_k m_k / (w_k m_k + w_j m_j), else x_j, carrying weight
+ *    (w_k m_k + w_j m_j) / m(kept): mass exact, every estimate unbiased, V kept,
+ *    and the inflow weight scale gs_swa_gain grows by nmax / (nmax - 1);
+ *  - GS_SWA_DROP (Lee et al. 2015): one of the nmax + 1 particles, the new one
+ *    included, is dropped uniformly and V shrinks by nmax / (nmax + 1):
+ *    unbiased, equal weights stay equal, mass kept only in expectation. */
 int gs_swa_add(gs_swa_sim *s, size_t comp, const double *x, double w, gs_error *err);
 /* Remove particle i (the last particle takes its index). */
 void gs_swa_remove(gs_swa_sim *s, size_t comp, size_t i);

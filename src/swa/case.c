@@ -49,6 +49,8 @@ static int read_solver(gs_cfg_node *root, gs_swa_case *c, gs_error *err) {
   if (!rc) rc = gs_cfg_double_range(n, "doubling_fraction", 0, 0.375, 0, 0, 0.5, 0, &m->nmin_fraction, err);
   if (!rc) rc = gs_cfg_double_range(n, "reference_number", 0, 0, 0, 0, HUGE_VAL, 0, &m->reference_number, err);
   if (!rc) rc = gs_cfg_double_range(n, "lpda_interval", 0, 0, 0, 0, HUGE_VAL, 0, &m->lpda_interval, err);
+  static const char *const contractions[] = {"merge", "drop", NULL};
+  if (!rc) rc = gs_cfg_enum_opt(n, "contraction", contractions, GS_SWA_MERGE, &m->contraction, err);
   if (rc) return rc;
   m->nmax = (size_t)particles;
   c->runs = (size_t)runs;

@@ -27,6 +27,7 @@ gs_swa_sim *gs_swa_sim_alloc(const gs_swa_model *m, uint64_t seed, gs_error *err
     if (!c->x || !c->w || (m->has_continuous && !c->stamp)) goto fail;
     if (gs_fenwick_init(&c->tree, m->nmax, m->nprop, err)) goto fail;
     c->vsamp = 1;
+    c->gain = 1;
   }
   s->next_checkpoint = m->lpda_interval > 0 ? m->lpda_interval : HUGE_VAL;
   return s;
@@ -55,6 +56,7 @@ void *gs_swa_rng(gs_swa_sim *s) { return s->rng; }
 double gs_swa_time(const gs_swa_sim *s) { return s->t; }
 size_t gs_swa_count(const gs_swa_sim *s, size_t z) { return s->comp[z].n; }
 double gs_swa_vsamp(const gs_swa_sim *s, size_t z) { return s->comp[z].vsamp; }
+double gs_swa_gain(const gs_swa_sim *s, size_t z) { return s->comp[z].gain; }
 void gs_swa_set_vsamp(gs_swa_sim *s, size_t z, double v) { s->comp[z].vsamp = v; }
 double gs_swa_w(const gs_swa_sim *s, size_t z, size_t i) { return s->comp[z].w[i]; }
 gs_swa_stats gs_swa_sim_stats(const gs_swa_sim *s) { return s->stats; }
@@ -139,15 +141,74 @@ int gs_swa_sim_place(gs_swa_sim *s, size_t z, const double *x, double w, gs_erro
   return GS_OK;
 }
 
+/* Merge contraction: two particles become one, chosen by mass, the way the
+ * seed's breakage picks a fragment (eqs. 54-56).  For the pair (k, j), with
+ * a = w m(x), keeping x_k with probability a_k / (a_k + a_j) and giving it
+ * the weight (a_k + a_j) / m_k (else likewise x_j) leaves the mass exact and
+ * the expectation of every estimate sum w phi(x) unchanged:
+ * a_k/(a_k+a_j) (a_k+a_j)/m_k phi_k + a_j/(a_k+a_j) (a_k+a_j)/m_j phi_j
+ * = w_k phi_k + w_j phi_j, for any choice of the pair.  The variance is the
+ * smaller the closer the pair, so j is the closest in mass of a few uniform
+ * candidates.  Massless pairs are merged by weight (the number kept).  The
+ * mass is a function of the stored vector: the continuous processes keep it,
+ * so no LPDA catch-up is needed here. */
+#define MERGE_CANDIDATES 8
+static void merge_pair(gs_swa_sim *s, size_t z) {
+  swa_comp *c = &s->comp[z];
+  const gs_swa_model *m = s->m;
+  size_t n = c->n, nc = (size_t)m->ncoord;
+  size_t k = gsl_rng_uniform_int(s->rng, n), j = k;
+  double mk = gs_swa_mass(m, c->x + k * nc), best = HUGE_VAL;
+  for (int t = 0; t < MERGE_CANDIDATES; t++) {
+    size_t cand = gsl_rng_uniform_int(s->rng, n - 1);
+    if (cand >= k) cand++;
+    double mc = gs_swa_mass(m, c->x + cand * nc);
+    double d = mc > 0 && mk > 0 ? fabs(log(mc / mk)) : (mc > 0) != (mk > 0) ? HUGE_VAL : 0;
+    if (j == k || d < best) {
+      best = d;
+      j = cand;
+    }
+  }
+  double mj = gs_swa_mass(m, c->x + j * nc);
+  double ak = c->w[k] * mk, aj = c->w[j] * mj, u = gsl_rng_uniform(s->rng);
+  size_t keep;
+  double w;
+  if (ak + aj > 0) {
+    keep = u * (ak + aj) < ak ? k : j;
+    w = (ak + aj) / (keep == k ? mk : mj);
+  } else {
+    keep = u * (c->w[k] + c->w[j]) < c->w[k] ? k : j;
+    w = c->w[k] + c->w[j];
+  }
+  gs_swa_update(s, z, keep, w);
+  gs_swa_remove(s, z, keep == k ? j : k);
+}
+
 int gs_swa_add(gs_swa_sim *s, size_t z, const double *x, double w, gs_error *err) {
   swa_comp *c = &s->comp[z];
-  if (c->n >= s->m->nmax) {
-    /* Contraction: dropping a uniformly chosen particle keeps every
-     * estimate unbiased once V shrinks by the same fraction. */
-    gs_swa_remove(s, z, gsl_rng_uniform_int(s->rng, c->n));
-    c->vsamp *= (double)(s->m->nmax - 1) / (double)s->m->nmax;
-    s->stats.contractions++;
+  size_t nmax = s->m->nmax;
+  if (c->n < nmax) return gs_swa_sim_place(s, z, x, w, err);
+  s->stats.contractions++;
+  if (s->m->contraction == GS_SWA_MERGE) {
+    /* V unchanged: w / V is still what the caller meant.  The n particles
+     * now carry what n + 1 carried: later inflow comes in heavier by the same
+     * factor (gs_swa_gain), as the drop's smaller V makes it, so the
+     * computational inflow adapts to the capacity as in Lee et al. 2015. */
+    merge_pair(s, z);
+    c->gain *= (double)nmax / (double)(nmax - 1);
+    return gs_swa_sim_place(s, z, x, w, err);
   }
+  /* Drop: the new particle, weighted for the V before the call, joins the
+   * nmax candidates; one of the nmax + 1 is dropped uniformly and V shrinks by
+   * nmax / (nmax + 1), so every particle, the new one included, keeps its
+   * estimate in expectation (dropping first and adding with the old weight
+   * over-weighted the new particle by nmax / (nmax - 1)). */
+  if (!(w > 0) || !isfinite(w))
+    return gs_error_set(err, GS_ENUMERIC, "particle weight %g in compartment %zu is not > 0", w, z + 1);
+  c->vsamp *= (double)nmax / (double)(nmax + 1);
+  size_t d = gsl_rng_uniform_int(s->rng, nmax + 1);
+  if (d == nmax) return GS_OK; /* the new particle is the one dropped */
+  gs_swa_remove(s, z, d);
   return gs_swa_sim_place(s, z, x, w, err);
 }
 

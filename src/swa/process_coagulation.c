@@ -146,7 +146,8 @@ static int coag_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
   if (c->scheme == S_DSA) {
     if (wi != wj)
       return gs_error_set(err, GS_ENUMERIC,
-                          "scheme dsa needs equal particle weights, found %g and %g (use scheme swa)", wi, wj);
+                          "scheme dsa needs equal particle weights, found %g and %g (use scheme swa, or "
+                          "solver.contraction: drop if particles are added to full compartments)", wi, wj);
     for (int k = 0; k < m->ncoord; k++) xi[k] += xj[k];
     gs_swa_compact(&c->comp, z, xi);
     gs_swa_update(s, z, i, wi);

@@ -53,7 +53,7 @@ static int feed_create(gs_cfg_node *node, gs_swa_model *m, void **self, gs_error
 static double feed_rate(const void *self, const gs_swa_sim *s, size_t z) {
   const feed *f = self;
   if (z != f->comp || s->t < f->start || s->t >= f->end) return 0;
-  return f->rate * gs_swa_vsamp(s, z) / f->spec.mean_weight; /* eq. 37 */
+  return f->rate * gs_swa_vsamp(s, z) / (f->spec.mean_weight * gs_swa_gain(s, z)); /* eq. 37 */
 }
 
 static int feed_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
@@ -64,7 +64,7 @@ static int feed_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
     gs_swa_fictitious(s); /* VWI: a diameter where the feed has no particles */
     return GS_OK;
   }
-  return gs_swa_add(s, z, x, w * f->spec.mean_weight, err);
+  return gs_swa_add(s, z, x, w * f->spec.mean_weight * gs_swa_gain(s, z), err);
 }
 
 const gs_swa_process_type gs_swa_feed = {

@@ -78,7 +78,7 @@ static int nuc_create(gs_cfg_node *node, gs_swa_model *m, void **self, gs_error 
 static double nuc_rate(const void *self, const gs_swa_sim *s, size_t z) {
   const nuc *n = self;
   if (z != n->comp || s->t < n->start || s->t >= n->end) return 0;
-  return n->rate * gs_swa_vsamp(s, z) / n->wdrop; /* eq. 47 */
+  return n->rate * gs_swa_vsamp(s, z) / (n->wdrop * gs_swa_gain(s, z)); /* eq. 47 */
 }
 
 /* T_nuc(x_nuc, x_i), eqs. 10-13: the partner's solid joins, all its liquid
@@ -102,7 +102,7 @@ static int nuc_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
   int nc = m->ncoord;
   double xn[GS_SWA_MAX_COORD] = {0}, t[GS_SWA_MAX_COORD];
   xn[n->ext] = n->vdrop;
-  double wn = n->wdrop, tol = 1e-12 * n->vdrop;
+  double wn = n->wdrop * gs_swa_gain(s, z), tol = 1e-12 * n->vdrop;
   for (long step = 0; xn[n->ext] > tol; step++) {
     if (step >= n->max_steps)
       return gs_error_set(err, GS_ENUMERIC,

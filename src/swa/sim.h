@@ -17,6 +17,7 @@ typedef struct swa_comp {
   double *stamp; /* nmax LPDA time stamps (NULL without continuous processes) */
   gs_fenwick tree;
   double vsamp;
+  double gain; /* weight scale of inflowing particles (merge contractions), 1 at start */
 } swa_comp;
 
 struct gs_swa_sim {
