@@ -6,7 +6,8 @@
  * require >= 60 % of the bins inside 1 CI and all inside 3 CI, i.e. 4.9
  * standard errors; M0 and M2 within 2.5 CI), for the weighted (swa) and direct (dsa) schemes, with an
  * inflated majorant (fictitious jumps), and the CI must shrink like
- * 1/sqrt(N).  M1 is conserved exactly.  A fixed-seed regression pins the
+ * 1/sqrt(N) at fixed runs and like 1/sqrt(runs) at fixed N.  M1 is conserved
+ * exactly.  A fixed-seed regression pins the
  * exact outcome. */
 #include <gsl/gsl_integration.h>
 #include <gsl/gsl_sf_bessel.h>
@@ -149,6 +150,49 @@ static void ci_scaling(void) {
   CHECK(ci[0] / ci[1] > 2.5 && ci[0] / ci[1] < 6.5);
 }
 
+/* At fixed N the CI half-width of M0 shrinks like 1/sqrt(runs).  With the
+ * seed's eq. 65, c = 1.64 sqrt(sum_r (M_r - mean)^2) / R, the expectation of
+ * c^2 is 1.64^2 sigma^2 (R - 1) / R^2 for R independent runs of variance
+ * sigma^2, so q_R = sqrt(mean of c^2) R / sqrt(R - 1) estimates 1.64 sigma for
+ * every R (the exact small-sample form of c ~ 1/sqrt(R): at R = 4 the factor
+ * sqrt(R - 1) / R is 0.866 / sqrt(R)).  R = 4, 16, 64 runs, each in 1024 / R
+ * independent groups (case seeds 1, 2, ...), N_max 256, T1 to tau = 10.
+ * Tolerance: for near-normal M0 the mean of c^2 over G groups has relative
+ * standard deviation sqrt(2 / ((R - 1) G)) = 5.1 %, 4.6 %, 4.5 %, so q_R / q_64
+ * has a standard deviation of about 3.4 %; 15 % is 4.4 standard deviations.
+ * A CI without the runs factor (c ~ sigma) would give ratios 0.25 and 0.5. */
+static void ci_runs_scaling(void) {
+  long R[3] = {4, 16, 64};
+  double q[3], mean_c[3];
+  for (int k = 0; k < 3; k++) {
+    long groups = 1024 / R[k];
+    double sum_c2 = 0, sum_c = 0;
+    for (long g = 0; g < groups; g++) {
+      gs_swa_case c;
+      sw_case(coag_case("constant", 1e-3, "swa", 1, 256, R[k], g + 1, 10), &c);
+      size_t ncol = (size_t)gs_swa_ncolumns(&c.model), n = c.ntimes * c.model.ncomp * ncol;
+      double *mean = calloc(n, sizeof(double)), *ci = calloc(n, sizeof(double));
+      gs_error e = {0};
+      CHECK(gs_swa_case_run(&c, NULL, 0, mean, ci, NULL, &e) == 0);
+      double cm0 = ci[((c.ntimes - 1) * c.model.ncomp + 0) * ncol + 0];
+      sum_c2 += cm0 * cm0;
+      sum_c += cm0;
+      free(mean);
+      free(ci);
+      gs_swa_case_free(&c);
+    }
+    mean_c[k] = sum_c / (double)groups;
+    q[k] = sqrt(sum_c2 / (double)groups) * (double)R[k] / sqrt((double)R[k] - 1);
+  }
+  for (int k = 0; k < 3; k++)
+    fprintf(stderr, "CI of M0, N_max 256, %ld runs (%ld groups): mean CI %.4g, q = rms CI * R / sqrt(R - 1) = %.4g, "
+            "q / q(64 runs) = %.3f (expected 1)\n", R[k], 1024 / R[k], mean_c[k], q[k], q[k] / q[2]);
+  fprintf(stderr, "mean CI ratios: 4 / 16 runs %.2f, 16 / 64 runs %.2f (1/sqrt(runs): 2; with the small-sample "
+          "factor of eq. 65: 1.68 and 1.94)\n", mean_c[0] / mean_c[1], mean_c[1] / mean_c[2]);
+  CHECK(fabs(q[0] / q[2] - 1) < 0.15);
+  CHECK(fabs(q[1] / q[2] - 1) < 0.15);
+}
+
 /* Fixed seed: the exact outcome of a small case is pinned (any change to
  * the random stream or to the jump rules shows up here). */
 static void regression(void) {
@@ -178,6 +222,7 @@ int main(void) {
   t2("swa", "T2 swa");
   t2("dsa", "T2 dsa");
   ci_scaling();
+  ci_runs_scaling();
   regression();
   TEST_EXIT();
 }
