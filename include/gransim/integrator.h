@@ -46,6 +46,10 @@ typedef struct gs_ode {
    * every rank accepts, rejects and sizes the same steps and fails on the
    * same evaluation.  NULL: a single process. */
   double (*reduce_max)(void *ctx, double v);
+  /* 1: f itself fails (returns non-zero) rather than return a non-finite
+   * rate, so the integrator need not scan every rate again (the run driver's
+   * f does; it also says where).  0: the integrator checks. */
+  int rates_checked;
 } gs_ode;
 
 typedef struct gs_integrator_stats {

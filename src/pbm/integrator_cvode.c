@@ -74,7 +74,7 @@ static int gs_cvode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *data) {
     self->rhs_failed = 1;
     return -1;
   }
-  for (size_t i = 0; i < self->n; i++) {
+  for (size_t i = 0; !self->ode->rates_checked && i < self->n; i++) {
     if (!isfinite(f[i])) {
       self->rhs_failed = 2;
       self->fail_index = i;

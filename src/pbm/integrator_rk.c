@@ -69,7 +69,7 @@ static int gs_rk_rhs(double t, const double y[], double dydt[], void *params) {
   self->stats.rhs_evals++;
   self->fail_t = t;
   if (ode->f(ode->ctx, t, y, dydt)) self->rhs_failed = 1;
-  for (size_t i = 0; !self->rhs_failed && i < self->n; i++) {
+  for (size_t i = 0; !self->rhs_failed && !ode->rates_checked && i < self->n; i++) {
     if (!isfinite(dydt[i])) {
       self->rhs_failed = 2;
       self->fail_index = i;

@@ -1,6 +1,7 @@
 /* The run driver: integrate a case over its output times, check the state
  * after each output interval, write outputs, report progress. */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,8 +37,21 @@ typedef struct {
   int bad;
 } guard_t;
 
+/* 1 if every value is finite: an OR of "exponent all ones" over the bits,
+ * which the compiler vectorises (an early-exit isfinite loop it does not). */
+static int all_finite(const double *f, size_t n) {
+  uint64_t bad = 0;
+  for (size_t i = 0; i < n; i++) {
+    uint64_t b;
+    memcpy(&b, f + i, sizeof b);
+    bad |= (uint64_t)((b & 0x7ff0000000000000ull) == 0x7ff0000000000000ull);
+  }
+  return !bad;
+}
+
 /* Flag the first non-finite rate (index i of f is entry full(i) of the state). */
 static int check_rates(guard_t *gd, double t, const double *f, size_t n, const gs_dist *local) {
+  if (all_finite(f, n)) return 0;
   for (size_t i = 0; i < n; i++)
     if (!isfinite(f[i])) {
       gd->bad = 1;
@@ -102,6 +116,7 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
   memset(s, 0, sizeof *s);
   s->ode = c->ode;
   s->ode.ctx = guard;
+  s->ode.rates_checked = 1; /* guarded_rhs and local_rhs check every rate */
   if (d->size < 2) {
     s->it = &c->integrator;
     s->ode.f = guarded_rhs;
@@ -116,7 +131,7 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
   if (!s->yl || !s->scale || !guard->F) return GS_ENOMEM;
   gs_dist_pack(d, c->abs_scale, s->scale);
   /* numbers and carried volumes come first in the packed vector too */
-  s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max};
+  s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max, 1};
   s->it = &s->own;
   return gs_integrator_create(gs_cfg_get(gs_cfg_root(c->cfg), "solver"), &s->ode, &s->own, err);
 }
