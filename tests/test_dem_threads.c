@@ -96,28 +96,38 @@ static void compare(const char *what, snapshot a, snapshot b, size_t n, unsigned
   CHECK(dw < 1e-8 * wmax);
 }
 
-static snapshot run(int threads) {
+/* An engine on `threads` threads (forced on whatever the particle count),
+ * domain [lo, hi]^3, two particle types t[0], t[1] of one material *m. */
+static gs_dem *engine(int threads, double lo, double hi, gs_dem_material *m, int t[2]) {
   omp_set_num_threads(threads);
   gs_dem_params p;
   memset(&p, 0, sizeof p);
   p.dt = 2e-6;
   p.skin = 5e-4;
   p.gravity[2] = -9.81;
-  for (int a = 0; a < 3; a++) p.lo[a] = -0.001, p.hi[a] = 0.061;
+  for (int a = 0; a < 3; a++) p.lo[a] = lo, p.hi[a] = hi;
   p.nclass = 2;
   gs_error err = {0};
   gs_dem *d = gs_dem_alloc(&p, &err);
   gs_dem_set_parallel_min(d, 0);
-  gs_dem_material m = {8e6, 0.2, 0.4, 0.5, 0.2, 500};
-  int t0 = gs_dem_add_type(d, &m, 0, &err), t1 = gs_dem_add_type(d, &m, 1, &err);
-  const double zero[3] = {0, 0, 0};
+  *m = (gs_dem_material){8e6, 0.2, 0.4, 0.5, 0.2, 500};
+  t[0] = gs_dem_add_type(d, m, 0, &err);
+  t[1] = gs_dem_add_type(d, m, 1, &err);
+  return d;
+}
+
+static snapshot run(int threads) {
+  gs_dem_material m;
+  int t[2];
+  gs_dem *d = engine(threads, -0.001, 0.061, &m, t);
+  const int t0 = t[0], t1 = t[1];
+  gs_error err = {0};
   for (int a = 0; a < 3; a++) {
     double pl[3] = {0, 0, 0}, nl[3] = {0, 0, 0}, ph[3] = {0, 0, 0}, nh[3] = {0, 0, 0};
     pl[a] = 0, nl[a] = 1, ph[a] = 0.06, nh[a] = -1;
     gs_dem_add_plane(d, "lo", pl, nl, &m, &err);
     gs_dem_add_plane(d, "hi", ph, nh, &m, &err);
   }
-  (void)zero;
   /* a lattice with random velocities: collisions from the first steps */
   unsigned s = 7;
   for (int i = 0; i < 16; i++)
@@ -140,19 +150,11 @@ static snapshot run(int threads) {
  * 40 x 30 mm) turning at 1000 rpm about z through the box's centre, and a
  * lattice of particles flying about at up to 2 m/s; threads forced on. */
 static snapshot run_mesh(int threads) {
-  omp_set_num_threads(threads);
-  gs_dem_params p;
-  memset(&p, 0, sizeof p);
-  p.dt = 2e-6;
-  p.skin = 5e-4;
-  p.gravity[2] = -9.81;
-  for (int a = 0; a < 3; a++) p.lo[a] = -0.002, p.hi[a] = 0.062;
-  p.nclass = 2;
+  gs_dem_material m;
+  int t[2];
+  gs_dem *d = engine(threads, -0.002, 0.062, &m, t);
+  const int t0 = t[0], t1 = t[1];
   gs_error err = {0};
-  gs_dem *d = gs_dem_alloc(&p, &err);
-  gs_dem_set_parallel_min(d, 0);
-  gs_dem_material m = {8e6, 0.2, 0.4, 0.5, 0.2, 500};
-  int t0 = gs_dem_add_type(d, &m, 0, &err), t1 = gs_dem_add_type(d, &m, 1, &err);
   double box[108];
   cube(box, 0.062, -0.001);
   CHECK(gs_dem_add_mesh(d, "box", gs_dem_mesh_from_triangles(box, 12, &err), &m, &err) == 0);
