@@ -24,15 +24,14 @@ if [ -f "$SRC/../shared/data/corimix/shell.stl" ]; then
   grep -q '^impeller,1,fine,[1-9]' "$WORK/out/impacts.csv" || fail "no impeller impacts"
   # the PBM reads the collision table as its aggregation kernel
   cp "$WORK/out/collision_kernel.csv" "$WORK/C.csv"
-  cat > "$WORK/pbm.yaml" <<'YAML'
-title: DEM collision frequencies as the aggregation kernel
-grid:
+  # the PBM cases below share their grid and initial distribution
+  pbm_head='grid:
   axes:
     - {name: solid, type: geometric, min: 1.0e-11, max: 1.0e-6, cells: 20, zero_first: true}
-initial:
-  type: exponential
-  number: 1
-  mean: 4.0e-9
+initial: {type: exponential, number: 1, mean: 4.0e-9}'
+  cat > "$WORK/pbm.yaml" <<YAML
+title: DEM collision frequencies as the aggregation kernel
+$pbm_head
 mechanisms:
   - type: aggregation
     kernel: {type: table, file: C.csv, measure: diameter, beta0: 1.0e-3}
@@ -48,13 +47,7 @@ YAML
   for t in I.csv Iimp.csv; do
     cat > "$WORK/pbm-break.yaml" <<YAML
 title: DEM wall impacts as the breakage selection
-grid:
-  axes:
-    - {name: solid, type: geometric, min: 1.0e-11, max: 1.0e-6, cells: 20, zero_first: true}
-initial:
-  type: exponential
-  number: 1
-  mean: 4.0e-9
+$pbm_head
 mechanisms:
   - type: breakage
     selection: {type: dem_impact, file: $t, measure: diameter, u_break: 2.0}

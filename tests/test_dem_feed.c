@@ -17,27 +17,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "check.h"
-#include "dem/dem_case.h"
+#include "dem_testlib.h"
 #include "gransim/dem.h"
 
-static char dir[] = "/tmp/gransim-test-dem-feed-XXXXXX";
-
+/* Load and run a case in the scratch directory (NULL when it does not load). */
 static gs_dem_case *run_case(const char *name, const char *yaml) {
-  char path[600], out[600];
-  snprintf(path, sizeof path, "%s/%s.yaml", dir, name);
-  snprintf(out, sizeof out, "%s/%s", dir, name);
-  FILE *fp = fopen(path, "w");
-  fputs(yaml, fp);
-  fclose(fp);
-  gs_error err = {0};
-  gs_dem_case *c = gs_dem_case_load(path, &err);
-  if (!c) fprintf(stderr, "%s\n", err.msg);
-  CHECK(c != NULL);
-  if (c && gs_dem_case_run(c, out, 0, &err)) {
-    fprintf(stderr, "%s\n", err.msg);
-    CHECK(!"run failed");
-  }
+  gs_dem_case *c = dt_load(name, yaml);
+  if (c) dt_run(c, name);
   return c;
 }
 
@@ -173,14 +159,9 @@ static void test_feed(void) {
 }
 
 int main(void) {
-  if (!mkdtemp(dir)) {
-    CHECK(!"mkdtemp");
-    TEST_EXIT();
-  }
+  if (dt_scratch_begin("test-dem-feed")) TEST_EXIT();
   test_lognormal();
   test_feed();
-  char cmd[200];
-  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-  if (!check_failures) CHECK(system(cmd) == 0);
+  dt_scratch_end();
   TEST_EXIT();
 }

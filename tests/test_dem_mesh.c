@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "dem_testlib.h"
 #include "dem/dem_case.h"
 #include "gransim/dem.h"
 
@@ -266,11 +267,7 @@ static void test_turntable(void) {
   int t = gs_dem_add_type(d, &m, 0, &err);
   const double R = 0.03;
   double tri[64 * 9];
-  for (int k = 0; k < 64; k++) {
-    double a0 = 2 * M_PI * k / 64, a1 = 2 * M_PI * (k + 1) / 64;
-    double t9[9] = {0, 0, 0, R * cos(a0), R * sin(a0), 0, R * cos(a1), R * sin(a1), 0};
-    memcpy(tri + 9 * k, t9, sizeof t9);
-  }
+  dt_disk(tri, R, 64);
   int w = gs_dem_add_mesh(d, "disk", gs_dem_mesh_from_triangles(tri, 64, &err), &m, &err);
   const double omega = 2 * M_PI, o[3] = {0, 0, 0}, z[3] = {0, 0, 1};
   CHECK(gs_dem_wall_set_motion(d, w, o, z, omega, NULL, &err) == 0);

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "dem_testlib.h"
 #include "gransim/dem.h"
 
 /* Slope of the pile's upper surface: the highest particle top in rings of
@@ -54,11 +55,7 @@ static double pour(double mu_r, size_t *n_out) {
   /* the table: a disk of radius 20 mm in 64 triangles */
   const double rt = 0.020;
   double tri[64 * 9];
-  for (int k = 0; k < 64; k++) {
-    double a0 = 2 * M_PI * k / 64, a1 = 2 * M_PI * (k + 1) / 64;
-    double t9[9] = {0, 0, 0, rt * cos(a0), rt * sin(a0), 0, rt * cos(a1), rt * sin(a1), 0};
-    memcpy(tri + 9 * k, t9, sizeof t9);
-  }
+  dt_disk(tri, rt, 64);
   gs_dem_add_mesh(d, "table", gs_dem_mesh_from_triangles(tri, 64, &err), &m, &err);
   const double r = 1e-3;
   gs_dem_region reg;

@@ -15,53 +15,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "check.h"
-#include "dem/dem_case.h"
+#include "dem_testlib.h"
 #include "dem/dem_stats.h"
 #include "gransim/dem.h"
-
-static char dir[] = "/tmp/gransim-test-dem-stats-XXXXXX";
-
-static gs_dem_case *load(const char *name, const char *yaml) {
-  char path[600];
-  snprintf(path, sizeof path, "%s/%s.yaml", dir, name);
-  FILE *fp = fopen(path, "w");
-  fputs(yaml, fp);
-  fclose(fp);
-  gs_error err = {0};
-  gs_dem_case *c = gs_dem_case_load(path, &err);
-  if (!c) fprintf(stderr, "%s\n", err.msg);
-  CHECK(c != NULL);
-  return c;
-}
-
-static int run(gs_dem_case *c, const char *name) {
-  char out[600];
-  snprintf(out, sizeof out, "%s/%s", dir, name);
-  gs_error err = {0};
-  int rc = gs_dem_case_run(c, out, 0, &err);
-  if (rc) fprintf(stderr, "%s\n", err.msg);
-  CHECK(rc == 0);
-  return rc;
-}
-
-static char *slurp(const char *name, const char *file) {
-  char path[800];
-  snprintf(path, sizeof path, "%s/%s/%s", dir, name, file);
-  FILE *fp = fopen(path, "r");
-  if (!fp) {
-    fprintf(stderr, "cannot read %s\n", path);
-    CHECK(!"output file missing");
-    return calloc(1, 1);
-  }
-  fseek(fp, 0, SEEK_END);
-  long n = ftell(fp);
-  rewind(fp);
-  char *s = calloc((size_t)n + 1, 1);
-  if (fread(s, 1, (size_t)n, fp) != (size_t)n) CHECK(!"short read");
-  fclose(fp);
-  return s;
-}
 
 /* the numbers of the first data line starting with prefix (up to max) */
 static int row(const char *text, const char *prefix, double *v, int max) {
@@ -146,8 +102,8 @@ static const char *RES =
     "output: {every: 0.01}\n";
 
 static void test_residence(void) {
-  gs_dem_case *c = load("res", RES);
-  if (!c || run(c, "res")) {
+  gs_dem_case *c = dt_load("res", RES);
+  if (!c || dt_run(c, "res")) {
     gs_dem_case_free(c);
     return;
   }
@@ -156,12 +112,12 @@ static void test_residence(void) {
   CHECK(v.n == 0); /* everything left at 1 m/s within 0.05 s */
   gs_dem_case_free(c);
   /* particles present when the window opened: the time series row at 0.02 s */
-  char *ts = slurp("res", "timeseries.csv");
+  char *ts = dt_slurp("res", "timeseries.csv");
   double r[3] = {0};
   CHECK(row(ts, "0.02,", r, 2) == 2);
   long at_start = (long)r[1];
   free(ts);
-  char *res = slurp("res", "residence.csv"), *cls = slurp("res", "residence_class.csv");
+  char *res = dt_slurp("res", "residence.csv"), *cls = dt_slurp("res", "residence_class.csv");
   long pooled = -1, n_low = -1, n_high = -1;
   double mean_low = 0, mean_high = 0;
   CHECK(sscanf(res, "# %ld particles left", &pooled) == 1);
@@ -235,7 +191,7 @@ static void stats_of(const double *x, const int *n, int m, int ns, double *mean,
 }
 
 static void test_velocity(void) {
-  gs_dem_case *c = load("vel", VEL);
+  gs_dem_case *c = dt_load("vel", VEL);
   if (c) {
     /* compartment 1 (x 0..0.05): class a, 40 at (0.2, 0, 0) and 60 at (0, 0.1, 0);
      * compartment 2 (x 0.05..0.1): class a, 50 at (-0.1, 0, 0.3), class b, 30 at (0, 0, -0.05) */
@@ -246,12 +202,12 @@ static void test_velocity(void) {
     lattice(c, 0, 50, 0.06, v3, &s2);
     lattice(c, 1, 30, 0.06, v4, &s2);
   }
-  if (!c || run(c, "vel")) {
+  if (!c || dt_run(c, "vel")) {
     gs_dem_case_free(c);
     return;
   }
   gs_dem_case_free(c);
-  char *col = slurp("vel", "collisions.csv"), *vel = slurp("vel", "velocity.csv");
+  char *col = dt_slurp("vel", "collisions.csv"), *vel = dt_slurp("vel", "velocity.csv");
   double e[10] = {0};
   /* class_i, class_j, events, ... (names skipped): nobody met, so the velocities stay as prescribed */
   CHECK(row(col, "1,1,", e, 10) == 8 && e[2] == 0);
@@ -319,23 +275,23 @@ static const char *NEVER =
     "statistics: {start: steady, sample_every: 0.001, steady: {window: 3, tolerance: 0.5}}\n";
 
 static void test_never_steady(void) {
-  gs_dem_case *c = load("never", NEVER);
+  gs_dem_case *c = dt_load("never", NEVER);
   if (!c) return;
   char log[700];
-  snprintf(log, sizeof log, "%s/never.log", dir);
+  snprintf(log, sizeof log, "%s/never.log", dt_dir);
   fflush(stderr);
   int fd = dup(2);
   FILE *fp = freopen(log, "w", stderr);
   CHECK(fp != NULL);
-  int rc = run(c, "never");
+  int rc = dt_run(c, "never");
   fflush(stderr);
   dup2(fd, 2);
   close(fd);
   gs_dem_case_free(c);
   if (rc) return;
-  char *msg = slurp("never", "../never.log");
-  char *col = slurp("never", "collisions.csv"), *ker = slurp("never", "collision_kernel.csv");
-  char *imp = slurp("never", "impact_table.csv");
+  char *msg = dt_slurp("never", "../never.log");
+  char *col = dt_slurp("never", "collisions.csv"), *ker = dt_slurp("never", "collision_kernel.csv");
+  char *imp = dt_slurp("never", "impact_table.csv");
   fprintf(stderr, "never steady: stderr: %s", msg);
   CHECK(strstr(msg, "warning") && strstr(msg, "steady state was not reached"));
   CHECK(strstr(col, "NO STATISTICS WINDOW") && strstr(ker, "NO STATISTICS WINDOW") &&
@@ -351,16 +307,11 @@ static void test_never_steady(void) {
 }
 
 int main(void) {
-  if (!mkdtemp(dir)) {
-    CHECK(!"mkdtemp");
-    TEST_EXIT();
-  }
+  if (dt_scratch_begin("test-dem-stats")) TEST_EXIT();
   test_detector();
   test_residence();
   test_velocity();
   test_never_steady();
-  char cmd[200];
-  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-  if (!check_failures) CHECK(system(cmd) == 0);
+  dt_scratch_end();
   TEST_EXIT();
 }

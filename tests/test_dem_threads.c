@@ -116,11 +116,30 @@ static gs_dem *engine(int threads, double lo, double hi, gs_dem_material *m, int
   return d;
 }
 
+/* n[0] x n[1] x n[2] particles on a lattice of spacing h from x0, velocity
+ * components uniform in [-vmax, vmax], a third of them (at random) of type
+ * t[1] and radius r_big, the rest t[0] of radius 1.2 mm; a fixed LCG seed.
+ * Sites with |y - band_y| < band_half are left empty (band_half 0: none). */
+static void lattice(gs_dem *d, const int t[2], const int n[3], double x0, double h, double vmax, double r_big,
+                    unsigned seed, double band_y, double band_half) {
+  gs_error err = {0};
+  for (int i = 0; i < n[0]; i++)
+    for (int j = 0; j < n[1]; j++)
+      for (int k = 0; k < n[2]; k++) {
+        seed = seed * 1103515245u + 12345u;
+        double x[3] = {x0 + h * i, x0 + h * j, x0 + h * k};
+        if (fabs(x[1] - band_y) < band_half) continue;
+        double v[3] = {vmax * (((seed >> 8) % 1000) / 500.0 - 1), vmax * (((seed >> 12) % 1000) / 500.0 - 1),
+                       vmax * (((seed >> 16) % 1000) / 500.0 - 1)};
+        int big = (seed >> 20) % 3 == 0;
+        gs_dem_add_particle(d, t[big], big ? r_big : 1.2e-3, x, v, NULL, &err);
+      }
+}
+
 static snapshot run(int threads) {
   gs_dem_material m;
   int t[2];
   gs_dem *d = engine(threads, -0.001, 0.061, &m, t);
-  const int t0 = t[0], t1 = t[1];
   gs_error err = {0};
   for (int a = 0; a < 3; a++) {
     double pl[3] = {0, 0, 0}, nl[3] = {0, 0, 0}, ph[3] = {0, 0, 0}, nh[3] = {0, 0, 0};
@@ -129,17 +148,7 @@ static snapshot run(int threads) {
     gs_dem_add_plane(d, "hi", ph, nh, &m, &err);
   }
   /* a lattice with random velocities: collisions from the first steps */
-  unsigned s = 7;
-  for (int i = 0; i < 16; i++)
-    for (int j = 0; j < 16; j++)
-      for (int k = 0; k < 12; k++) {
-        s = s * 1103515245u + 12345u;
-        double x[3] = {0.002 + 0.0037 * i, 0.002 + 0.0037 * j, 0.002 + 0.0037 * k};
-        double v[3] = {((s >> 8) % 1000) / 500.0 - 1, ((s >> 12) % 1000) / 500.0 - 1,
-                       ((s >> 16) % 1000) / 500.0 - 1};
-        int big = (s >> 20) % 3 == 0;
-        gs_dem_add_particle(d, big ? t1 : t0, big ? 1.7e-3 : 1.2e-3, x, v, NULL, &err);
-      }
+  lattice(d, t, (const int[3]){16, 16, 12}, 0.002, 0.0037, 1.0, 1.7e-3, 7, 0, 0);
   if (gs_dem_run(d, 1500, &err)) fprintf(stderr, "%s\n", err.msg);
   snapshot out = take(d, 12);
   gs_dem_free(d);
@@ -153,7 +162,6 @@ static snapshot run_mesh(int threads) {
   gs_dem_material m;
   int t[2];
   gs_dem *d = engine(threads, -0.002, 0.062, &m, t);
-  const int t0 = t[0], t1 = t[1];
   gs_error err = {0};
   double box[108];
   cube(box, 0.062, -0.001);
@@ -164,18 +172,7 @@ static snapshot run_mesh(int threads) {
   int pw = gs_dem_add_mesh(d, "paddle", gs_dem_mesh_from_triangles(paddle, 2, &err), &m, &err);
   const double o[3] = {c0, c0, 0}, z[3] = {0, 0, 1};
   CHECK(gs_dem_wall_set_motion(d, pw, o, z, 1000 * 2 * M_PI / 60, NULL, &err) == 0);
-  unsigned s = 11;
-  for (int i = 0; i < 10; i++)
-    for (int j = 0; j < 10; j++)
-      for (int k = 0; k < 10; k++) {
-        s = s * 1103515245u + 12345u;
-        double x[3] = {0.003 + 0.006 * i, 0.003 + 0.006 * j, 0.003 + 0.006 * k};
-        if (fabs(x[1] - c0) < 0.003) continue; /* clear of the paddle at t = 0 */
-        double v[3] = {((s >> 8) % 1000) / 250.0 - 2, ((s >> 12) % 1000) / 250.0 - 2,
-                       ((s >> 16) % 1000) / 250.0 - 2};
-        int big = (s >> 20) % 3 == 0;
-        gs_dem_add_particle(d, big ? t1 : t0, big ? 1.6e-3 : 1.2e-3, x, v, NULL, &err);
-      }
+  lattice(d, t, (const int[3]){10, 10, 10}, 0.003, 0.006, 2.0, 1.6e-3, 11, c0, 0.003); /* clear of the paddle */
   if (gs_dem_run(d, 1500, &err)) fprintf(stderr, "%s\n", err.msg);
   snapshot out = take(d, 4);
   gs_dem_free(d);
