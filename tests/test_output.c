@@ -258,6 +258,32 @@ static void test_roundtrip(int dim) {
   gs_model_free(&m);
 }
 
+/* Rows of 8192 values and more are deflated (written chunk by chunk by
+ * src/io/chunk_writer.c): HDF5 reads every value back through its filter. */
+static void test_deflated(void) {
+  char dir[256];
+  snprintf(dir, sizeof dir, "%s/deflated", base);
+  gs_model m;
+  make_model(&m, 1, 2, 4096);
+  gs_error err;
+  gs_output *o = gs_output_open(dir, &m, "", "case.yaml", &err);
+  CHECK(o != NULL);
+  if (!o) return;
+  write_times(o, &m, 0, 3);
+  CHECK(gs_output_finish(o, 1, &err) == GS_OK);
+  check_result(dir, &m, 3);
+  char p[512];
+  snprintf(p, sizeof p, "%s/result.h5", dir);
+  hid_t f = H5Fopen(p, H5F_ACC_RDONLY, H5P_DEFAULT), d = H5Dopen2(f, "/number", H5P_DEFAULT);
+  hid_t dcpl = H5Dget_create_plist(d);
+  CHECK(H5Pget_nfilters(dcpl) == 1 && H5Pget_filter2(dcpl, 0, NULL, NULL, NULL, 0, NULL, NULL) == H5Z_FILTER_DEFLATE);
+  CHECK(H5Dget_storage_size(d) < 3 * 8192 * sizeof(double)); /* the values compress */
+  H5Pclose(dcpl);
+  H5Dclose(d);
+  H5Fclose(f);
+  gs_model_free(&m);
+}
+
 static void test_abort(void) {
   char dir[256];
   snprintf(dir, sizeof dir, "%s/abort", base);
@@ -405,6 +431,7 @@ int main(void) {
     return 1;
   }
   for (int dim = 1; dim <= 3; dim++) test_roundtrip(dim);
+  test_deflated();
   test_abort();
   test_resume();
   test_nothing_to_resume();

@@ -38,6 +38,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "io/chunk_writer.h"
+
 #ifndef GRANSIM_VERSION
 #define GRANSIM_VERSION "unknown"
 #endif
@@ -52,6 +54,7 @@
 #define CHUNK_ROWS 64                          /* time rows per chunk of the small series */
 #define BLOCK_VALUES 65536                     /* doubles per read when copying or rebuilding */
 #define PENDING_BYTES ((size_t)64 << 20)       /* output times held before a commit, at most */
+#define DEFLATE_LEVEL 1                        /* zlib level of the large series */
 
 enum { S_TIME, S_NUMBER, S_LEDGER, S_SUMMARY };
 
@@ -66,6 +69,10 @@ struct gs_output {
   int rank[NSERIES_MAX];
   hsize_t rest[NSERIES_MAX][RANK_MAX - 1]; /* dimensions after time */
   size_t rowlen[NSERIES_MAX];              /* values per time row */
+  /* series chunked by single rows, written chunk by chunk (chunk_writer.h),
+   * and whether their chunks are deflated */
+  int direct[NSERIES_MAX], deflated[NSERIES_MAX];
+  gs_chunk_writer *chunks;
   FILE *csv;
   hsize_t ntimes; /* committed output times */
   size_t ncomp, nstate, nnum;
@@ -340,10 +347,12 @@ static int create_series(gs_output *o, int i, gs_error *err) {
     values *= chunk[r];
   }
   const int compress = big && values >= COMPRESS_MIN_VALUES && deflate_usable();
+  o->direct[i] = big && o->chunks && gs_chunk_direct_ok();
+  o->deflated[i] = compress;
   hid_t space = H5Screate_simple(rank, dims, maxdims);
   hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
   if (space >= 0 && dcpl >= 0 && H5Pset_chunk(dcpl, rank, chunk) >= 0 &&
-      (!compress || H5Pset_deflate(dcpl, 1) >= 0))
+      (!compress || H5Pset_deflate(dcpl, DEFLATE_LEVEL) >= 0))
     o->ds[i] = H5Dcreate2(o->file, o->sname[i], H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl,
                           H5P_DEFAULT);
   if (dcpl >= 0) H5Pclose(dcpl);
@@ -394,8 +403,11 @@ static int write_rows(gs_output *o, int i, hsize_t start, hsize_t count, const d
   for (int r = 1; r < o->rank[i]; r++) dims[r] = o->rest[i][r - 1];
   hid_t fs = H5I_INVALID_HID, ms = H5I_INVALID_HID;
   herr_t st = H5Dset_extent(o->ds[i], dims);
-  if (st >= 0) st = select_rows(o->ds[i], start, count, &fs, &ms);
-  if (st >= 0) st = H5Dwrite(o->ds[i], H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, buf);
+  if (st >= 0 && o->direct[i])
+    st = gs_chunk_write_rows(o->chunks, o->ds[i], start, count, o->rowlen[i], buf, o->deflated[i],
+                             DEFLATE_LEVEL);
+  else if (st >= 0 && (st = select_rows(o->ds[i], start, count, &fs, &ms)) >= 0)
+    st = H5Dwrite(o->ds[i], H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, buf);
   close_spaces(fs, ms);
   return st < 0 ? h5_error(err, o->h5_path, "write dataset %s", o->sname[i]) : GS_OK;
 }
@@ -456,6 +468,7 @@ static void output_free(gs_output *o) {
   free(o->csv_final);
   free(o->sbuf);
   for (int i = 0; i < NSERIES_MAX; i++) free(o->pending[i]);
+  gs_chunk_writer_free(o->chunks);
   free(o);
 }
 
@@ -480,6 +493,7 @@ static gs_output *output_alloc(const char *dir, const gs_model *m, gs_error *err
   o->csv_tmp = path_join(dir, CSV_PARTIAL, err);
   o->csv_final = path_join(dir, "summary.csv", err);
   o->sbuf = gs_malloc((size_t)o->ncol * g->ncomp * sizeof(double), err);
+  o->chunks = gs_chunk_writer_new(); /* without it, H5Dwrite does the same job slower */
   if (!o->dir || !o->h5_new || !o->h5_tmp || !o->h5_final || !o->csv_tmp || !o->csv_final ||
       !o->sbuf) {
     output_free(o);
