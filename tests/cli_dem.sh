@@ -79,6 +79,9 @@ stderr_has "bad.yaml:6: materials[0].E = '-5'"
 sed -i 's/E: -5/E: 8.0e6/; s/radius: 1.0e-3/radius: 1.0e-3, colour: red/' "$WORK/bad.yaml"
 run_rc 1 "$BIN" dem "$WORK/bad.yaml" --out "$WORK/bad"
 stderr_has "unknown key 'colour'"
+sed -i 's/, colour: red//; s/^  duration: 0.001$/  duration: 0.001\n  mesh_contacts: nearest/' "$WORK/bad.yaml"
+run_rc 1 "$BIN" dem "$WORK/bad.yaml" --out "$WORK/bad"
+stderr_has "bad.yaml:4: dem.mesh_contacts = 'nearest'"
 
 # a time step above 20 % of the Rayleigh time: one warning, from reading the case
 cat > "$WORK/big-step.yaml" <<'YAML'

@@ -1,7 +1,9 @@
 /* Triangle meshes: binary and ASCII STL read the same (with scale); a sphere
  * pressed onto a face, an edge or a vertex of a cube feels exactly one Hertz
  * contact (shared edges and vertices are not counted twice, and neighbouring
- * coplanar triangles add nothing); a moving mesh pushes with its own velocity;
+ * coplanar triangles add nothing), also when the file writes one vertex with
+ * round-off; LIGGGHTS' contact rule (mesh_contacts: liggghts) adds a
+ * neighbour's owned edge to a face contact, as LIGGGHTS 3.8 does; a moving mesh pushes with its own velocity;
  * a mesh turning at a given rpm (and translating) has its vertices exactly
  * where the rigid motion puts them; a sphere resting on a turning disk is
  * carried at the wall velocity omega x r; the real CoriMix meshes load. */
@@ -95,9 +97,10 @@ static void test_stl(void) {
 
 static const gs_dem_material MAT = {8e6, 0.2, 1.0, 0.0, 0.0, 500};
 
-static gs_dem *box_sim(void) {
+static gs_dem *box_sim(int mesh_contacts) {
   gs_dem_params p;
   memset(&p, 0, sizeof p);
+  p.mesh_contacts = mesh_contacts;
   p.dt = 1e-8;
   p.skin = 1e-4;
   for (int a = 0; a < 3; a++) p.lo[a] = -0.01, p.hi[a] = 0.02;
@@ -107,14 +110,16 @@ static gs_dem *box_sim(void) {
 }
 
 /* Force on a sphere of radius r whose centre is at x, overlapping the 1 cm
- * cube by delta: measured from its velocity after one tiny step. */
-static double push(const double x[3], double r, double *dir) {
-  gs_dem *d = box_sim();
+ * cube: measured from its velocity after one tiny step.  mode: contact rule
+ * (GS_DEM_MESH_*); jitter: each stored corner moved by up to this fraction
+ * of the cube's size, as CAD exports write one vertex with round-off. */
+static double push_mode(const double x[3], double r, double *dir, int mode, double jitter) {
+  gs_dem *d = box_sim(mode);
   gs_error err = {0};
   int t = gs_dem_add_type(d, &MAT, 0, &err);
   double tri[108];
   cube(tri);
-  for (int k = 0; k < 108; k++) tri[k] *= 0.01;
+  for (int k = 0; k < 108; k++) tri[k] = 0.01 * (tri[k] + jitter * ((k * 7919) % 13 - 6) / 6.0);
   gs_dem_add_mesh(d, "cube", gs_dem_mesh_from_triangles(tri, 12, &err), &MAT, &err);
   gs_dem_add_particle(d, t, r, x, NULL, NULL, &err);
   gs_dem_run(d, 1, &err);
@@ -127,6 +132,10 @@ static double push(const double x[3], double r, double *dir) {
   for (int k = 0; k < 3; k++) dir[k] = f[k] / fm;
   gs_dem_free(d);
   return fm;
+}
+
+static double push(const double x[3], double r, double *dir) {
+  return push_mode(x, r, dir, GS_DEM_MESH_CLOSEST, 0.0);
 }
 
 static void test_features(void) {
@@ -157,6 +166,53 @@ static void test_features(void) {
   fprintf(stderr, "vertex: %.6g N, direction %.3f %.3f %.3f\n", f, dir[0], dir[1], dir[2]);
   CHECK_REL(f, hertz, 1e-3);
   CHECK_ABS(dir[0], 1 / sqrt(3), 1e-6);
+}
+
+/* Corners written with round-off (1e-14 of the size apart) are one vertex:
+ * an edge or vertex push is still one contact, not one per triangle. */
+static void test_weld_tolerance(void) {
+  const double r = 1e-3, delta = 2e-5, s = r - delta;
+  const double Estar = 1 / (2 * (1 - 0.04) / 8e6);
+  const double hertz = 4.0 / 3 * Estar * sqrt(r) * pow(delta, 1.5);
+  double dir[3];
+  double edge[3] = {0.005, 0.01 + s / sqrt(2), 0.01 + s / sqrt(2)};
+  double vert[3] = {0.01 + s / sqrt(3), 0.01 + s / sqrt(3), 0.01 + s / sqrt(3)};
+  double f = push_mode(edge, r, dir, GS_DEM_MESH_CLOSEST, 1e-14);
+  fprintf(stderr, "edge, corners 1e-14 apart: %.6g N (Hertz %.6g N)\n", f, hertz);
+  CHECK_REL(f, hertz, 1e-3);
+  f = push_mode(vert, r, dir, GS_DEM_MESH_CLOSEST, 1e-14);
+  CHECK_REL(f, hertz, 1e-3);
+}
+
+/* LIGGGHTS-compatible contacts (mesh_contacts: liggghts, src/dem/mesh_topology.c):
+ * every triangle gives its own contact, a shared edge belongs to the later
+ * triangle in the file unless the two are coplanar (then to neither).  The
+ * top face (z = 1 cm) meets the side y = 1 cm along an edge owned by the
+ * side.  A sphere above the top face near that edge: gransim's rule gives
+ * the face contact alone; LIGGGHTS' adds the side's edge contact.  From the
+ * side near the same edge (the top does not own it), and on the top face
+ * across the diagonal of its two coplanar triangles, one contact either way. */
+static void test_liggghts_contacts(void) {
+  const double r = 1e-3, s = r - 2e-5, a = 1e-4; /* face overlap 2e-5; edge 2e-5 - ~5e-6 */
+  const double Estar = 1 / (2 * (1 - 0.04) / 8e6);
+  const double k = 4.0 / 3 * Estar * sqrt(r);
+  const double d_face = r - s, d_edge = r - sqrt(a * a + s * s);
+  double dir[3];
+  double top[3] = {0.005, 0.01 - a, 0.01 + s}, side[3] = {0.005, 0.01 + s, 0.01 - a};
+  double diag[3] = {0.005, 0.005 + 1e-5, 0.01 + s};
+  double f = push_mode(top, r, dir, GS_DEM_MESH_CLOSEST, 0.0);
+  CHECK_REL(f, k * pow(d_face, 1.5), 1e-3);
+  f = push_mode(top, r, dir, GS_DEM_MESH_LIGGGHTS, 0.0);
+  fprintf(stderr, "top face near the edge, LIGGGHTS contacts: %.6g N (face %.6g + edge %.6g)\n", f,
+          k * pow(d_face, 1.5), k * pow(d_edge, 1.5));
+  /* the two forces point along z and along (0, a, s)/|.|: add them as vectors */
+  const double fe = k * pow(d_edge, 1.5), l = sqrt(a * a + s * s);
+  const double fy = -fe * a / l, fz = k * pow(d_face, 1.5) + fe * s / l;
+  CHECK_REL(f, sqrt(fy * fy + fz * fz), 1e-3);
+  f = push_mode(side, r, dir, GS_DEM_MESH_LIGGGHTS, 0.0);
+  CHECK_REL(f, k * pow(d_face, 1.5), 1e-3);
+  f = push_mode(diag, r, dir, GS_DEM_MESH_LIGGGHTS, 0.0);
+  CHECK_REL(f, k * pow(d_face, 1.5), 1e-3);
 }
 
 /* A plate (two triangles) moving at +0.2 m/s along z hits a resting sphere:
@@ -325,6 +381,8 @@ static void test_corimix(void) {
 int main(void) {
   test_stl();
   test_features();
+  test_weld_tolerance();
+  test_liggghts_contacts();
   test_moving();
   test_rotation();
   test_turntable();

@@ -50,6 +50,10 @@ typedef struct {
  *             closed form LIGGGHTS uses (realises e to within about 1 %,
  *             e.g. 0.3995 for 0.4); chosen for side-by-side comparisons. */
 enum { GS_DEM_DAMPING_EXACT = 0, GS_DEM_DAMPING_LIGGGHTS = 1 };
+/* Mesh contacts: one per touching region at the closest feature (gransim),
+ * or one per triangle with LIGGGHTS 3.8's edge and corner ownership (to
+ * compare with LIGGGHTS; see src/dem/mesh_topology.c). */
+enum { GS_DEM_MESH_CLOSEST = 0, GS_DEM_MESH_LIGGGHTS = 1 };
 
 typedef struct {
   double dt;          /* time step [s] */
@@ -59,6 +63,7 @@ typedef struct {
   int damping;        /* GS_DEM_DAMPING_* */
   int nclass;         /* size classes for statistics (>= 1) */
   double impact_dv;   /* bin width of impact speed histograms [m/s] (0: 0.25) */
+  int mesh_contacts;  /* GS_DEM_MESH_* */
 } gs_dem_params;
 
 /* ---- setup ------------------------------------------------------------- */

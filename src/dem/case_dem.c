@@ -314,6 +314,7 @@ static int load(gs_dem_case *c, gs_error *err) {
   gs_dem_params *p = &c->prm;
   memset(p, 0, sizeof *p);
   static const char *const damp[] = {"exact", "liggghts", NULL};
+  static const char *const mesh_contacts[] = {"closest", "liggghts", NULL};
   const double g0[3] = {0, 0, -9.81};
   long seed = 1;
   gs_cfg_node *box;
@@ -321,6 +322,7 @@ static int load(gs_dem_case *c, gs_error *err) {
       (rc = gs_cfg_double_range(dem, "duration", 1, 0, 0, 1, HUGE_VAL, 0, &c->duration, err)) ||
       (rc = vec3(dem, "gravity", 0, g0, p->gravity, err)) ||
       (rc = gs_cfg_enum_opt(dem, "damping", damp, 0, &p->damping, err)) ||
+      (rc = gs_cfg_enum_opt(dem, "mesh_contacts", mesh_contacts, 0, &p->mesh_contacts, err)) ||
       (rc = gs_cfg_long_range(dem, "seed", 0, 1, 0, LONG_MAX, &seed, err)) ||
       (rc = gs_cfg_map_req(dem, "box", &box, err)) || (rc = vec3(box, "lo", 1, NULL, p->lo, err)) ||
       (rc = vec3(box, "hi", 1, NULL, p->hi, err)) || (rc = gs_cfg_check_unused(box, err)))

@@ -47,6 +47,7 @@ struct gs_dem_mesh {
   double *v;        /* 9 per triangle */
   double *nrm;      /* unit normal, 3 per triangle */
   int *vid;         /* 3 welded vertex ids per triangle (edge/vertex contact dedup) */
+  uint8_t *active;  /* LIGGGHTS mode only: bits 0-2 edge k, 3-5 corner k may touch */
   /* bins: built for the largest particle radius + margin */
   double blo[3], bh;
   int bdim[3];
@@ -55,6 +56,10 @@ struct gs_dem_mesh {
   uint64_t *bmask;  /* one bit per cell: has triangles (small enough to stay in cache) */
   double bin_reach; /* particle radius the bins were built for */
 };
+
+/* LIGGGHTS 3.8's edge and corner ownership for `mesh_contacts: liggghts`
+ * (src/dem/mesh_topology.c); sets m->active once. */
+int gs_dem_mesh_liggghts_activity(gs_dem_mesh *m, gs_error *err);
 
 typedef struct {
   int kind;

@@ -14,36 +14,61 @@ typedef struct {
   int i;
 } corner;
 
-static int cmp_corner(const void *a, const void *b) {
+static int by_x(const void *a, const void *b) {
   const corner *p = a, *q = b;
-  for (int k = 0; k < 3; k++) {
-    if (p->c[k] < q->c[k]) return -1;
-    if (p->c[k] > q->c[k]) return 1;
-  }
-  return 0;
+  return (p->c[0] > q->c[0]) - (p->c[0] < q->c[0]);
 }
 
-/* Identical coordinates get one id (STL stores each corner once per facet). */
+static int root(int *parent, int k) {
+  while (parent[k] != k) k = parent[k] = parent[parent[k]];
+  return k;
+}
+
+/* Corners closer than 1e-8 of the mesh's size (on every axis) get one id:
+ * STL stores each corner once per facet, and CAD exports write the same
+ * vertex with round-off differences (the CoriMix impeller has corners
+ * 1e-14 mm apart), which exact comparison took for different vertices, so
+ * the edge between them looked like two edges (two contacts instead of one).
+ * The same tolerance as LIGGGHTS' `precision`, relative. */
 void gs_dem_mesh_weld(gs_dem_mesh *m) {
   size_t nc = 3 * m->ntri;
   corner *cs = malloc((nc ? nc : 1) * sizeof *cs);
-  if (!cs) {
+  int *parent = malloc((nc ? nc : 1) * sizeof *parent);
+  if (!cs || !parent) {
+    free(cs);
+    free(parent);
     for (size_t k = 0; k < nc; k++) m->vid[k] = (int)k; /* no welding: still correct, less dedup */
     m->nvert = nc;
     return;
   }
+  double lo[3], hi[3], diag2 = 0;
+  gs_dem_mesh_bounds(m, lo, hi);
+  for (int a = 0; a < 3; a++) diag2 += (hi[a] - lo[a]) * (hi[a] - lo[a]);
+  const double tol = 1e-8 * sqrt(diag2);
   for (size_t k = 0; k < nc; k++) {
     memcpy(cs[k].c, m->v + 3 * k, 3 * sizeof(double));
     cs[k].i = (int)k;
+    parent[k] = (int)k;
   }
-  qsort(cs, nc, sizeof *cs, cmp_corner);
-  int id = -1;
-  for (size_t k = 0; k < nc; k++) {
-    if (k == 0 || cmp_corner(&cs[k - 1], &cs[k])) id++;
-    m->vid[cs[k].i] = id;
-  }
-  m->nvert = (size_t)id + 1;
+  qsort(cs, nc, sizeof *cs, by_x);
+  for (size_t k = 1; k < nc; k++) /* union with every earlier corner within tol */
+    for (size_t j = k; j-- > 0 && cs[k].c[0] - cs[j].c[0] <= tol;)
+      if (fabs(cs[k].c[1] - cs[j].c[1]) <= tol && fabs(cs[k].c[2] - cs[j].c[2]) <= tol) {
+        int a = root(parent, cs[k].i), b = root(parent, cs[j].i);
+        if (a != b) parent[a < b ? b : a] = a < b ? a : b;
+      }
   free(cs);
+  /* ids in order of first appearance in the file: m->vid holds, for now,
+   * the id given to each root corner */
+  for (size_t k = 0; k < nc; k++) m->vid[k] = -1;
+  int next = 0;
+  for (size_t k = 0; k < nc; k++) {
+    int r = root(parent, (int)k);
+    if (m->vid[r] < 0) m->vid[r] = next++;
+    m->vid[k] = m->vid[r];
+  }
+  m->nvert = (size_t)next;
+  free(parent);
 }
 
 int gs_dem_mesh_build_bins(gs_dem_mesh *m, double reach, gs_error *err) {

@@ -175,6 +175,7 @@ void gs_dem_mesh_free(gs_dem_mesh *m) {
   free(m->v);
   free(m->nrm);
   free(m->vid);
+  free(m->active);
   free(m->bfirst);
   free(m->btri);
   free(m->bmask);

@@ -147,7 +147,10 @@ int gs_dem_add_cylinder(gs_dem *d, const char *name, const double point[3], cons
 
 int gs_dem_add_mesh(gs_dem *d, const char *name, gs_dem_mesh *mesh, const gs_dem_material *m,
                     gs_error *err) {
-  gs_dem_wall *w = new_wall(d, name, m, GS_DEM_WALL_MESH, err);
+  const int liggghts = d->prm.mesh_contacts == GS_DEM_MESH_LIGGGHTS;
+  gs_dem_wall *w = liggghts && gs_dem_mesh_liggghts_activity(mesh, err)
+                       ? NULL
+                       : new_wall(d, name, m, GS_DEM_WALL_MESH, err);
   if (!w) {
     gs_dem_mesh_free(mesh);
     return -1;

@@ -129,8 +129,10 @@ static void add_cand(cand *c, int *nc, const cand *x) {
   c[(*nc)++] = *x;
 }
 
+/* owned_only: in LIGGGHTS mode, only the edges and corners a triangle owns
+ * (the force loop); insertion asks for any overlap. */
 static void mesh_candidates(const gs_dem_wall *w, int wi, const double xw[3], double r, cand *c,
-                            int *nc) {
+                            int *nc, int owned_only) {
   const gs_dem_mesh *m = w->mesh;
   double pb[3];
   gs_dem_wall_to_body(w, xw, pb);
@@ -149,6 +151,11 @@ static void mesh_candidates(const gs_dem_wall *w, int wi, const double xw[3], do
     if (s >= r || s <= -r) continue;
     double q[3];
     int feat = gs_dem_closest_on_triangle(pb, v, v + 3, v + 6, q);
+    /* LIGGGHTS mode: an edge (feat 1..3: edge feat-1) or corner (4..6: corner
+     * feat-4) this triangle does not own gives no contact */
+    if (owned_only && m->active && feat > 0 &&
+        !(m->active[t] & (feat <= 3 ? 1u << (feat - 1) : 8u << (feat - 4))))
+      continue;
     double dq[3] = {pb[0] - q[0], pb[1] - q[1], pb[2] - q[2]};
     double d2 = dq[0] * dq[0] + dq[1] * dq[1] + dq[2] * dq[2];
     if (d2 >= r * r || d2 <= 0) continue;
@@ -158,6 +165,7 @@ static void mesh_candidates(const gs_dem_wall *w, int wi, const double xw[3], do
     x.dist = sqrt(d2);
     const int *vid = m->vid + 3 * (size_t)t;
     uint64_t ids;
+    int feat_kind = feat == 0 ? 0 : feat <= 3 ? 1 : 2;
     if (feat == 0) {
       x.nv = 3;
       x.v[0] = vid[0], x.v[1] = vid[1], x.v[2] = vid[2];
@@ -173,7 +181,10 @@ static void mesh_candidates(const gs_dem_wall *w, int wi, const double xw[3], do
       x.v[0] = vid[feat - 4];
       ids = (uint64_t)x.v[0];
     }
-    x.key = ((uint64_t)(wi + 1) << 56) | ((uint64_t)(feat == 0 ? 0 : feat <= 3 ? 1 : 2) << 54) | ids;
+    /* LIGGGHTS keeps a contact's history per triangle, whichever of its
+     * features touches; gransim per feature (a shared edge is one contact) */
+    if (m->active) ids = (uint64_t)t, feat_kind = 0;
+    x.key = ((uint64_t)(wi + 1) << 56) | ((uint64_t)feat_kind << 54) | ids;
     double nb[3] = {dq[0] / x.dist, dq[1] / x.dist, dq[2] / x.dist};
     gs_dem_wall_point_to_world(w, q, x.cp);
     gs_dem_wall_dir_to_world(w, nb, x.n);
@@ -240,8 +251,9 @@ static int shares_vertex(const cand *a, const cand *b) {
 }
 
 /* Sort by distance, then keep faces and analytic walls, and edge/vertex
- * contacts that share no vertex with a kept contact of the same mesh. */
-static int select_contacts(cand *c, int nc) {
+ * contacts that share no vertex with a kept contact of the same mesh; in
+ * LIGGGHTS mode (`dedup` 0) every contact an owning triangle found. */
+static int select_contacts(cand *c, int nc, int dedup) {
   for (int i = 1; i < nc; i++) {
     cand x = c[i];
     int j = i - 1;
@@ -254,7 +266,7 @@ static int select_contacts(cand *c, int nc) {
   int nk = 0;
   for (int i = 0; i < nc; i++) {
     int keep = 1;
-    if (c[i].feat > 0)
+    if (dedup && c[i].feat > 0)
       for (int k = 0; k < nk && keep; k++)
         if (c[k].wall == c[i].wall && c[k].feat >= 0 && shares_vertex(&c[k], &c[i])) keep = 0;
     if (keep) c[nk++] = c[i];
@@ -288,6 +300,7 @@ void gs_dem_wall_forces(gs_dem *d) {
     ib = NULL;
   }
   const double dt = d->prm.dt, dv = d->impact_dv;
+  const int liggghts = d->prm.mesh_contacts == GS_DEM_MESH_LIGGGHTS;
 
 #pragma omp parallel num_threads(nt)
   {
@@ -301,7 +314,7 @@ void gs_dem_wall_forces(gs_dem *d) {
       int nc = 0;
       for (size_t w = 0; w < nw; w++) {
         const gs_dem_wall *wl = &d->walls[w];
-        if (wl->kind == GS_DEM_WALL_MESH) mesh_candidates(wl, (int)w, xi, r, c, &nc);
+        if (wl->kind == GS_DEM_WALL_MESH) mesh_candidates(wl, (int)w, xi, r, c, &nc, 1);
         else analytic_candidate(wl, (int)w, xi, r, c, &nc, 0);
       }
       uint64_t *okey = p->wkey + i * GS_DEM_WSLOTS;
@@ -313,7 +326,7 @@ void gs_dem_wall_forces(gs_dem *d) {
         }
         continue;
       }
-      nc = select_contacts(c, nc);
+      nc = select_contacts(c, nc, !liggghts);
       if (nc > GS_DEM_WSLOTS) nc = GS_DEM_WSLOTS;
       uint64_t nkey[GS_DEM_WSLOTS] = {0};
       double nshear[3 * GS_DEM_WSLOTS] = {0};
@@ -332,13 +345,15 @@ void gs_dem_wall_forces(gs_dem *d) {
         double vw[3];
         gs_dem_wall_velocity(wl, x->cp, vw);
         const double *nr = x->n, dist = x->dist, delta = r - dist;
+        /* lever of the contact point: the wall surface, or LIGGGHTS' r - delta/2 */
+        const double lever = liggghts ? r - 0.5 * delta : dist;
         const double vr[3] = {p->vx[i] - vw[0], p->vy[i] - vw[1], p->vz[i] - vw[2]};
         const double vn = vr[0] * nr[0] + vr[1] * nr[1] + vr[2] * nr[2];
         const double wi[3] = {p->wx[i], p->wy[i], p->wz[i]};
         const double wxn[3] = {wi[1] * nr[2] - wi[2] * nr[1], wi[2] * nr[0] - wi[0] * nr[2],
                                wi[0] * nr[1] - wi[1] * nr[0]};
-        const double vt[3] = {vr[0] - vn * nr[0] - dist * wxn[0], vr[1] - vn * nr[1] - dist * wxn[1],
-                              vr[2] - vn * nr[2] - dist * wxn[2]};
+        const double vt[3] = {vr[0] - vn * nr[0] - lever * wxn[0], vr[1] - vn * nr[1] - lever * wxn[1],
+                              vr[2] - vn * nr[2] - lever * wxn[2]};
         const uint32_t bit = 1u << x->wall;
         if (!(p->wall_mask[i] & bit) && !(mask & bit) && my) {
           /* a new impact on this wall: book class, normal and tangential speed */
@@ -362,13 +377,13 @@ void gs_dem_wall_forces(gs_dem *d) {
         const double cr[3] = {nr[1] * cf.ft[2] - nr[2] * cf.ft[1], nr[2] * cf.ft[0] - nr[0] * cf.ft[2],
                               nr[0] * cf.ft[1] - nr[1] * cf.ft[0]};
         double rt[3] = {0, 0, 0};
-        gs_dem_rolling(wl->pt[ty].mu_r, cf.fe, dist, nr, wi, rt);
+        gs_dem_rolling(wl->pt[ty].mu_r, cf.fe, lever, nr, wi, rt);
         p->fx[i] += f[0];
         p->fy[i] += f[1];
         p->fz[i] += f[2];
-        p->tx[i] += -dist * cr[0] + rt[0];
-        p->ty[i] += -dist * cr[1] + rt[1];
-        p->tz[i] += -dist * cr[2] + rt[2];
+        p->tx[i] += -lever * cr[0] + rt[0];
+        p->ty[i] += -lever * cr[1] + rt[1];
+        p->tz[i] += -lever * cr[2] + rt[2];
         if (my) {
           double *wf = my + nctr * (4 + GS_DEM_IMPACT_BINS) + 6 * (size_t)x->wall;
           const double *o = wl->moving ? wl->shift : wl->origin;
@@ -422,7 +437,7 @@ int gs_dem_touches_wall(gs_dem *d, const double x[3], double r) {
     gs_dem_wall_frame(wl, d->t);
     if (wl->kind == GS_DEM_WALL_MESH) {
       if (wl->mesh->bin_reach < r) continue; /* cannot happen after gs_dem_prepare */
-      mesh_candidates(wl, (int)w, x, r, c, &nc);
+      mesh_candidates(wl, (int)w, x, r, c, &nc, 0);
     } else {
       analytic_candidate(wl, (int)w, x, r, c, &nc, 1);
     }
