@@ -3,7 +3,8 @@
  * bed (threads forced on for its 3072 particles) in a box of planes, and
  * count the same collision events and wall impacts; and the same with 1 and
  * 2 threads in a box of triangle meshes with a turning mesh paddle, where the
- * record of impact speeds (the breakage table's input) must match too. */
+ * record of impact speeds (the breakage table's input) must match too, with
+ * either mesh-contact rule. */
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
@@ -97,8 +98,9 @@ static void compare(const char *what, snapshot a, snapshot b, size_t n, unsigned
 }
 
 /* An engine on `threads` threads (forced on whatever the particle count),
- * domain [lo, hi]^3, two particle types t[0], t[1] of one material *m. */
-static gs_dem *engine(int threads, double lo, double hi, gs_dem_material *m, int t[2]) {
+ * domain [lo, hi]^3, two particle types t[0], t[1] of one material *m,
+ * mesh contacts by rule `contacts` (GS_DEM_MESH_*). */
+static gs_dem *engine(int threads, double lo, double hi, gs_dem_material *m, int t[2], int contacts) {
   omp_set_num_threads(threads);
   gs_dem_params p;
   memset(&p, 0, sizeof p);
@@ -107,6 +109,7 @@ static gs_dem *engine(int threads, double lo, double hi, gs_dem_material *m, int
   p.gravity[2] = -9.81;
   for (int a = 0; a < 3; a++) p.lo[a] = lo, p.hi[a] = hi;
   p.nclass = 2;
+  p.mesh_contacts = contacts;
   gs_error err = {0};
   gs_dem *d = gs_dem_alloc(&p, &err);
   gs_dem_set_parallel_min(d, 0);
@@ -139,7 +142,7 @@ static void lattice(gs_dem *d, const int t[2], const int n[3], double x0, double
 static snapshot run(int threads) {
   gs_dem_material m;
   int t[2];
-  gs_dem *d = engine(threads, -0.001, 0.061, &m, t);
+  gs_dem *d = engine(threads, -0.001, 0.061, &m, t, GS_DEM_MESH_CLOSEST);
   gs_error err = {0};
   for (int a = 0; a < 3; a++) {
     double pl[3] = {0, 0, 0}, nl[3] = {0, 0, 0}, ph[3] = {0, 0, 0}, nh[3] = {0, 0, 0};
@@ -158,10 +161,10 @@ static snapshot run(int threads) {
 /* A closed box of 12 triangles (62 mm) with a vertical paddle (2 triangles,
  * 40 x 30 mm) turning at 1000 rpm about z through the box's centre, and a
  * lattice of particles flying about at up to 2 m/s; threads forced on. */
-static snapshot run_mesh(int threads) {
+static snapshot run_mesh(int threads, int contacts) {
   gs_dem_material m;
   int t[2];
-  gs_dem *d = engine(threads, -0.002, 0.062, &m, t);
+  gs_dem *d = engine(threads, -0.002, 0.062, &m, t, contacts);
   gs_error err = {0};
   double box[108];
   cube(box, 0.062, -0.001);
@@ -195,12 +198,17 @@ int main(int argc, char **argv) {
   t0 = now();
   compare("planes, 1 vs 4 threads", a, b, 3072, 1000);
   drop(&a), drop(&b);
-  a = run_mesh(1);
+  a = run_mesh(1, GS_DEM_MESH_CLOSEST);
   fprintf(stderr, "meshes, 1 thread: %.2f s\n", now() - t0);
-  b = run_mesh(2);
+  b = run_mesh(2, GS_DEM_MESH_CLOSEST);
   fprintf(stderr, "meshes, both: %.2f s\n", now() - t0);
   compare("meshes and a turning paddle, 1 vs 2 threads", a, b, a.n, 100);
   CHECK(a.n > 800);
+  drop(&a), drop(&b);
+  /* LIGGGHTS' contact rule (mesh_contacts: liggghts): the same for any thread count */
+  a = run_mesh(1, GS_DEM_MESH_LIGGGHTS);
+  b = run_mesh(2, GS_DEM_MESH_LIGGGHTS);
+  compare("meshes with LIGGGHTS' contact rule, 1 vs 2 threads", a, b, a.n, 100);
   drop(&a), drop(&b);
   TEST_EXIT();
 }
