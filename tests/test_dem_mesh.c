@@ -16,6 +16,7 @@
 #include "check.h"
 #include "dem_testlib.h"
 #include "dem/dem_case.h"
+#include "dem/dem_internal.h"
 #include "gransim/dem.h"
 
 /* unit cube [0,1]^3 as 12 outward triangles */
@@ -182,6 +183,29 @@ static void test_weld_tolerance(void) {
   CHECK_REL(f, hertz, 1e-3);
   f = push_mode(vert, r, dir, GS_DEM_MESH_CLOSEST, 1e-14);
   CHECK_REL(f, hertz, 1e-3);
+  /* the vertex count itself: a jittered cube has 8; a flat 20 x 20 grid of
+   * squares at one x (every corner in one plane of the sort) has 21 x 21 */
+  gs_error err = {0};
+  double tri[108];
+  cube(tri);
+  for (int k = 0; k < 108; k++) tri[k] += 1e-14 * ((k * 7919) % 13 - 6) / 6.0;
+  gs_dem_mesh *m = gs_dem_mesh_from_triangles(tri, 12, &err);
+  CHECK(m && m->nvert == 8);
+  gs_dem_mesh_free(m);
+  enum { G = 20 };
+  double *flat = malloc(2 * G * G * 9 * sizeof *flat);
+  for (int i = 0, k = 0; i < G; i++)
+    for (int j = 0; j < G; j++, k += 2) {
+      const double y0 = i, z0 = j;
+      const double a[9] = {0, y0, z0, 0, y0 + 1, z0, 0, y0 + 1, z0 + 1};
+      const double b[9] = {0, y0, z0, 0, y0 + 1, z0 + 1, 0, y0, z0 + 1};
+      memcpy(flat + 9 * k, a, sizeof a);
+      memcpy(flat + 9 * (k + 1), b, sizeof b);
+    }
+  m = gs_dem_mesh_from_triangles(flat, 2 * G * G, &err);
+  CHECK(m && m->nvert == (G + 1) * (G + 1));
+  gs_dem_mesh_free(m);
+  free(flat);
 }
 
 /* LIGGGHTS-compatible contacts (mesh_contacts: liggghts, src/dem/mesh_topology.c):

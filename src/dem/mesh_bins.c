@@ -4,19 +4,39 @@
  * of the cell, so a sphere of radius <= reach needs only the cell of its
  * centre. */
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "dem/dem_internal.h"
 
+/* A corner of a triangle, with the cell of a grid of spacing tol that holds it. */
 typedef struct {
-  double c[3];
-  int i;
+  int64_t q[3];
+  int i; /* index of the corner in the mesh (3 t + k) */
 } corner;
 
-static int by_x(const void *a, const void *b) {
+static int cmp_cell(const int64_t *a, const int64_t *b) {
+  for (int k = 0; k < 3; k++)
+    if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
+  return 0;
+}
+
+static int by_cell(const void *a, const void *b) {
   const corner *p = a, *q = b;
-  return (p->c[0] > q->c[0]) - (p->c[0] < q->c[0]);
+  int c = cmp_cell(p->q, q->q);
+  return c ? c : (p->i > q->i) - (p->i < q->i);
+}
+
+/* First corner of the sorted array whose cell is not below q. */
+static size_t first_in(const corner *cs, size_t n, const int64_t *q) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (cmp_cell(cs[mid].q, q) < 0) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
 }
 
 static int root(int *parent, int k) {
@@ -29,7 +49,10 @@ static int root(int *parent, int k) {
  * vertex with round-off differences (the CoriMix impeller has corners
  * 1e-14 mm apart), which exact comparison took for different vertices, so
  * the edge between them looked like two edges (two contacts instead of one).
- * The same tolerance as LIGGGHTS' `precision`, relative. */
+ * The same tolerance as LIGGGHTS' `precision`, relative.  Corners are
+ * sorted by cells of that size, so a corner's partners are in its own cell
+ * or the 26 around it: n log n whatever the shape (a flat mesh puts every
+ * corner at one x). */
 void gs_dem_mesh_weld(gs_dem_mesh *m) {
   size_t nc = 3 * m->ntri;
   corner *cs = malloc((nc ? nc : 1) * sizeof *cs);
@@ -44,19 +67,25 @@ void gs_dem_mesh_weld(gs_dem_mesh *m) {
   double lo[3], hi[3], diag2 = 0;
   gs_dem_mesh_bounds(m, lo, hi);
   for (int a = 0; a < 3; a++) diag2 += (hi[a] - lo[a]) * (hi[a] - lo[a]);
-  const double tol = 1e-8 * sqrt(diag2);
+  const double tol = 1e-8 * sqrt(diag2), h = tol > 0 ? tol : 1.0;
   for (size_t k = 0; k < nc; k++) {
-    memcpy(cs[k].c, m->v + 3 * k, 3 * sizeof(double));
+    for (int a = 0; a < 3; a++) cs[k].q[a] = (int64_t)floor((m->v[3 * k + (size_t)a] - lo[a]) / h);
     cs[k].i = (int)k;
     parent[k] = (int)k;
   }
-  qsort(cs, nc, sizeof *cs, by_x);
-  for (size_t k = 1; k < nc; k++) /* union with every earlier corner within tol */
-    for (size_t j = k; j-- > 0 && cs[k].c[0] - cs[j].c[0] <= tol;)
-      if (fabs(cs[k].c[1] - cs[j].c[1]) <= tol && fabs(cs[k].c[2] - cs[j].c[2]) <= tol) {
+  qsort(cs, nc, sizeof *cs, by_cell);
+  for (size_t k = 0; k < nc; k++) {
+    const double *p = m->v + 3 * (size_t)cs[k].i;
+    for (int d = 0; d < 27; d++) {
+      int64_t q[3] = {cs[k].q[0] + d % 3 - 1, cs[k].q[1] + d / 3 % 3 - 1, cs[k].q[2] + d / 9 - 1};
+      for (size_t j = first_in(cs, nc, q); j < nc && !cmp_cell(cs[j].q, q); j++) {
+        const double *o = m->v + 3 * (size_t)cs[j].i;
+        if (fabs(p[0] - o[0]) > tol || fabs(p[1] - o[1]) > tol || fabs(p[2] - o[2]) > tol) continue;
         int a = root(parent, cs[k].i), b = root(parent, cs[j].i);
         if (a != b) parent[a < b ? b : a] = a < b ? a : b;
       }
+    }
+  }
   free(cs);
   /* ids in order of first appearance in the file: m->vid holds, for now,
    * the id given to each root corner */
