@@ -40,8 +40,9 @@ same_results() {
 
 ex="$SRC/examples/corimix-continuous.yaml"
 run_rc 0 "$BIN" run "$ex" --out "$WORK/serial" --quiet --threads 1
-run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2" --quiet --threads 1
+run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2" --quiet --threads 1 --timings
 stderr_has "done to t = 85"
+[ "$(grep -cE '^  [01] ' "$WORK/stderr")" = 2 ] || { show_output; fail "--timings on 2 ranks: expected a row per rank"; }
 [ "$(grep -c 'done to t' "$WORK/stderr")" = 1 ] || { show_output; fail "expected one final message (rank 0's) on 2 ranks"; }
 same_results "$WORK/serial" "$WORK/np2" /carried
 run_rc 0 "${MPI[@]}" -np 3 "$BIN" run "$ex" --out "$WORK/np3" --quiet --threads 1

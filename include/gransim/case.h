@@ -55,6 +55,7 @@ typedef struct gs_run_options {
   const char *out_dir; /* where result.h5 and summary.csv go (NULL: no files) */
   int resume;          /* continue an interrupted run from its partial files */
   int progress;        /* -1 auto (when stderr is a terminal), 0 off, 1 on */
+  int timings;         /* 1: print where each (MPI) rank spent its time, at the end */
 } gs_run_options;
 
 typedef struct gs_run_report {

@@ -35,20 +35,23 @@ static void usage(FILE *fp) {
 
 static int cmd_run(int argc, char **argv) {
   const char *path = NULL, *out = NULL;
-  gs_run_options opt = {NULL, 0, -1};
+  gs_run_options opt = {NULL, 0, -1, 0};
   for (int i = 0; i < argc; i++) {
     if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-      printf("usage: gransim run CASE --out DIR [--resume] [--quiet] [--threads N]\n\n"
+      printf("usage: gransim run CASE --out DIR [--resume] [--quiet] [--threads N] [--timings]\n\n"
              "Runs CASE and writes DIR/result.h5 (HDF5: grid, times, numbers per cell and\n"
              "compartment, ledger, summary, case echo) and DIR/summary.csv (one row per output\n"
              "time and compartment).  Files are written under temporary names and renamed\n"
              "only when the run succeeds.  --resume continues a killed run from the partial\n"
-             "files in DIR.  --threads sets the OpenMP threads (default: OMP_NUM_THREADS or all).\n");
+             "files in DIR.  --threads sets the OpenMP threads (default: OMP_NUM_THREADS or all).\n"
+             "--timings prints, at the end, the seconds each MPI rank spent in the rates, the\n"
+             "exchange between ranks, the integrator's own work, the outputs and the final write.\n");
       return 0;
     } else if (!strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
     else if (!strcmp(argv[i], "--resume")) opt.resume = 1;
     else if (!strcmp(argv[i], "--quiet")) opt.progress = 0;
     else if (!strcmp(argv[i], "--progress")) opt.progress = 1;
+    else if (!strcmp(argv[i], "--timings")) opt.timings = 1;
     else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
       int n = atoi(argv[++i]);
       if (n < 1) {

@@ -35,7 +35,14 @@ typedef struct {
   double bad_t;
   size_t bad_index; /* in the full vector */
   int bad;
+  double t_rhs, t_exchange; /* seconds in the model's rates, and in the MPI boundary exchange */
 } guard_t;
+
+static double now_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 /* 1 if every value is finite: an OR of "exponent all ones" over the bits,
  * which the compiler vectorises (an early-exit isfinite loop it does not). */
@@ -66,9 +73,11 @@ static int check_rates(guard_t *gd, double t, const double *f, size_t n, const g
 static int guarded_rhs(void *ctx, double t, const double *y, double *dydt) {
   guard_t *gd = ctx;
   gs_model *m = &gd->c->model;
+  const double start = now_seconds();
   m->in_integrator = 1;
   gs_model_rhs(m, t, y, dydt, dydt + m->nstate);
   m->in_integrator = 0;
+  gd->t_rhs += now_seconds() - start;
   return check_rates(gd, t, dydt, m->nstate + m->nledger, NULL);
 }
 
@@ -78,11 +87,15 @@ static int guarded_rhs(void *ctx, double t, const double *y, double *dydt) {
 static int local_rhs(void *ctx, double t, const double *yl, double *fl) {
   guard_t *gd = ctx;
   gs_model *m = &gd->c->model;
+  const double start = now_seconds();
   gs_dist_unpack(gd->dist, yl, gd->Y);
   gs_dist_sync(gd->dist, gd->Y);
+  const double synced = now_seconds();
   m->in_integrator = 1;
   gs_model_rhs(m, t, gd->Y, gd->F, gd->F + m->nstate);
   m->in_integrator = 0;
+  gd->t_exchange += synced - start;
+  gd->t_rhs += now_seconds() - synced;
   gs_dist_pack(gd->dist, gd->F, fl);
   return check_rates(gd, t, fl, gd->dist->nlocal, gd->dist);
 }
@@ -257,10 +270,27 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
   return GS_OK;
 }
 
-static double now_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+/* --timings: each rank's seconds per phase, summed into one table that rank
+ * 0 prints (phases: integration = advance minus rates and exchange, i.e.
+ * the integrator's own vector work, packing and rate checks). */
+enum { PH_RHS, PH_EXCHANGE, PH_INTEGRATOR, PH_OUTPUTS, PH_FINISH, PH_N };
+
+static void print_timings(const gs_dist *d, const double *mine) {
+  const size_t n = (size_t)d->size * PH_N;
+  double *all = calloc(n, sizeof *all);
+  if (!all) return;
+  memcpy(all + (size_t)d->rank * PH_N, mine, PH_N * sizeof *mine);
+  if (d->size > 1) gs_parallel_sum(all, n); /* zeros elsewhere: exact */
+  if (d->rank == 0) {
+    fprintf(stderr, "gransim: where the time went (s)\n  %-5s %-12s %-9s %-11s %-8s %s\n", "rank",
+            "rates (RHS)", "exchange", "integrator", "outputs", "final write");
+    for (int r = 0; r < d->size; r++) {
+      const double *x = all + (size_t)r * PH_N;
+      fprintf(stderr, "  %-5d %-12.4f %-9.4f %-11.4f %-8.4f %.4f\n", r, x[PH_RHS], x[PH_EXCHANGE],
+              x[PH_INTEGRATOR], x[PH_OUTPUTS], x[PH_FINISH]);
+    }
+  }
+  free(all);
 }
 
 static void progress(const gs_case *c, double t, double t_end, const gs_integrator_stats *st,
@@ -316,7 +346,8 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   if (!rc) rc = check_state(c, Y, M1_0, t, &ymax_seen, &rep, err);
   if (!rc && out && !(opt && opt->resume)) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
   rc = agree(&dist, rc, err);
-  guard_t guard = {c, &dist, Y, NULL, 0, 0, 0};
+  guard_t guard = {c, &dist, Y, NULL, 0, 0, 0, 0, 0};
+  double phase[PH_N] = {0};
   stepper_t step;
   memset(&step, 0, sizeof step);
   if (!rc) rc = agree(&dist, stepper_init(&step, c, &dist, &guard, err), err);
@@ -326,10 +357,13 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     if (c->times[i] <= t) continue;
     /* stop at every time where a rate switches on or off (spray windows,
      * feeds): an integrator cannot step over a jump in f to tolerance */
+    const double advance_start = now_seconds();
     while (!rc && t < c->times[i]) {
       double stop = fmin(c->times[i], gs_model_next_switch(m, t));
       rc = stepper_advance(&step, &t, stop, Y, err);
     }
+    const double outputs_start = now_seconds();
+    phase[PH_INTEGRATOR] += outputs_start - advance_start;
     if (rc && guard.bad) {
       char where[512];
       size_t idx = guard.bad_index;
@@ -343,10 +377,12 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     if (!rc) rc = check_state(c, Y, M1_0, t, &ymax_seen, &rep, err);
     if (!rc && out) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
     rc = agree(&dist, rc, err);
+    phase[PH_OUTPUTS] += now_seconds() - outputs_start;
     step.it->type->get_stats(step.it->self, &st);
     if (show) progress(c, t, t_end, &st, now_seconds() - start);
   }
   if (show) fprintf(stderr, "\n");
+  const double finish_start = now_seconds();
   if (out) {
     gs_error ferr;
     int frc = gs_output_finish(out, rc == GS_OK, &ferr);
@@ -356,6 +392,11 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     }
   }
   rc = agree(&dist, rc, err);
+  phase[PH_FINISH] = now_seconds() - finish_start;
+  phase[PH_RHS] = guard.t_rhs;
+  phase[PH_EXCHANGE] = guard.t_exchange;
+  phase[PH_INTEGRATOR] -= guard.t_rhs + guard.t_exchange;
+  if (opt && opt->timings) print_timings(&dist, phase);
   stepper_free(&step);
   free(guard.F);
   m->comp_lo = 0; /* the model is whole again for whoever uses it next */
