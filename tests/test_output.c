@@ -258,17 +258,30 @@ static void test_roundtrip(int dim) {
   gs_model_free(&m);
 }
 
+/* A model (make_model's arguments) and an output opened for it in
+ * base/name, whose path goes to dir (256 bytes). */
+static gs_output *open_in(const char *name, char *dir, gs_model *m, int dim, size_t ncomp,
+                          size_t nsolid) {
+  snprintf(dir, 256, "%s/%s", base, name);
+  make_model(m, dim, ncomp, nsolid);
+  gs_error err;
+  gs_output *o = gs_output_open(dir, m, "", "case.yaml", &err);
+  CHECK(o != NULL);
+  if (!o) fprintf(stderr, "%s\n", err.msg);
+  return o;
+}
+
 /* Rows of 8192 values and more are deflated (written chunk by chunk by
  * src/io/chunk_writer.c): HDF5 reads every value back through its filter. */
 static void test_deflated(void) {
   char dir[256];
-  snprintf(dir, sizeof dir, "%s/deflated", base);
   gs_model m;
-  make_model(&m, 1, 2, 4096);
   gs_error err;
-  gs_output *o = gs_output_open(dir, &m, "", "case.yaml", &err);
-  CHECK(o != NULL);
-  if (!o) return;
+  gs_output *o = open_in("deflated", dir, &m, 1, 2, 4096);
+  if (!o) {
+    gs_model_free(&m);
+    return;
+  }
   write_times(o, &m, 0, 3);
   CHECK(gs_output_finish(o, 1, &err) == GS_OK);
   check_result(dir, &m, 3);
@@ -286,12 +299,9 @@ static void test_deflated(void) {
 
 static void test_abort(void) {
   char dir[256];
-  snprintf(dir, sizeof dir, "%s/abort", base);
   gs_model m;
-  make_model(&m, 2, 1, 5);
   gs_error err;
-  gs_output *o = gs_output_open(dir, &m, "", "case.yaml", &err);
-  CHECK(o != NULL);
+  gs_output *o = open_in("abort", dir, &m, 2, 1, 5);
   if (o) {
     write_times(o, &m, 0, 1);
     CHECK(gs_output_finish(o, 0, &err) == GS_OK);
