@@ -38,6 +38,7 @@
 
 #include "gransim/kernel.h"
 #include "gransim/pbm.h"
+#include "gransim/threads.h"
 #include "pbm/lever.h"
 
 enum { CELL_AVERAGE = 0, FIXED_PIVOT = 1 };
@@ -470,10 +471,10 @@ static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
   A->span_valid[comp] = 1;
 }
 
-/* Pair loop of one compartment; result in acc[0]. */
-/* slot < 0: this compartment alone, split over the OpenMP team (result in
- * acc[0]); slot >= 0: called by thread `slot` of a team that splits the
- * compartments, so the loop is serial (result in acc[slot]). */
+/* Pair loop of one compartment.  slot < 0: this compartment alone, split
+ * over the OpenMP team (result in acc[0]); slot >= 0: called by thread
+ * `slot` of a team that splits the compartments, so the loop is serial
+ * (result in acc[slot]). */
 static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
                               const gs_model *m, acc_t *acc, int slot, const double *pcar) {
   /* The participating cells are chosen once per time value under an
@@ -486,6 +487,8 @@ static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
     A->span_t[comp] = t;
   }
   const size_t *span = A->span + comp * 2 * A->nrows;
+  /* small grids (or one thread): a parallel region costs more than the pairs */
+  if (slot < 0 && gs_threads_for(A->ncells, 401) < 2) slot = 0;
   if (slot >= 0) {
     acc[slot] = thread_acc(A, slot);
     acc[slot].pcar = pcar;
@@ -496,8 +499,7 @@ static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
     return;
   }
   int nth = 1;
-  /* small grids: a parallel region costs more than the pairs themselves */
-#pragma omp parallel if (A->ncells > 400)
+#pragma omp parallel
   {
 #pragma omp single
     nth = omp_get_num_threads();

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 
 #include "gransim/pbm.h"
+#include "gransim/threads.h"
 
 enum { SPRAY, PORE_CONSOLIDATION };
 
@@ -81,50 +82,59 @@ static int carried_create(gs_cfg_node *node, const gs_model *m, void **self, int
   return GS_OK;
 }
 
-static void spray_rhs(const carried_t *C, const gs_model *m, double t, const double *y,
-                      double *dydt, double *dledger) {
+/* Compartment comp's share of the spray, in proportion to solid volume. */
+static void spray_compartment(const carried_t *C, const gs_model *m, const double *y,
+                              double *dydt, double *dledger, size_t comp) {
   const gs_grid *g = &m->grid;
-  if (t < C->start || t >= C->end) return;
-#pragma omp parallel for schedule(static) if (g->ncomp * g->ncells > 20000)
-  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
-    const double *N = y + comp * g->ncells;
-    double solid = 0;
-    for (size_t c = 0; c < g->ncells; c++) solid += N[c] * g->volume[c];
-    if (!(solid > 0) || C->q[comp] == 0.0) continue; /* (inside an OpenMP loop) */
-    double per = C->q[comp] / solid, *dL = gs_model_carried(m, dydt, comp, C->liquid);
-    for (size_t c = 0; c < g->ncells; c++) dL[c] += per * N[c] * g->volume[c];
-    gs_model_ledger(m, dledger, comp)[g->dim + C->liquid] += C->q[comp];
-  }
+  const double *N = y + comp * g->ncells;
+  double solid = 0;
+  for (size_t c = 0; c < g->ncells; c++) solid += N[c] * g->volume[c];
+  if (!(solid > 0) || C->q[comp] == 0.0) return;
+  double per = C->q[comp] / solid, *dL = gs_model_carried(m, dydt, comp, C->liquid);
+  for (size_t c = 0; c < g->ncells; c++) dL[c] += per * N[c] * g->volume[c];
+  gs_model_ledger(m, dledger, comp)[g->dim + C->liquid] += C->q[comp];
 }
 
-static void consolidation_rhs(const carried_t *C, const gs_model *m, const double *y,
-                              double *dydt, double *dledger) {
+/* Compartment comp's loss of gas down to the minimum porosity. */
+static void consolidation_compartment(const carried_t *C, const gs_model *m, const double *y,
+                                      double *dydt, double *dledger, size_t comp) {
   const gs_grid *g = &m->grid;
   const double target = C->emin / (1 - C->emin); /* pore volume per solid volume at e_min */
-#pragma omp parallel for schedule(static) if (g->ncomp * g->ncells > 20000)
-  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
-    const double *N = y + comp * g->ncells;
-    const double *L = gs_model_carried_c(m, y, comp, C->liquid);
-    const double *G = gs_model_carried_c(m, y, comp, C->gas);
-    double *dG = gs_model_carried(m, dydt, comp, C->gas), lost = 0;
-    for (size_t c = 0; c < g->ncells; c++) {
-      if (!(N[c] > 0) || !(G[c] > 0)) continue;
-      double s = g->volume[c], l = L[c] / N[c], gas = G[c] / N[c];
-      double excess = gas + l - target * s;
-      if (!(excess > 0) || !(s > 0)) continue;
-      double rate = C->k * (s + l + gas) * (1 - C->emin) / s * fmin(excess, gas) * N[c];
-      dG[c] -= rate;
-      lost += rate;
-    }
-    gs_model_ledger(m, dledger, comp)[g->dim + C->gas] -= lost;
+  const double *N = y + comp * g->ncells;
+  const double *L = gs_model_carried_c(m, y, comp, C->liquid);
+  const double *G = gs_model_carried_c(m, y, comp, C->gas);
+  double *dG = gs_model_carried(m, dydt, comp, C->gas), lost = 0;
+  for (size_t c = 0; c < g->ncells; c++) {
+    if (!(N[c] > 0) || !(G[c] > 0)) continue;
+    double s = g->volume[c], l = L[c] / N[c], gas = G[c] / N[c];
+    double excess = gas + l - target * s;
+    if (!(excess > 0) || !(s > 0)) continue;
+    double rate = C->k * (s + l + gas) * (1 - C->emin) / s * fmin(excess, gas) * N[c];
+    dG[c] -= rate;
+    lost += rate;
   }
+  gs_model_ledger(m, dledger, comp)[g->dim + C->gas] -= lost;
+}
+
+/* Compartments write disjoint rates and ledger entries: a team splits them
+ * when there is enough work. */
+static void carried_compartment(const carried_t *C, const gs_model *m, const double *y,
+                                double *dydt, double *dledger, size_t comp) {
+  if (C->kind == SPRAY) spray_compartment(C, m, y, dydt, dledger, comp);
+  else consolidation_compartment(C, m, y, dydt, dledger, comp);
 }
 
 static void carried_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
                         double *dledger) {
   const carried_t *C = self;
-  if (C->kind == SPRAY) spray_rhs(C, m, t, y, dydt, dledger);
-  else consolidation_rhs(C, m, y, dydt, dledger);
+  if (C->kind == SPRAY && (t < C->start || t >= C->end)) return;
+  const size_t lo = m->comp_lo, hi = m->comp_hi;
+  if (gs_threads_for((hi - lo) * m->grid.ncells, 20000) > 1) {
+#pragma omp parallel for schedule(static)
+    for (size_t comp = lo; comp < hi; comp++) carried_compartment(C, m, y, dydt, dledger, comp);
+  } else {
+    for (size_t comp = lo; comp < hi; comp++) carried_compartment(C, m, y, dydt, dledger, comp);
+  }
 }
 
 static int spray_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {

@@ -18,6 +18,7 @@
 
 #include "gransim/distribution.h"
 #include "gransim/pbm.h"
+#include "gransim/threads.h"
 
 typedef struct {
   size_t comp;
@@ -153,39 +154,48 @@ static int transfer_create(gs_cfg_node *node, const gs_model *m, void **self, gs
   return GS_OK;
 }
 
+/* Compartment comp's rates and ledger: what leaves it, and what comes in
+ * from the one before.  It writes only its own entries, so compartments can
+ * run in parallel. */
+static void transfer_compartment(const transfer_t *T, const gs_model *m, const double *y,
+                                 double *dydt, double *dledger, size_t comp) {
+  const gs_grid *g = &m->grid;
+  const size_t n = g->ncells;
+  double *d = dydt + comp * n, moved_out[GS_MAX_VOL] = {0}, moved_in[GS_MAX_VOL] = {0};
+  for (int from = comp > 0 ? -1 : 0; from <= 0; from++) { /* -1: inflow from comp - 1 */
+    const size_t sc = from == 0 ? comp : comp - 1;        /* source compartment */
+    const double k = T->k[sc], sign = from == 0 ? -1.0 : 1.0;
+    double *moved = from == 0 ? moved_out : moved_in;
+    const double *N = y + sc * n;
+    for (size_t c = 0; c < n; c++) {
+      double r = k * N[c];
+      d[c] += sign * r;
+      for (int a = 0; a < g->dim; a++) moved[a] += r * g->x[c * (size_t)g->dim + (size_t)a];
+    }
+    for (int q = 0; q < m->ncarried; q++) {
+      const double *Q = gs_model_carried_c(m, y, sc, q);
+      double *dq = gs_model_carried(m, dydt, comp, q);
+      for (size_t c = 0; c < n; c++) {
+        double r = k * Q[c];
+        dq[c] += sign * r;
+        moved[g->dim + q] += r;
+      }
+    }
+  }
+  double *ledger = gs_model_ledger(m, dledger, comp);
+  for (int a = 0; a < m->nvol; a++) ledger[a] += moved_in[a] - moved_out[a];
+}
+
 static void transfer_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
                          double *dledger) {
   (void)t;
   const transfer_t *T = self;
-  const gs_grid *g = &m->grid;
-  const size_t n = g->ncells;
-  /* each compartment writes only its own rates and ledger (what leaves it,
-   * and what comes in from the one before), so compartments run in parallel */
-#pragma omp parallel for schedule(static) if (g->ncomp * n * (size_t)(1 + m->ncarried) > 20000)
-  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
-    double *d = dydt + comp * n, moved_out[GS_MAX_VOL] = {0}, moved_in[GS_MAX_VOL] = {0};
-    for (int from = comp > 0 ? -1 : 0; from <= 0; from++) { /* -1: inflow from comp - 1 */
-      const size_t sc = from == 0 ? comp : comp - 1; /* source compartment */
-      const double k = T->k[sc], sign = from == 0 ? -1.0 : 1.0;
-      double *moved = from == 0 ? moved_out : moved_in;
-      const double *N = y + sc * n;
-      for (size_t c = 0; c < n; c++) {
-        double r = k * N[c];
-        d[c] += sign * r;
-        for (int a = 0; a < g->dim; a++) moved[a] += r * g->x[c * (size_t)g->dim + (size_t)a];
-      }
-      for (int q = 0; q < m->ncarried; q++) {
-        const double *Q = gs_model_carried_c(m, y, sc, q);
-        double *dq = gs_model_carried(m, dydt, comp, q);
-        for (size_t c = 0; c < n; c++) {
-          double r = k * Q[c];
-          dq[c] += sign * r;
-          moved[g->dim + q] += r;
-        }
-      }
-    }
-    double *ledger = gs_model_ledger(m, dledger, comp);
-    for (int a = 0; a < m->nvol; a++) ledger[a] += moved_in[a] - moved_out[a];
+  const size_t lo = m->comp_lo, hi = m->comp_hi;
+  if (gs_threads_for((hi - lo) * m->grid.ncells * (size_t)(1 + m->ncarried), 20000) > 1) {
+#pragma omp parallel for schedule(static)
+    for (size_t comp = lo; comp < hi; comp++) transfer_compartment(T, m, y, dydt, dledger, comp);
+  } else {
+    for (size_t comp = lo; comp < hi; comp++) transfer_compartment(T, m, y, dydt, dledger, comp);
   }
 }
 
