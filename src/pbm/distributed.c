@@ -12,6 +12,7 @@
 #endif
 
 int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err) {
+  memset(d, 0, sizeof *d);
   d->rank = gs_parallel_rank();
   d->size = gs_parallel_size();
   d->m = m;
@@ -20,7 +21,13 @@ int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err) {
     return gs_error_set(err, GS_EINPUT, "%d MPI ranks for %zu compartments: use at most one rank per compartment",
                         d->size, ncomp);
   d->lo = gs_malloc(((size_t)d->size + 1) * sizeof(size_t), err);
-  if (!d->lo) return GS_ENOMEM;
+  const size_t comp_len = (1 + (size_t)m->ncarried) * m->grid.ncells;
+  d->sendbuf = gs_malloc(comp_len * sizeof(double), err);
+  d->recvbuf = gs_malloc(comp_len * sizeof(double), err);
+  if (!d->lo || !d->sendbuf || !d->recvbuf) {
+    gs_dist_free(d);
+    return GS_ENOMEM;
+  }
   for (int r = 0; r <= d->size; r++) d->lo[r] = ncomp * (size_t)r / (size_t)d->size; /* contiguous, balanced */
   m->comp_lo = d->lo[d->rank];
   m->comp_hi = d->lo[d->rank + 1];
@@ -58,18 +65,34 @@ size_t gs_dist_full_index(const gs_dist *d, size_t i) {
 
 void gs_dist_free(gs_dist *d) {
   free(d->lo);
+  free(d->sendbuf);
+  free(d->recvbuf);
   d->lo = NULL;
+  d->sendbuf = d->recvbuf = NULL;
 }
 
 #ifdef GRANSIM_HAVE_MPI
-/* Numbers and carried totals of compartment comp are two separate runs of y. */
-static void exchange(const gs_model *m, double *y, size_t send_comp, int to, size_t recv_comp, int from) {
+/* Numbers and carried totals of compartment comp are separate runs of y:
+ * packed, they travel as one message (each message costs ~1.5 µs here). */
+static void pack_comp(const gs_model *m, const double *y, size_t comp, double *buf) {
   const size_t n = m->grid.ncells, nq = (size_t)m->ncarried * n;
-  MPI_Sendrecv(y + send_comp * n, (int)n, MPI_DOUBLE, to, 0, y + recv_comp * n, (int)n, MPI_DOUBLE, from, 0,
+  memcpy(buf, y + comp * n, n * sizeof(double));
+  memcpy(buf + n, y + m->nnum + comp * nq, nq * sizeof(double));
+}
+
+static void unpack_comp(const gs_model *m, const double *buf, size_t comp, double *y) {
+  const size_t n = m->grid.ncells, nq = (size_t)m->ncarried * n;
+  memcpy(y + comp * n, buf, n * sizeof(double));
+  memcpy(y + m->nnum + comp * nq, buf + n, nq * sizeof(double));
+}
+
+static void exchange(gs_dist *d, double *y, size_t send_comp, int to, size_t recv_comp, int from) {
+  const gs_model *m = d->m;
+  const int len = (int)((1 + (size_t)m->ncarried) * m->grid.ncells);
+  if (to != MPI_PROC_NULL) pack_comp(m, y, send_comp, d->sendbuf);
+  MPI_Sendrecv(d->sendbuf, len, MPI_DOUBLE, to, 0, d->recvbuf, len, MPI_DOUBLE, from, 0,
                MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-  if (nq)
-    MPI_Sendrecv(y + m->nnum + send_comp * nq, (int)nq, MPI_DOUBLE, to, 1, y + m->nnum + recv_comp * nq,
-                 (int)nq, MPI_DOUBLE, from, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  if (from != MPI_PROC_NULL) unpack_comp(m, d->recvbuf, recv_comp, y);
 }
 #endif
 
@@ -79,7 +102,7 @@ void gs_dist_sync(gs_dist *d, double *y) {
   const int r = d->rank;
   int to = r + 1 < d->size ? r + 1 : MPI_PROC_NULL, from = r > 0 ? r - 1 : MPI_PROC_NULL;
   size_t send = d->lo[r + 1] - 1, recv = d->lo[r] > 0 ? d->lo[r] - 1 : 0;
-  exchange(d->m, y, send, to, recv, from);
+  exchange(d, y, send, to, recv, from);
 #else
   (void)d;
   (void)y;

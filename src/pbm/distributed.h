@@ -21,6 +21,7 @@ typedef struct {
   size_t off[3];  /* this rank's segments of the full vector: numbers, */
   size_t len[3];  /* carried volumes, ledger */
   size_t nlocal;  /* len[0] + len[1] + len[2] */
+  double *sendbuf, *recvbuf; /* one compartment's numbers and carried totals */
 } gs_dist;
 
 /* Split the compartments of m over the ranks and set m's comp_lo/comp_hi. */
