@@ -70,6 +70,12 @@ stderr_has() {
     grep -qF -- "$s" "$WORK/stderr" || { show_output; fail "stderr lacks '$s'"; }
   done
 }
+stderr_lacks() {
+  local s
+  for s in "$@"; do
+    ! grep -qF -- "$s" "$WORK/stderr" || { show_output; fail "stderr has '$s'"; }
+  done
+}
 
 # A small valid grid section (one axis), for cases that only vary other keys.
 GRID_1D='grid:

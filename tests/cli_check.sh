@@ -145,6 +145,14 @@ bad rtol-range.yaml 5 "$GRID_1D
 output: {end: 1}
 solver: {rtol: 2}" \
   "solver.rtol = '2': expected a number > 0 and < 1"
+bad rebalance-range.yaml 5 "$GRID_1D
+output: {end: 1}
+solver: {rebalance: 1.5}" \
+  "solver.rebalance = '1.5': expected a fraction in [0, 1) or 'none'"
+bad rebalance-word.yaml 5 "$GRID_1D
+output: {end: 1}
+solver: {rebalance: never}" \
+  "solver.rebalance = 'never': expected a fraction in [0, 1) or 'none'"
 bad cell-index.yaml 4 "$GRID_1D
 initial: {type: cell, index: 0, number: 1}
 output: {end: 1}" \

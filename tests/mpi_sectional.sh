@@ -1,7 +1,9 @@
 # gransim run of sectional cases on MPI ranks (built with -DGRANSIM_MPI=ON): each
 # rank owns a contiguous block of compartments; the results must not depend on
 # the number of ranks or threads.  Checks: the seed-000 example (rk) on 1, 2 and
-# 3 ranks (blocks 2+2 and 1+1+2) and on 2 ranks x 2 threads gives the same
+# 3 ranks (blocks 2+2 and 1+1+2), on 2 ranks x 2 threads, and on 2 and 3 ranks
+# with compartments moved between ranks at output times (solver.rebalance)
+# gives the same
 # summary.csv and the same numbers, carried volumes and ledger in result.h5 to
 # 1e-12 relative (they are identical in practice); a 2-D case with the seed's
 # adaptive Euler the same; only rank 0 prints; cvode and more ranks than
@@ -49,6 +51,16 @@ run_rc 0 "${MPI[@]}" -np 3 "$BIN" run "$ex" --out "$WORK/np3" --quiet --threads 
 same_results "$WORK/serial" "$WORK/np3" /carried
 run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2t2" --quiet --threads 2
 same_results "$WORK/serial" "$WORK/np2t2" /carried
+# compartments moved between ranks at output times (solver.rebalance): the
+# integrators carry on with the same steps, so the results stay the same.
+# Moves follow measured times; GRANSIM_TEST_MOVE_COMPARTMENTS makes one at
+# every output time whatever the times, so this does not depend on them.
+for np in 2 3; do
+  run_rc 0 "${MPI[@]}" -np $np -x GRANSIM_TEST_MOVE_COMPARTMENTS=1 "$BIN" run "$ex" --out "$WORK/moved$np" \
+    --quiet --threads 1
+  stderr_has "compartments moved between ranks"
+  same_results "$WORK/serial" "$WORK/moved$np" /carried
+done
 
 # the adaptive Euler of seed 000: one step size agreed by all ranks
 c=$(write_case euler.yaml "title: Euler on ranks (2-D, four compartments, feed, transfer)
@@ -71,6 +83,14 @@ output: {end: 2, count: 5}")
 run_rc 0 "$BIN" run "$c" --out "$WORK/e1" --quiet --threads 1
 run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$c" --out "$WORK/e2" --quiet --threads 1
 same_results "$WORK/e1" "$WORK/e2"
+# Euler carries over too; solver.rebalance: none keeps the blocks even when forced
+run_rc 0 "${MPI[@]}" -np 2 -x GRANSIM_TEST_MOVE_COMPARTMENTS=1 "$BIN" run "$c" --out "$WORK/e2m" --quiet --threads 1
+stderr_has "compartments moved between ranks"
+same_results "$WORK/e1" "$WORK/e2m"
+sed 's/method: euler, safety: 0.05/method: euler, safety: 0.05, rebalance: none/' "$c" >"$WORK/fixed.yaml"
+run_rc 0 "${MPI[@]}" -np 2 -x GRANSIM_TEST_MOVE_COMPARTMENTS=1 "$BIN" run "$WORK/fixed.yaml" --out "$WORK/e2f" --quiet --threads 1
+stderr_lacks "compartments moved between ranks"
+same_results "$WORK/e1" "$WORK/e2f"
 
 # refused: cvode on several ranks; more ranks than compartments
 sed 's/method: euler, safety: 0.05/method: cvode/' "$c" >"$WORK/cvode.yaml"

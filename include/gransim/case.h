@@ -36,6 +36,10 @@ typedef struct gs_case {
   gs_integrator integrator;
   gs_checks checks;
   double checkpoint;   /* output.checkpoint: seconds of wall time between commits */
+  /* solver.rebalance: under MPI, move compartments between ranks at output
+   * times when the measured costs promise a largest block this fraction
+   * cheaper (0: whenever the best split differs; none: never) */
+  double rebalance;
 } gs_case;
 
 /* Read, validate and build a case from a file, or from an already loaded
@@ -64,6 +68,7 @@ typedef struct gs_run_report {
   double wall_seconds;
   double max_balance_error; /* largest relative volume-balance error seen */
   double max_loss;          /* largest fraction of volume lost through boundaries */
+  long rebalanced;          /* under MPI: times the compartments moved between ranks */
 } gs_run_report;
 
 /* Integrate the case over its output times, checking after every output time

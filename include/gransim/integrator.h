@@ -72,6 +72,11 @@ typedef struct gs_integrator_type {
                  gs_error *err);
   void (*get_stats)(const void *self, gs_integrator_stats *stats);
   void (*free)(void *self);
+  /* Optional: carry on where `from` (the same type, any n) stopped, with its
+   * step size and counters, so that an integrator rebuilt on another part
+   * of the state (MPI ranks taking over compartments) takes exactly the
+   * steps the old one would have.  NULL: the type keeps more history. */
+  void (*carry)(void *to, const void *from);
 } gs_integrator_type;
 
 const gs_integrator_type *gs_integrator_lookup(const char *name);

@@ -87,16 +87,19 @@ static int cmd_run(int argc, char **argv) {
   int rc = gs_case_run(&c, &opt, NULL, &rep, &err);
   /* under MPI rank 0 speaks for all; another rank only for its own failure */
   const int rank = gs_parallel_rank();
+  char moved[64] = "";
+  if (!rc && rep.rebalanced)
+    snprintf(moved, sizeof moved, "; compartments moved between ranks %ld times", rep.rebalanced);
   if (rc && rank == 0) fprintf(stderr, "gransim: %s\n", err.msg);
   else if (rc && !strstr(err.msg, "on another MPI rank"))
     fprintf(stderr, "gransim (MPI rank %d): %s\n", rank, err.msg);
   else if (!rc && rank == 0)
     fprintf(stderr,
-            "gransim: %s: done to t = %g in %.3f s (%ld steps, %ld rhs evaluations); results in "
+            "gransim: %s: done to t = %g in %.3f s (%ld steps, %ld rhs evaluations%s); results in "
             "%s/result.h5 and %s/summary.csv; largest volume-balance error %.2g, loss through "
             "grid boundaries %.2g\n",
-            path, rep.t_end, rep.wall_seconds, rep.stats.steps, rep.stats.rhs_evals, out, out,
-            rep.max_balance_error, rep.max_loss);
+            path, rep.t_end, rep.wall_seconds, rep.stats.steps, rep.stats.rhs_evals, moved, out,
+            out, rep.max_balance_error, rep.max_loss);
   gs_case_free(&c);
   return rc ? 1 : 0;
 }

@@ -312,6 +312,11 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
                     gs_model_has_preconditioner(m) ? model_psolve : NULL, model_hold, NULL, 0};
   gs_cfg_node *solver = gs_cfg_get(root, "solver");
   if (solver && gs_cfg_require_kind(solver, GS_CFG_MAP, err)) return GS_EINPUT;
+  c->rebalance = 0.05;
+  gs_cfg_node *rb = solver ? gs_cfg_get(solver, "rebalance") : NULL;
+  if (rb && gs_cfg_scalar(rb) && !strcmp(gs_cfg_scalar(rb), "none")) c->rebalance = -1;
+  else if (rb && (gs_cfg_node_double(rb, &c->rebalance, err) || !(c->rebalance >= 0 && c->rebalance < 1)))
+    return gs_cfg_fail(rb, err, "expected a fraction in [0, 1) or 'none'");
   return gs_integrator_create(solver, &c->ode, &c->integrator, err);
 }
 

@@ -2,6 +2,7 @@
  * (cmake -DGRANSIM_MPI=ON); otherwise one process owns every compartment. */
 #include "pbm/distributed.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -28,7 +29,13 @@ int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err) {
     gs_dist_free(d);
     return GS_ENOMEM;
   }
-  for (int r = 0; r <= d->size; r++) d->lo[r] = ncomp * (size_t)r / (size_t)d->size; /* contiguous, balanced */
+  for (int r = 0; r <= d->size; r++) d->lo[r] = ncomp * (size_t)r / (size_t)d->size; /* contiguous, even */
+  gs_dist_resplit(d, m, d->lo);
+  return GS_OK;
+}
+
+void gs_dist_resplit(gs_dist *d, gs_model *m, const size_t *lo) {
+  if (lo != d->lo) memcpy(d->lo, lo, ((size_t)d->size + 1) * sizeof *lo);
   m->comp_lo = d->lo[d->rank];
   m->comp_hi = d->lo[d->rank + 1];
   /* per compartment: ncells numbers, ncarried * ncells carried, 2 nvol ledger */
@@ -40,7 +47,77 @@ int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err) {
     d->len[s] = (m->comp_hi - m->comp_lo) * unit[s];
     d->nlocal += d->len[s];
   }
-  return GS_OK;
+}
+
+/* Prefix sums P[0..n] of the costs. */
+static void prefix_sums(const double *cost, size_t n, double *P) {
+  P[0] = 0;
+  for (size_t j = 0; j < n; j++) P[j + 1] = P[j] + cost[j];
+}
+
+/* reach[r * (n + 1) + j] = 1 when the first j compartments can go to ranks
+ * 0..r, each taking at least one, rank q's block costing extra[q] plus its
+ * compartments, none above T.  Rank r's block [k, j) fits when k >= the
+ * smallest k with P[j] - P[k] + extra[r] <= T, which grows with j; a count of
+ * the reachable ends of the ranks before makes each test O(1): O(nr n) in
+ * all.  Returns 1 when all n compartments reach the last rank. */
+static int reachable(const double *P, size_t n, const double *extra, int nr, double T,
+                     unsigned char *reach, size_t *count) {
+  const size_t w = n + 1;
+  memset(reach, 0, (size_t)nr * w);
+  for (int r = 0; r < nr; r++) {
+    /* count[k + 1] = reachable ends among 0..k of the ranks before r (for
+     * r = 0: only the empty start, 0) */
+    count[0] = 0;
+    for (size_t k = 0; k <= n; k++)
+      count[k + 1] = count[k] + (r ? reach[(size_t)(r - 1) * w + k] : k == 0);
+    size_t lb = 0;
+    for (size_t j = 1; j <= n; j++) {
+      while (lb < j && P[j] - P[lb] + extra[r] > T) lb++;
+      /* a start k in [lb, j - 1] reachable before */
+      if (lb < j && count[j] > count[lb]) reach[(size_t)r * w + j] = 1;
+    }
+  }
+  return reach[(size_t)(nr - 1) * w + n];
+}
+
+/* Bisection on the largest block's cost with an exact feasibility test,
+ * then the split read back from the reachable ends. */
+double gs_dist_balanced_split(const double *cost, size_t n, const double *extra, int nr,
+                              size_t *lo) {
+  double *P = malloc((n + 1) * sizeof *P);
+  size_t *count = malloc((n + 2) * sizeof *count);
+  unsigned char *reach = malloc((size_t)nr * (n + 1));
+  if (!P || !count || !reach || nr < 1 || (size_t)nr > n) { /* keep an even split */
+    for (int r = 0; r <= nr; r++) lo[r] = n * (size_t)r / (size_t)(nr > 0 ? nr : 1);
+    free(P), free(count), free(reach);
+    return INFINITY;
+  }
+  prefix_sums(cost, n, P);
+  double low = 0, hi = P[n];
+  for (int r = 0; r < nr; r++) hi = fmax(hi, P[n] + extra[r]);
+  for (int it = 0; it < 200 && hi - low > 1e-12 * hi; it++) {
+    double mid = 0.5 * (low + hi);
+    if (reachable(P, n, extra, nr, mid, reach, count)) hi = mid;
+    else low = mid;
+  }
+  reachable(P, n, extra, nr, hi, reach, count);
+  /* back from the end: rank r's block [k, j) with k reachable by rank r - 1 */
+  const size_t w = n + 1;
+  size_t j = n;
+  double worst = 0;
+  lo[nr] = n;
+  for (int r = nr - 1; r >= 0; r--) {
+    size_t k = j - 1;
+    if (r == 0) k = 0;
+    else
+      while (k > 0 && !(reach[(size_t)(r - 1) * w + k] && P[j] - P[k] + extra[r] <= hi)) k--;
+    worst = fmax(worst, P[j] - P[k] + extra[r]);
+    lo[r] = k;
+    j = k;
+  }
+  free(P), free(count), free(reach);
+  return worst;
 }
 
 void gs_dist_pack(const gs_dist *d, const double *full, double *local) {

@@ -24,8 +24,18 @@ typedef struct {
   double *sendbuf, *recvbuf; /* one compartment's numbers and carried totals */
 } gs_dist;
 
-/* Split the compartments of m over the ranks and set m's comp_lo/comp_hi. */
+/* Split the compartments of m evenly over the ranks and set m's
+ * comp_lo/comp_hi. */
 int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err);
+/* Another split: rank r owns [lo[r], lo[r + 1]) (size + 1 entries). */
+void gs_dist_resplit(gs_dist *d, gs_model *m, const size_t *lo);
+/* The contiguous split of n compartments of the given costs over nr <= n
+ * ranks (lo: nr + 1 entries) that makes the largest block cheapest, block r
+ * costing extra[r] (work of that rank alone, such as rank 0's outputs) plus
+ * its compartments, each rank with at least one compartment; returns that
+ * largest block's cost. */
+double gs_dist_balanced_split(const double *cost, size_t n, const double *extra, int nr,
+                              size_t *lo);
 void gs_dist_free(gs_dist *d);
 /* This rank's parts of a full vector <-> the packed local vector. */
 void gs_dist_pack(const gs_dist *d, const double *full, double *local);

@@ -173,6 +173,14 @@ static void gs_euler_stats(const void *vself, gs_integrator_stats *stats) {
   *stats = self->stats;
 }
 
+static void gs_euler_carry(void *vto, const void *vfrom) {
+  gs_euler *to = vto;
+  const gs_euler *from = vfrom;
+  to->dt = from->dt;
+  to->dt_min = from->dt_min;
+  to->stats = from->stats;
+}
+
 const gs_integrator_type gs_integrator_euler = {
     "euler", "adaptive explicit Euler of seed 000, dt kept below safety / max(-f_i / y_i)",
-    gs_euler_create, gs_euler_advance, gs_euler_stats, gs_euler_free};
+    gs_euler_create, gs_euler_advance, gs_euler_stats, gs_euler_free, gs_euler_carry};

@@ -345,6 +345,16 @@ static void gs_rk_stats(const void *vself, gs_integrator_stats *stats) {
   *stats = self->stats;
 }
 
+/* GSL's explicit steppers and this controller keep nothing between steps
+ * (evolve evaluates f at the start of each one), so h and the counters are
+ * the whole state. */
+static void gs_rk_carry(void *vto, const void *vfrom) {
+  gs_rk *to = vto;
+  const gs_rk *from = vfrom;
+  to->h = from->h;
+  to->stats = from->stats;
+}
+
 const gs_integrator_type gs_integrator_rk = {
     "rk", "adaptive embedded Runge-Kutta from GSL, variant rkf45 | rkck | rk8pd",
-    gs_rk_create, gs_rk_advance, gs_rk_stats, gs_rk_free};
+    gs_rk_create, gs_rk_advance, gs_rk_stats, gs_rk_free, gs_rk_carry};

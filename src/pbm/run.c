@@ -36,6 +36,11 @@ typedef struct {
   size_t bad_index; /* in the full vector */
   int bad;
   double t_rhs, t_exchange; /* seconds in the model's rates, and in the MPI boundary exchange */
+  double t_written;         /* seconds in the result files at output times (rank 0) */
+  /* rebalancing (MPI): rates and output seconds at the last one, the
+   * estimated cost of every compartment, moves taken */
+  double rhs_mark, written_mark, *comp_cost;
+  long rebalanced, moves_tried; /* moves_tried: GRANSIM_TEST_MOVE_COMPARTMENTS only */
 } guard_t;
 
 static double now_seconds(void) {
@@ -140,7 +145,7 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
   s->local = d;
   s->yl = gs_malloc(d->nlocal * sizeof(double), err);
   s->scale = gs_malloc(d->nlocal * sizeof(double), err);
-  guard->F = gs_malloc(c->ode.n * sizeof(double), err);
+  if (!guard->F) guard->F = gs_malloc(c->ode.n * sizeof(double), err);
   if (!s->yl || !s->scale || !guard->F) return GS_ENOMEM;
   gs_dist_pack(d, c->abs_scale, s->scale);
   /* numbers and carried volumes come first in the packed vector too */
@@ -270,6 +275,70 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
   return GS_OK;
 }
 
+/* Under MPI, at an output time (every rank holds the whole state).  Each
+ * rank's right-hand-side seconds since the last call are shared over its
+ * compartments in proportion to their previous estimates (at first evenly),
+ * so the estimates learn the shape of the costs as compartments move; rank
+ * 0's seconds writing results count as work of rank 0 alone.  When the best
+ * contiguous split for those costs promises a slowest rank at least
+ * c->rebalance cheaper than the measured one, the ranks take it and rebuild
+ * their integrators, which carry on with the old step size and counters
+ * (gs_integrator_type.carry): not a single step changes, so the results are
+ * the same for any split. */
+static int rebalance(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, gs_error *err) {
+  const size_t ncomp = c->model.grid.ncomp;
+  const int nr = d->size;
+  if (c->rebalance < 0 || !s->it->type->carry) return GS_OK;
+  if (!g->comp_cost) {
+    if (!(g->comp_cost = gs_malloc(ncomp * sizeof(double), err))) return GS_ENOMEM;
+    for (size_t j = 0; j < ncomp; j++) g->comp_cost[j] = 1.0;
+  }
+  double *spent = gs_calloc(2 * (size_t)nr, sizeof(double), err); /* rates, then writing */
+  size_t *lo = gs_malloc(((size_t)nr + 1) * sizeof(size_t), err);
+  if (!spent || !lo) {
+    free(spent);
+    free(lo);
+    return GS_ENOMEM;
+  }
+  spent[d->rank] = g->t_rhs - g->rhs_mark;
+  spent[nr + d->rank] = g->t_written - g->written_mark;
+  g->rhs_mark = g->t_rhs;
+  g->written_mark = g->t_written;
+  gs_parallel_sum(spent, 2 * (size_t)nr); /* the same numbers on every rank: the same decision */
+  double slowest = 0;
+  for (int r = 0; r < nr; r++) {
+    double before = 0;
+    for (size_t j = d->lo[r]; j < d->lo[r + 1]; j++) before += g->comp_cost[j];
+    for (size_t j = d->lo[r]; j < d->lo[r + 1]; j++)
+      g->comp_cost[j] = before > 0 ? spent[r] * g->comp_cost[j] / before
+                                   : spent[r] / (double)(d->lo[r + 1] - d->lo[r]);
+    slowest = fmax(slowest, spent[r] + spent[nr + r]);
+  }
+  double largest = gs_dist_balanced_split(g->comp_cost, ncomp, spent + nr, nr, lo);
+  if (getenv("GRANSIM_TEST_MOVE_COMPARTMENTS")) {
+    /* tests only: a move at every output time whatever the costs, one
+     * block boundary after the other, so that tests/mpi_sectional.sh can
+     * check that moves change no result without depending on timings */
+    memcpy(lo, d->lo, ((size_t)nr + 1) * sizeof *lo);
+    int b = 1 + (int)(g->moves_tried++ % (long)(nr - 1));
+    if (lo[b] - lo[b - 1] > 1) lo[b]--;
+    else if (lo[b + 1] - lo[b] > 1) lo[b]++;
+    largest = -1; /* take it */
+  }
+  int rc = GS_OK;
+  if (memcmp(lo, d->lo, ((size_t)nr + 1) * sizeof *lo) && largest < (1 - c->rebalance) * slowest) {
+    stepper_t old = *s; /* old.own is the old integrator (old.it points into *s) */
+    gs_dist_resplit(d, &c->model, lo);
+    rc = stepper_init(s, c, d, g, err);
+    if (!rc) s->it->type->carry(s->it->self, old.own.self);
+    stepper_free(&old);
+    g->rebalanced++;
+  }
+  free(spent);
+  free(lo);
+  return rc;
+}
+
 /* --timings: each rank's seconds per phase, summed into one table that rank
  * 0 prints (phases: integration = advance minus rates and exchange, i.e.
  * the integrator's own vector work, packing and rate checks). */
@@ -346,7 +415,11 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   if (!rc) rc = check_state(c, Y, M1_0, t, &ymax_seen, &rep, err);
   if (!rc && out && !(opt && opt->resume)) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
   rc = agree(&dist, rc, err);
-  guard_t guard = {c, &dist, Y, NULL, 0, 0, 0, 0, 0};
+  guard_t guard;
+  memset(&guard, 0, sizeof guard);
+  guard.c = c;
+  guard.dist = &dist;
+  guard.Y = Y;
   double phase[PH_N] = {0};
   stepper_t step;
   memset(&step, 0, sizeof step);
@@ -375,8 +448,12 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     /* integrator failures are agreed already; gather only a good state */
     if (!rc) rc = gs_dist_gather(&dist, Y, err);
     if (!rc) rc = check_state(c, Y, M1_0, t, &ymax_seen, &rep, err);
+    const double write_start = now_seconds();
     if (!rc && out) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
+    guard.t_written += now_seconds() - write_start;
     rc = agree(&dist, rc, err);
+    if (!rc && dist.size > 1 && i + 1 < c->ntimes)
+      rc = agree(&dist, rebalance(c, &dist, &step, &guard, err), err);
     phase[PH_OUTPUTS] += now_seconds() - outputs_start;
     step.it->type->get_stats(step.it->self, &st);
     if (show) progress(c, t, t_end, &st, now_seconds() - start);
@@ -399,11 +476,13 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   if (opt && opt->timings) print_timings(&dist, phase);
   stepper_free(&step);
   free(guard.F);
+  free(guard.comp_cost);
   m->comp_lo = 0; /* the model is whole again for whoever uses it next */
   m->comp_hi = g->ncomp;
   gs_dist_free(&dist);
   rep.t_end = t;
   rep.stats = st;
+  rep.rebalanced = guard.rebalanced;
   rep.wall_seconds = now_seconds() - start;
   if (yout) memcpy(yout, Y, n * sizeof(double));
   if (rep_out) *rep_out = rep;

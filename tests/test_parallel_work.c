@@ -1,0 +1,109 @@
+/* How work is shared between MPI ranks and OpenMP threads:
+ *  - gs_dist_balanced_split (src/pbm/distributed.c), the contiguous split of
+ *    compartments over ranks used when rebalancing: on 4,000 random cases
+ *    (up to 9 compartments, 1-4 ranks, a fixed extra cost on some ranks) the
+ *    split it returns is valid (contiguous, every rank at least one
+ *    compartment), its largest block costs what it reports, and that is the
+ *    optimum found by trying every split;
+ *  - gs_threads_for: one thread below the work threshold and inside a
+ *    parallel region, OpenMP's team size otherwise. */
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "gransim/threads.h"
+#include "pbm/distributed.h"
+
+/* Cost of the largest block of split lo. */
+static double largest_block(const double *cost, size_t n, const double *extra, int nr,
+                            const size_t *lo) {
+  double worst = 0;
+  for (int r = 0; r < nr; r++) {
+    double s = extra[r];
+    for (size_t j = lo[r]; j < lo[r + 1]; j++) s += cost[j];
+    if (s > worst) worst = s;
+  }
+  (void)n;
+  return worst;
+}
+
+/* The best largest block over every split with non-empty blocks: the
+ * boundaries lo[1] < ... < lo[nr-1] tried in lexicographic order. */
+static double brute_force(const double *cost, size_t n, const double *extra, int nr) {
+  size_t lo[8];
+  lo[0] = 0;
+  lo[nr] = n;
+  for (int r = 1; r < nr; r++) lo[r] = (size_t)r;
+  double best = INFINITY;
+  for (;;) {
+    double v = largest_block(cost, n, extra, nr, lo);
+    if (v < best) best = v;
+    int r = nr - 1;
+    while (r >= 1 && lo[r] == n - (size_t)(nr - r)) r--;
+    if (r < 1) break;
+    lo[r]++;
+    for (int k = r + 1; k < nr; k++) lo[k] = lo[k - 1] + 1;
+  }
+  return best;
+}
+
+static double uniform(unsigned *s) {
+  *s = *s * 1664525u + 1013904223u;
+  return (double)(*s >> 8) / 16777216.0;
+}
+
+static void split_is_optimal(void) {
+  unsigned seed = 12345;
+  int bad = 0;
+  for (int trial = 0; trial < 4000; trial++) {
+    size_t n = 1 + (size_t)(uniform(&seed) * 9);
+    int nr = 1 + (int)(uniform(&seed) * 4);
+    if ((size_t)nr > n) nr = (int)n;
+    double cost[9], extra[4];
+    for (size_t j = 0; j < n; j++) cost[j] = 0.1 + uniform(&seed);
+    for (int r = 0; r < nr; r++) extra[r] = uniform(&seed) < 0.5 ? 0.0 : 2 * uniform(&seed);
+    size_t lo[5];
+    double got = gs_dist_balanced_split(cost, n, extra, nr, lo);
+    int valid = lo[0] == 0 && lo[nr] == n;
+    for (int r = 0; r < nr; r++) valid = valid && lo[r] < lo[r + 1];
+    CHECK(valid);
+    if (!valid) continue;
+    double actual = largest_block(cost, n, extra, nr, lo), best = brute_force(cost, n, extra, nr);
+    if (fabs(got - actual) > 1e-12 * actual || actual > best * (1 + 1e-9)) {
+      if (bad++ < 5)
+        fprintf(stderr, "trial %d: n %zu ranks %d: split gives %.15g (reported %.15g), best %.15g\n",
+                trial, n, nr, actual, got, best);
+    }
+  }
+  CHECK(bad == 0);
+  /* the seed-000 example's shape: costs growing downstream, rank 0 writing */
+  const double cost[4] = {16, 20.5, 21.2, 21.3}, extra[2] = {10, 0};
+  size_t lo[3];
+  CHECK_REL(gs_dist_balanced_split(cost, 4, extra, 2, lo), 46.5, 1e-12);
+  CHECK(lo[1] == 2);
+  const double none[2] = {0, 0};
+  CHECK_REL(gs_dist_balanced_split(cost, 4, none, 2, lo), 42.5, 1e-12);
+  CHECK(lo[1] == 2);
+}
+
+static void threads_for(void) {
+  omp_set_num_threads(2);
+  CHECK(gs_threads_for(10, 100) == 1);
+  CHECK(gs_threads_for(100, 100) == 2);
+  int inner = 0;
+#pragma omp parallel num_threads(2)
+  {
+#pragma omp single
+    inner = gs_threads_for(1000, 1);
+  }
+  CHECK(inner == 1);
+  omp_set_num_threads(1);
+  CHECK(gs_threads_for(1000, 1) == 1);
+}
+
+int main(void) {
+  split_is_optimal();
+  threads_for();
+  TEST_EXIT();
+}
