@@ -14,6 +14,7 @@
 
 #include "gransim/pbm.h"
 #include "gransim/threads.h"
+#include "pbm/sums.h"
 
 enum { SPRAY, PORE_CONSOLIDATION };
 
@@ -87,8 +88,7 @@ static void spray_compartment(const carried_t *C, const gs_model *m, const doubl
                               double *dydt, double *dledger, size_t comp) {
   const gs_grid *g = &m->grid;
   const double *N = y + comp * g->ncells;
-  double solid = 0;
-  for (size_t c = 0; c < g->ncells; c++) solid += N[c] * g->volume[c];
+  const double solid = gs_dot_strided(N, g->volume, 1, g->ncells);
   if (!(solid > 0) || C->q[comp] == 0.0) return;
   double per = C->q[comp] / solid, *dL = gs_model_carried(m, dydt, comp, C->liquid);
   for (size_t c = 0; c < g->ncells; c++) dL[c] += per * N[c] * g->volume[c];

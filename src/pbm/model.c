@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "gransim/pbm.h"
+#include "pbm/sums.h"
 
 extern const gs_mech_type gs_mech_aggregation, gs_mech_breakage, gs_mech_growth,
     gs_mech_liquid_addition, gs_mech_consolidation, gs_mech_feed, gs_mech_transfer, gs_mech_spray,
@@ -70,15 +71,9 @@ const char *gs_model_vol_name(const gs_model *m, int k) {
 
 double gs_model_held(const gs_model *m, const double *y, size_t comp, int k) {
   const gs_grid *g = &m->grid;
-  double held = 0;
-  if (k < g->dim) {
-    const double *N = y + comp * g->ncells;
-    for (size_t c = 0; c < g->ncells; c++) held += N[c] * g->x[c * (size_t)g->dim + (size_t)k];
-  } else {
-    const double *Q = gs_model_carried_c(m, y, comp, k - g->dim);
-    for (size_t c = 0; c < g->ncells; c++) held += Q[c];
-  }
-  return held;
+  if (k < g->dim)
+    return gs_dot_strided(y + comp * g->ncells, g->x + k, (size_t)g->dim, g->ncells);
+  return gs_sum(gs_model_carried_c(m, y, comp, k - g->dim), g->ncells);
 }
 
 int gs_model_add_mechanism(gs_model *m, const char *type, gs_cfg_node *node, const char *label,

@@ -19,6 +19,7 @@
 #include "gransim/distribution.h"
 #include "gransim/pbm.h"
 #include "gransim/threads.h"
+#include "pbm/sums.h"
 
 typedef struct {
   size_t comp;
@@ -154,36 +155,33 @@ static int transfer_create(gs_cfg_node *node, const gs_model *m, void **self, gs
   return GS_OK;
 }
 
+/* Rates sign * k * v[c] added to dst (sign -1: what leaves, +1: what comes in). */
+static void add_scaled(double *restrict dst, const double *restrict v, double f, size_t n) {
+  for (size_t c = 0; c < n; c++) dst[c] += f * v[c];
+}
+
 /* Compartment comp's rates and ledger: what leaves it, and what comes in
  * from the one before.  It writes only its own entries, so compartments can
  * run in parallel. */
 static void transfer_compartment(const transfer_t *T, const gs_model *m, const double *y,
                                  double *dydt, double *dledger, size_t comp) {
   const gs_grid *g = &m->grid;
-  const size_t n = g->ncells;
-  double *d = dydt + comp * n, moved_out[GS_MAX_VOL] = {0}, moved_in[GS_MAX_VOL] = {0};
+  const size_t n = g->ncells, dim = (size_t)g->dim;
+  double *ledger = gs_model_ledger(m, dledger, comp);
   for (int from = comp > 0 ? -1 : 0; from <= 0; from++) { /* -1: inflow from comp - 1 */
     const size_t sc = from == 0 ? comp : comp - 1;        /* source compartment */
     const double k = T->k[sc], sign = from == 0 ? -1.0 : 1.0;
-    double *moved = from == 0 ? moved_out : moved_in;
     const double *N = y + sc * n;
-    for (size_t c = 0; c < n; c++) {
-      double r = k * N[c];
-      d[c] += sign * r;
-      for (int a = 0; a < g->dim; a++) moved[a] += r * g->x[c * (size_t)g->dim + (size_t)a];
-    }
+    double moved[GS_MAX_VOL];
+    add_scaled(dydt + comp * n, N, sign * k, n);
+    for (size_t a = 0; a < dim; a++) moved[a] = k * gs_dot_strided(N, g->x + a, dim, n);
     for (int q = 0; q < m->ncarried; q++) {
       const double *Q = gs_model_carried_c(m, y, sc, q);
-      double *dq = gs_model_carried(m, dydt, comp, q);
-      for (size_t c = 0; c < n; c++) {
-        double r = k * Q[c];
-        dq[c] += sign * r;
-        moved[g->dim + q] += r;
-      }
+      add_scaled(gs_model_carried(m, dydt, comp, q), Q, sign * k, n);
+      moved[dim + (size_t)q] = k * gs_sum(Q, n);
     }
+    for (int a = 0; a < m->nvol; a++) ledger[a] += sign * moved[a];
   }
-  double *ledger = gs_model_ledger(m, dledger, comp);
-  for (int a = 0; a < m->nvol; a++) ledger[a] += moved_in[a] - moved_out[a];
 }
 
 static void transfer_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
