@@ -45,6 +45,11 @@ run_rc 0 "$BIN" run "$ex" --out "$WORK/serial" --quiet --threads 1
 run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2" --quiet --threads 1 --timings
 stderr_has "done to t = 85"
 [ "$(grep -cE '^  [01] ' "$WORK/stderr")" = 2 ] || { show_output; fail "--timings on 2 ranks: expected a row per rank"; }
+# the blocks at the end: contiguous, from compartment 1 to 4
+awk '/^  [01] / { split($7, b, "-"); lo = b[1]; hi = (2 in b) ? b[2] : b[1]
+                  if (lo != next_lo) bad = 1; next_lo = hi + 1 }
+     BEGIN { next_lo = 1 } END { exit bad || next_lo != 5 }' "$WORK/stderr" ||
+  { show_output; fail "--timings on 2 ranks: the compartments of the ranks are not 1-4 in contiguous blocks"; }
 [ "$(grep -c 'done to t' "$WORK/stderr")" = 1 ] || { show_output; fail "expected one final message (rank 0's) on 2 ranks"; }
 same_results "$WORK/serial" "$WORK/np2" /carried
 run_rc 0 "${MPI[@]}" -np 3 "$BIN" run "$ex" --out "$WORK/np3" --quiet --threads 1

@@ -45,7 +45,8 @@ static int cmd_run(int argc, char **argv) {
              "only when the run succeeds.  --resume continues a killed run from the partial\n"
              "files in DIR.  --threads sets the OpenMP threads (default: OMP_NUM_THREADS or all).\n"
              "--timings prints, at the end, the seconds each MPI rank spent in the rates, the\n"
-             "exchange between ranks, the integrator's own work, the outputs and the final write.\n");
+             "exchange between ranks, the integrator's own work, the outputs and the final write,\n"
+             "and the compartments it held at the end (they move to balance the ranks).\n");
       return 0;
     } else if (!strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
     else if (!strcmp(argv[i], "--resume")) opt.resume = 1;
@@ -89,7 +90,8 @@ static int cmd_run(int argc, char **argv) {
   const int rank = gs_parallel_rank();
   char moved[64] = "";
   if (!rc && rep.rebalanced)
-    snprintf(moved, sizeof moved, "; compartments moved between ranks %ld times", rep.rebalanced);
+    snprintf(moved, sizeof moved, "; compartments moved between ranks %ld time%s", rep.rebalanced,
+             rep.rebalanced == 1 ? "" : "s");
   if (rc && rank == 0) fprintf(stderr, "gransim: %s\n", err.msg);
   else if (rc && !strstr(err.msg, "on another MPI rank"))
     fprintf(stderr, "gransim (MPI rank %d): %s\n", rank, err.msg);

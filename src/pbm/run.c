@@ -351,12 +351,16 @@ static void print_timings(const gs_dist *d, const double *mine) {
   memcpy(all + (size_t)d->rank * PH_N, mine, PH_N * sizeof *mine);
   if (d->size > 1) gs_parallel_sum(all, n); /* zeros elsewhere: exact */
   if (d->rank == 0) {
-    fprintf(stderr, "gransim: where the time went (s)\n  %-5s %-12s %-9s %-11s %-8s %s\n", "rank",
-            "rates (RHS)", "exchange", "integrator", "outputs", "final write");
+    fprintf(stderr, "gransim: where the time went (s)\n  %-5s %-12s %-9s %-11s %-8s %-12s %s\n",
+            "rank", "rates (RHS)", "exchange", "integrator", "outputs", "final write",
+            "compartments at the end");
     for (int r = 0; r < d->size; r++) {
       const double *x = all + (size_t)r * PH_N;
-      fprintf(stderr, "  %-5d %-12.4f %-9.4f %-11.4f %-8.4f %.4f\n", r, x[PH_RHS], x[PH_EXCHANGE],
-              x[PH_INTEGRATOR], x[PH_OUTPUTS], x[PH_FINISH]);
+      char comps[48];
+      snprintf(comps, sizeof comps, d->lo[r + 1] - d->lo[r] > 1 ? "%zu-%zu" : "%zu", d->lo[r] + 1,
+               d->lo[r + 1]);
+      fprintf(stderr, "  %-5d %-12.4f %-9.4f %-11.4f %-8.4f %-12.4f %s\n", r, x[PH_RHS],
+              x[PH_EXCHANGE], x[PH_INTEGRATOR], x[PH_OUTPUTS], x[PH_FINISH], comps);
     }
   }
   free(all);
