@@ -506,7 +506,7 @@ static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
     int tid = omp_get_thread_num();
     acc[tid] = thread_acc(A, tid);
     acc[tid].pcar = pcar;
-#pragma omp for schedule(dynamic, 8)
+#pragma omp for schedule(static, 8)
     for (size_t a = 0; a < A->ncells; a++) {
       const size_t r = a / A->n[2], i = a % A->n[2];
       if (N[a] != 0.0 && i >= span[2 * r] && i < span[2 * r + 1])
