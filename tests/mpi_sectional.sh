@@ -67,6 +67,33 @@ for np in 2 3; do
   same_results "$WORK/serial" "$WORK/moved$np" /carried
 done
 
+# Threads on ranks with moves: sixteen 24 x 24 compartments (9216 cells), so
+# threads take whole compartments whatever a rank's block after a move (the
+# choice once depended on the block: a block of 7 switched to the shared
+# pair loop and changed the last bits); the same numbers bit for bit as one
+# process on one thread.
+c16=$(write_case sixteen.yaml "title: threads and moves (2-D, sixteen compartments)
+grid:
+  compartments: 16
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 24, zero_first: true}
+    - {name: liquid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 24, zero_first: true}
+initial: {type: exponential, number: 1, mean: [0.1, 0.05]}
+mechanisms:
+  - type: aggregation
+    kernel: {type: sum, beta0: 0.5}
+  - type: transfer
+    rate: 1
+output: {end: 0.5, count: 6}")
+run_rc 0 "$BIN" run "$c16" --out "$WORK/s1" --quiet --threads 1
+run_rc 0 "${MPI[@]}" -np 2 --bind-to none -x GRANSIM_TEST_MOVE_COMPARTMENTS=1 "$BIN" run "$c16" \
+  --out "$WORK/s2" --quiet --threads 2
+stderr_has "compartments moved between ranks"
+for ds in /number /ledger; do
+  h5diff "$WORK/s1/result.h5" "$WORK/s2/result.h5" "$ds" >"$WORK/h5diff.out" ||
+    { cat "$WORK/h5diff.out" >&2; fail "threads on moving ranks changed $ds"; }
+done
+
 # the adaptive Euler of seed 000: one step size agreed by all ranks
 c=$(write_case euler.yaml "title: Euler on ranks (2-D, four compartments, feed, transfer)
 grid:

@@ -643,10 +643,14 @@ static void agg_rates(agg_t *A, const gs_model *m, double t, const double *y, do
                       double *dledger, double *birth, double *death) {
   acc_t acc[A->nthreads > 0 ? A->nthreads : 1];
   const size_t lo = m->comp_lo, hi = m->comp_hi;
-  /* threads take whole compartments only when there are enough cells: two
-   * threads made the seed-000 example (4 x 256 cells) 15-50 % slower here,
-   * the region and the uneven compartments costing more than they save */
-  if (hi - lo > 1 && A->nthreads > 1 && gs_threads_for(A->ncells * (hi - lo), 4096) > 1) {
+  /* Threads take whole compartments only when the case has enough cells:
+   * two threads made the seed-000 example (4 x 256 cells) 15-50 % slower
+   * here, the region and the uneven compartments costing more than they
+   * save.  The choice depends on the whole case, not on this MPI rank's
+   * block, so that moving compartments between ranks never switches a
+   * compartment between this path (its sums in one thread, as in one
+   * process) and the shared pair loop (sums added in another order). */
+  if (A->ncomp > 1 && A->nthreads > 1 && gs_threads_for(A->ncells * A->ncomp, 4096) > 1) {
 #pragma omp parallel for schedule(dynamic, 1)
     for (size_t comp = lo; comp < hi; comp++)
       compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, omp_get_thread_num());
