@@ -27,8 +27,11 @@ void gs_parallel_init(int *argc, char ***argv) {
    * rendezvous with a single-copy system call: a 16 x 16 compartment's
    * numbers and carried volumes (6 KiB) took 7 µs to exchange on the
    * project's VM, against 2 µs sent eagerly.  Compartments of up to 32 KiB go
-   * eagerly unless the user set the limit (other MPIs ignore the variable). */
+   * eagerly unless the user set the limit in the environment (a value in an
+   * MCA parameter file is overridden; other MPIs ignore the variables; Open
+   * MPI 5 calls the transport "sm"). */
   setenv("OMPI_MCA_btl_vader_eager_limit", "32768", 0);
+  setenv("OMPI_MCA_btl_sm_eager_limit", "32768", 0);
   int provided;
   /* threads inside a rank never call MPI */
   MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);

@@ -22,10 +22,12 @@ int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err) {
     return gs_error_set(err, GS_EINPUT, "%d MPI ranks for %zu compartments: use at most one rank per compartment",
                         d->size, ncomp);
   d->lo = gs_malloc(((size_t)d->size + 1) * sizeof(size_t), err);
-  const size_t comp_len = (1 + (size_t)m->ncarried) * m->grid.ncells;
-  d->sendbuf = gs_malloc(comp_len * sizeof(double), err);
-  d->recvbuf = gs_malloc(comp_len * sizeof(double), err);
-  if (!d->lo || !d->sendbuf || !d->recvbuf) {
+  if (d->size > 1) { /* the boundary exchange's buffers */
+    const size_t comp_len = (1 + (size_t)m->ncarried) * m->grid.ncells;
+    d->sendbuf = gs_malloc(comp_len * sizeof(double), err);
+    d->recvbuf = gs_malloc(comp_len * sizeof(double), err);
+  }
+  if (!d->lo || (d->size > 1 && (!d->sendbuf || !d->recvbuf))) {
     gs_dist_free(d);
     return GS_ENOMEM;
   }

@@ -345,9 +345,10 @@ static void gs_rk_stats(const void *vself, gs_integrator_stats *stats) {
   *stats = self->stats;
 }
 
-/* GSL's explicit steppers and this controller keep nothing between steps
- * (evolve evaluates f at the start of each one), so h and the counters are
- * the whole state. */
+/* Besides h and the counters, GSL's evolve keeps only f at the end of the
+ * last step (reused as the next step's first stage); a fresh evolve
+ * evaluates it again at the same (t, y), which gives the same numbers, so
+ * the steps are the same and only the count of evaluations grows by one. */
 static void gs_rk_carry(void *vto, const void *vfrom) {
   gs_rk *to = vto;
   const gs_rk *from = vfrom;
