@@ -28,7 +28,9 @@
  * The small series are kept in memory until the commit (one write of several
  * rows each); the large ones (/number, /carried), chunked by single rows,
  * are written chunk by chunk as they come and become part of the file only
- * when "ntimes" covers them. */
+ * when "ntimes" covers them.  Their raw chunks go to new file space; the
+ * metadata cache does not evict (h5_open), so the chunk index and extents
+ * reach the disk only at the flushes of a commit, as in rule 1. */
 #include "gransim/output.h"
 
 #include <errno.h>
@@ -536,7 +538,25 @@ static void output_discard(gs_output *o) {
  * case text attribute exceed 64 KiB (dense attribute storage). */
 static hid_t h5_open(const char *path, int create) {
   hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), f = H5I_INVALID_HID;
-  if (fapl >= 0 && H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18) >= 0)
+  herr_t st = fapl >= 0 ? H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18) : -1;
+  if (st >= 0 && create) {
+    /* Dirty metadata reaches the disk only at flushes: with evictions the
+     * cache may write a chunk index node between two commits (the large
+     * series are written row by row), and a kill there could break rows
+     * already committed.  The cache then grows with the metadata until the
+     * next flush, a few bytes per chunk. */
+    H5AC_cache_config_t mdc;
+    mdc.version = H5AC__CURR_CACHE_CONFIG_VERSION;
+    st = H5Pget_mdc_config(fapl, &mdc);
+    if (st >= 0) {
+      mdc.evictions_enabled = 0;
+      mdc.incr_mode = H5C_incr__off;
+      mdc.flash_incr_mode = H5C_flash_incr__off;
+      mdc.decr_mode = H5C_decr__off;
+      st = H5Pset_mdc_config(fapl, &mdc);
+    }
+  }
+  if (st >= 0)
     f = create ? H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)
                : H5Fopen(path, H5F_ACC_RDONLY, fapl);
   if (fapl >= 0) H5Pclose(fapl);
