@@ -82,6 +82,17 @@ GRID_1D='grid:
   axes:
     - {name: solid, type: linear, min: 0, max: 10, cells: 20}'
 
+# grid_2d COMPARTMENTS CELLS [RATIO]: the grid section of the 2-D test cases,
+# geometric solid and liquid axes from 1e-3 (ratio 1.6 unless given).
+grid_2d() {
+  printf 'grid:\n  compartments: %s\n  axes:\n' "$1"
+  local axis
+  for axis in solid liquid; do
+    printf '    - {name: %s, type: geometric, min: 1.0e-3, ratio: %s, cells: %s, zero_first: true}\n' \
+      "$axis" "${3:-1.6}" "$2"
+  done
+}
+
 # write_case NAME TEXT: writes $WORK/NAME and prints its path.
 write_case() {
   printf '%s\n' "$2" >"$WORK/$1"

@@ -4,11 +4,7 @@
 source "$(dirname "$0")/cli-lib.sh" "$@"
 
 c=$(write_case threads.yaml "title: threads test (2-D, two compartments, both redistributions)
-grid:
-  compartments: 2
-  axes:
-    - {name: solid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 24, zero_first: true}
-    - {name: liquid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 24, zero_first: true}
+$(grid_2d 2 24)
 initial: {type: exponential, number: 1, mean: [0.1, 0.05]}
 mechanisms:
   - type: aggregation

@@ -73,11 +73,7 @@ done
 # pair loop and changed the last bits); the same numbers bit for bit as one
 # process on one thread.
 c16=$(write_case sixteen.yaml "title: threads and moves (2-D, sixteen compartments)
-grid:
-  compartments: 16
-  axes:
-    - {name: solid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 24, zero_first: true}
-    - {name: liquid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 24, zero_first: true}
+$(grid_2d 16 24)
 initial: {type: exponential, number: 1, mean: [0.1, 0.05]}
 mechanisms:
   - type: aggregation
@@ -96,11 +92,7 @@ done
 
 # the adaptive Euler of seed 000: one step size agreed by all ranks
 c=$(write_case euler.yaml "title: Euler on ranks (2-D, four compartments, feed, transfer)
-grid:
-  compartments: 4
-  axes:
-    - {name: solid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 20, zero_first: true}
-    - {name: liquid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 20, zero_first: true}
+$(grid_2d 4 20)
 initial: {type: exponential, number: 1, mean: [0.05, 0.02]}
 mechanisms:
   - type: feed
