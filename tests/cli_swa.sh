@@ -97,4 +97,11 @@ for d in /sieve/edges /sieve/mass_fraction /sieve/mass_fraction_ci; do
   grep -q "^$d " "$WORK/h5" || fail "twin-screw result.h5 lacks $d"
 done
 
+# a result file that cannot grow (as on a full disk): exit 1 with the cause,
+# no result files; HDF5's exit handler had crashed on the half-closed file
+# (status 139).  SIGXFSZ ignored: the write fails instead of killing the process
+run_rc 1 bash -c 'trap "" XFSZ; ulimit -f 20; exec "$0" "$@"' "$BIN" run "$SRC/examples/twin-screw.yaml" --out "$WORK/full" --quiet
+stderr_has "cannot write $WORK/full/.result.h5.partial: file write failed: File too large"
+no_result_files "$WORK/full"
+
 echo "cli_swa: ok"

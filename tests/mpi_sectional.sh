@@ -5,11 +5,14 @@
 # with compartments moved between ranks at output times (solver.rebalance)
 # gives the same
 # summary.csv and the same numbers, carried volumes and ledger in result.h5 to
-# 1e-12 relative (they are identical in practice); a 2-D case with the seed's
+# 1e-12 relative (they are identical in practice; on 2 ranks, where rank 0
+# writes while it waits, the whole result.h5 and summary.csv are checked
+# identical to the serial run's); a 2-D case with the seed's
 # adaptive Euler the same; only rank 0 prints; cvode and more ranks than
 # compartments are refused with a message; an Euler step that goes negative on
 # rank 1 only stops every rank with status 1 and rank 1's message, without
-# hanging; so does a non-finite rate on rank 1 only under rk.
+# hanging; so does a non-finite rate on rank 1 only under rk, and a result
+# file that cannot grow (rank 0's writes fail mid-run).
 #
 # Usage: bash mpi_sectional.sh GRANSIM_BINARY SOURCE_DIR MPIEXEC [MPIEXEC_OPTIONS...]
 source "$(dirname "$0")/cli-lib.sh" "$1" "$2"
@@ -46,12 +49,20 @@ run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2" --quiet --threads 
 stderr_has "done to t = 85"
 [ "$(grep -cE '^  [01] ' "$WORK/stderr")" = 2 ] || { show_output; fail "--timings on 2 ranks: expected a row per rank"; }
 # the blocks at the end: contiguous, from compartment 1 to 4
-awk '/^  [01] / { split($7, b, "-"); lo = b[1]; hi = (2 in b) ? b[2] : b[1]
+awk '/^  [01] / { split($8, b, "-"); lo = b[1]; hi = (2 in b) ? b[2] : b[1]
                   if (lo != next_lo) bad = 1; next_lo = hi + 1 }
      BEGIN { next_lo = 1 } END { exit bad || next_lo != 5 }' "$WORK/stderr" ||
   { show_output; fail "--timings on 2 ranks: the compartments of the ranks are not 1-4 in contiguous blocks"; }
 [ "$(grep -c 'done to t' "$WORK/stderr")" = 1 ] || { show_output; fail "expected one final message (rank 0's) on 2 ranks"; }
 same_results "$WORK/serial" "$WORK/np2" /carried
+# rank 0 writes its output times later, in pieces, while it waits for rank 1
+# at step agreements: the files are still those of the serial run, every
+# object of result.h5 and summary.csv byte for byte
+if command -v h5diff >/dev/null 2>&1; then
+  h5diff "$WORK/serial/result.h5" "$WORK/np2/result.h5" >"$WORK/h5diff.out" ||
+    { cat "$WORK/h5diff.out" >&2; fail "result.h5 on 2 ranks differs from the serial run's"; }
+fi
+cmp "$WORK/serial/summary.csv" "$WORK/np2/summary.csv" >&2 || fail "summary.csv on 2 ranks differs from the serial run's"
 run_rc 0 "${MPI[@]}" -np 3 "$BIN" run "$ex" --out "$WORK/np3" --quiet --threads 1
 same_results "$WORK/serial" "$WORK/np3" /carried
 run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2t2" --quiet --threads 2
@@ -165,5 +176,16 @@ YAML
 run_rc 1 timeout 120 "${MPI[@]}" -np 2 "$BIN" run "$WORK/inf.yaml" --out "$WORK/inf" --quiet
 stderr_has "compartment 4" "rate of change is not finite" "failed on another MPI rank"
 no_result_files "$WORK/inf"
+
+# a write that fails mid-run (the file size limit stands in for a full disk),
+# most likely while rank 0 writes held output times during the steps: every
+# rank stops with status 1 and the write's message, leaving no result files.
+# TCP between the ranks: the limit would also stop Open MPI's shared memory
+# (SIGXFSZ ignored: the write fails instead of killing the process)
+run_rc 1 timeout 120 "${MPI[@]}" -np 2 --mca btl self,tcp \
+  bash -c 'trap "" XFSZ; ulimit -f 600; exec "$0" "$@"' "$BIN" run "$ex" --out "$WORK/full" --quiet --threads 1
+stderr_has "cannot write dataset" "File too large"
+stderr_lacks "Segmentation"
+no_result_files "$WORK/full"
 
 echo "mpi_sectional: ok"

@@ -40,6 +40,13 @@ gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_t
 /* Append one output time: state y (nstate) and ledger (nledger). */
 int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
                     const double *ledger, gs_error *err);
+/* The same in gs_output_parts(o) pieces of a few tens of µs each, for a
+ * caller that fills idle moments (an MPI rank waiting for the others):
+ * parts 0, 1, ... in order, with the same t, y and ledger, none of another
+ * output time in between; the last part appends the rows. */
+int gs_output_parts(const gs_output *o);
+int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double *y,
+                         const double *ledger, int part, gs_error *err);
 /* Commit buffered output times once `seconds` of wall time have passed since
  * the last commit (and when 64 MiB are buffered, and at the end); 0 (the
  * default) commits every output time.  A killed run keeps what was committed. */

@@ -45,6 +45,7 @@
 #include <unistd.h>
 
 #include "io/chunk_writer.h"
+#include "io/h5_setup.h"
 
 #ifndef GRANSIM_VERSION
 #define GRANSIM_VERSION "unknown"
@@ -126,29 +127,18 @@ static int mkdir_p(const char *dir, gs_error *err) {
 
 /* ---- HDF5 error reporting ------------------------------------------------- */
 
-/* Innermost HDF5 error description (nearest the cause, e.g. the system's
- * message), captured before the next API call clears the stack. */
-static herr_t h5_walk_first(unsigned n, const H5E_error2_t *e, void *data) {
-  if (n == 0 && e->desc) snprintf((char *)data, 512, "%s", e->desc);
-  return 0;
-}
-
 /* "cannot <what> in <path>: <HDF5 detail>", always GS_EIO. */
 static int h5_error(gs_error *err, const char *path, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 static int h5_error(gs_error *err, const char *path, const char *fmt, ...) {
-  char detail[512] = "", what[512];
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, h5_walk_first, detail);
+  char detail[512], what[512];
+  gs_h5_cause(detail, sizeof detail);
   va_list ap;
   va_start(ap, fmt);
   vsnprintf(what, sizeof what, fmt, ap);
   va_end(ap);
   return gs_error_set(err, GS_EIO, "cannot %s in %s%s%s", what, path, *detail ? ": " : "", detail);
 }
-
-/* Errors are reported through gs_error; HDF5's own stack dump on stderr would
- * only duplicate (and precede) the message. */
-static void h5_quiet(void) { H5Eset_auto2(H5E_DEFAULT, NULL, NULL); }
 
 /* ---- attributes ----------------------------------------------------------- */
 
@@ -440,16 +430,20 @@ static int csv_header(gs_output *o, gs_error *err) {
   return fputc('\n', o->csv) == EOF ? csv_error(o, err) : GS_OK;
 }
 
-/* One row per compartment; value of column c, compartment j is
- * sbuf[c * stride + first + j]. */
+/* The row of compartment j; the value of column c is sbuf[c * stride + first + j]. */
+static int csv_row(gs_output *o, const double *sbuf, size_t stride, size_t first, size_t j,
+                   gs_error *err) {
+  for (int c = 0; c < o->ncol; c++)
+    if (fprintf(o->csv, "%s%.10g", c ? "," : "", sbuf[(size_t)c * stride + first + j]) < 0)
+      return csv_error(o, err);
+  return fputc('\n', o->csv) == EOF ? csv_error(o, err) : GS_OK;
+}
+
+/* One row per compartment. */
 static int csv_rows(gs_output *o, const double *sbuf, size_t stride, size_t first, gs_error *err) {
-  for (size_t j = 0; j < o->ncomp; j++) {
-    for (int c = 0; c < o->ncol; c++)
-      if (fprintf(o->csv, "%s%.10g", c ? "," : "", sbuf[(size_t)c * stride + first + j]) < 0)
-        return csv_error(o, err);
-    if (fputc('\n', o->csv) == EOF) return csv_error(o, err);
-  }
-  return GS_OK;
+  int rc = GS_OK;
+  for (size_t j = 0; j < o->ncomp && !rc; j++) rc = csv_row(o, sbuf, stride, first, j, err);
+  return rc;
 }
 
 static int csv_flush(gs_output *o, gs_error *err) {
@@ -459,6 +453,9 @@ static int csv_flush(gs_output *o, gs_error *err) {
 static int csv_create(gs_output *o, gs_error *err) {
   o->csv = fopen(o->csv_tmp, "w");
   if (!o->csv) return gs_error_set(err, GS_EIO, "cannot create %s: %s", o->csv_tmp, strerror(errno));
+  /* rows are formatted at every output time: fewer, larger writes (a system
+   * call costs ~20 µs on the project's VM) */
+  setvbuf(o->csv, NULL, _IOFBF, (size_t)1 << 16);
   int rc = csv_header(o, err);
   return rc ? rc : csv_flush(o, err);
 }
@@ -597,7 +594,7 @@ static int publish(gs_output *o, gs_error *err) {
 
 gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_text,
                           const char *case_name, gs_error *err) {
-  h5_quiet();
+  gs_h5_setup();
   if (mkdir_p(dir, err)) return NULL;
   gs_output *o = output_alloc(dir, m, err);
   if (!o) return NULL;
@@ -611,20 +608,18 @@ gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_t
   return o;
 }
 
-/* Fills o->sbuf ([column][comp]) for output time t. */
-static void summarize_all(gs_output *o, const gs_model *m, double t, const double *y) {
+/* Fills compartment j's entries of o->sbuf ([column][comp]) for output time t. */
+static void summarize(gs_output *o, const gs_model *m, double t, const double *y, size_t j) {
   size_t nc = o->ncomp;
   int nvol = m->nvol;
-  for (size_t j = 0; j < nc; j++) {
-    gs_summary s;
-    memset(&s, 0, sizeof s);
-    gs_summarize(m, y, j, &s);
-    double fixed[NCOL_FIXED] = {t, (double)(j + 1) /* 1-based, as in case files */, s.m0, s.m1, s.m2, s.d10, s.d50, s.d90};
-    for (int c = 0; c < NCOL_FIXED; c++) o->sbuf[(size_t)c * nc + j] = fixed[c];
-    for (int k = 0; k < nvol; k++) {
-      o->sbuf[(size_t)(NCOL_FIXED + k) * nc + j] = s.mean[k];
-      o->sbuf[(size_t)(NCOL_FIXED + nvol + k) * nc + j] = s.total[k];
-    }
+  gs_summary s;
+  memset(&s, 0, sizeof s);
+  gs_summarize(m, y, j, &s);
+  double fixed[NCOL_FIXED] = {t, (double)(j + 1) /* 1-based, as in case files */, s.m0, s.m1, s.m2, s.d10, s.d50, s.d90};
+  for (int c = 0; c < NCOL_FIXED; c++) o->sbuf[(size_t)c * nc + j] = fixed[c];
+  for (int k = 0; k < nvol; k++) {
+    o->sbuf[(size_t)(NCOL_FIXED + k) * nc + j] = s.mean[k];
+    o->sbuf[(size_t)(NCOL_FIXED + nvol + k) * nc + j] = s.total[k];
   }
 }
 
@@ -652,8 +647,10 @@ static int pending_alloc(gs_output *o, gs_error *err) {
 }
 
 /* Writes the pending rows of every series, then commits them (see the top
- * of the file), then their summary.csv rows.  last: the file is closed next
- * (which flushes), so the second flush is left to the close. */
+ * of the file), then flushes their summary.csv rows (formatted as they came:
+ * the partial CSV may run ahead of the commits, and a resume rewrites it from
+ * result.h5).  last: the file is closed next (which flushes), so the second
+ * flush is left to the close. */
 static int commit(gs_output *o, int last, gs_error *err) {
   int rc = GS_OK;
   const hsize_t n = o->npending;
@@ -666,13 +663,7 @@ static int commit(gs_output *o, int last, gs_error *err) {
   if (!rc && !last) rc = flush_h5(o, err);
   if (rc) return rc;
   o->ntimes += n;
-  /* summary rows: column c of pending row r is pending[S_SUMMARY + c] + r * ncomp */
-  for (hsize_t r = 0; r < n && !rc; r++) {
-    for (int c = 0; c < o->ncol; c++)
-      memcpy(o->sbuf + (size_t)c * o->ncomp, o->pending[S_SUMMARY + c] + r * o->ncomp, o->ncomp * sizeof(double));
-    rc = csv_rows(o, o->sbuf, o->ncomp, 0, err);
-  }
-  if (!rc) rc = csv_flush(o, err);
+  rc = csv_flush(o, err);
   o->npending = 0;
   o->last_commit = wall_seconds();
   return rc;
@@ -684,34 +675,57 @@ void gs_output_set_checkpoint(gs_output *o, double seconds) {
   o->last_commit = wall_seconds();
 }
 
-int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
-                    const double *ledger, gs_error *err) {
+/* Parts of an output time: a summary and CSV row per compartment, then a
+ * write per series chunked by single rows (~15 µs each for the seed-000
+ * example), then the rows of the small series held for the commit. */
+int gs_output_parts(const gs_output *o) {
+  int ndirect = 0;
+  for (int i = 0; i < o->nseries; i++) ndirect += o->direct[i] != 0;
+  return (int)o->ncomp + ndirect + 1;
+}
+
+/* Row of series i for output time t. */
+static const double *series_row(const gs_output *o, int i, const double *t, const double *y,
+                                const double *ledger) {
+  return i == S_TIME         ? t
+         : i == S_NUMBER     ? y
+         : i == S_LEDGER     ? ledger
+         : i == o->s_carried ? y + o->nnum
+                             : o->sbuf + (size_t)(i - S_SUMMARY) * o->ncomp;
+}
+
+int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double *y,
+                         const double *ledger, int part, gs_error *err) {
   if (m->nstate != o->nstate || m->grid.ncomp != o->ncomp)
     return gs_error_set(err, GS_EINPUT, "output to %s: the model does not match the result file",
                         o->dir);
   if (!o->cap && pending_alloc(o, err)) return GS_ENOMEM;
-  summarize_all(o, m, t, y);
-  const size_t r = o->npending;
-  for (int i = 0; i < o->nseries; i++) {
-    const double *row = i == S_TIME         ? &t
-                        : i == S_NUMBER     ? y
-                        : i == S_LEDGER     ? ledger
-                        : i == o->s_carried ? y + o->nnum
-                                            : o->sbuf + (size_t)(i - S_SUMMARY) * o->ncomp;
-    /* the large series go to the file at once (their rows count only once
-     * committed): copies held until the commit would touch fresh memory,
-     * and a page fault costs ~13 µs on the project's VM (7 ms of the
-     * example's 0.12 s) */
-    if (o->direct[i]) {
-      int rc = write_rows(o, i, o->ntimes + r, 1, row, err);
-      if (rc) return rc;
-    } else {
-      memcpy(o->pending[i] + r * o->rowlen[i], row, o->rowlen[i] * sizeof(double));
-    }
+  if ((size_t)part < o->ncomp) { /* compartment `part`: its summary and CSV row */
+    summarize(o, m, t, y, (size_t)part);
+    return csv_row(o, o->sbuf, o->ncomp, 0, (size_t)part, err);
   }
+  const size_t r = o->npending;
+  /* the large series go to the file at once (their rows count only once
+   * committed): copies held until the commit would touch fresh memory, and
+   * a page fault costs ~13 µs on the project's VM (7 ms of the example's
+   * 0.12 s) */
+  int k = part - (int)o->ncomp;
+  for (int i = 0; i < o->nseries; i++)
+    if (o->direct[i] && k-- == 0) return write_rows(o, i, o->ntimes + r, 1, series_row(o, i, &t, y, ledger), err);
+  for (int i = 0; i < o->nseries; i++)
+    if (!o->direct[i])
+      memcpy(o->pending[i] + r * o->rowlen[i], series_row(o, i, &t, y, ledger), o->rowlen[i] * sizeof(double));
   o->npending++;
   if (o->npending < o->cap && wall_seconds() - o->last_commit < o->checkpoint) return GS_OK;
   return commit(o, 0, err);
+}
+
+int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
+                    const double *ledger, gs_error *err) {
+  int rc = GS_OK;
+  for (int part = 0; part < gs_output_parts(o) && !rc; part++)
+    rc = gs_output_write_part(o, m, t, y, ledger, part, err);
+  return rc;
 }
 
 static int rename_final(const char *from, const char *to, gs_error *err) {
@@ -936,7 +950,7 @@ static int read_last(gs_output *o, double *t, double *y, double *ledger, gs_erro
 
 gs_output *gs_output_resume(const char *dir, const gs_model *m, double *t, double *y,
                             double *ledger, gs_error *err) {
-  h5_quiet();
+  gs_h5_setup();
   gs_output *old = output_alloc(dir, m, err);
   if (!old) return NULL;
   gs_output *o = output_alloc(dir, m, err);

@@ -21,8 +21,17 @@ typedef struct {
   size_t off[3];  /* this rank's segments of the full vector: numbers, */
   size_t len[3];  /* carried volumes, ledger */
   size_t nlocal;  /* len[0] + len[1] + len[2] */
-  double *sendbuf, *recvbuf; /* one compartment's numbers and carried totals */
+  /* the boundary exchange: one compartment's numbers and carried totals,
+   * sent from a ring of GS_DIST_NSEND buffers without waiting (see
+   * gs_dist_sync) */
+  double *sendbuf, *recvbuf;
+  void *requests; /* MPI_Request[GS_DIST_NSEND] under MPI */
+  int next_send;
 } gs_dist;
+
+/* Boundary messages a rank may have in flight: a rank with cheaper
+ * compartments runs ahead by up to a step's evaluations (rkf45: 6 stages). */
+#define GS_DIST_NSEND 16
 
 /* Split the compartments of m evenly over the ranks and set m's
  * comp_lo/comp_hi. */
@@ -43,10 +52,16 @@ void gs_dist_unpack(const gs_dist *d, const double *local, double *full);
 /* Index in the full vector of entry i of the local vector. */
 size_t gs_dist_full_index(const gs_dist *d, size_t i);
 /* Receive the compartment before this block (numbers and carried totals)
- * from the previous rank; send the last one to the next. */
+ * from the previous rank; send the last one to the next without waiting for
+ * it to arrive. */
 void gs_dist_sync(gs_dist *d, double *y);
 /* Maximum of v over the ranks (v itself on one rank). */
 double gs_dist_max(gs_dist *d, double v);
+/* The same, calling work(ctx) for as long as the other ranks have not all
+ * contributed yet and it returns 1 (it may be NULL).  Every rank must use
+ * this one or gs_dist_max at the same call: MPI matches a non-blocking
+ * collective only with non-blocking ones. */
+double gs_dist_max_while(gs_dist *d, double v, int (*work)(void *), void *ctx);
 /* Every rank receives every block of the full vector y (numbers, carried,
  * ledger), each rank's own parts being current. */
 int gs_dist_gather(gs_dist *d, double *y, gs_error *err);

@@ -11,6 +11,7 @@
 #include "gransim/case.h"
 #include "gransim/output.h"
 #include "gransim/parallel.h"
+#include "io/deferred_output.h"
 #include "pbm/distributed.h"
 
 /* Describe cell `cell` of compartment `comp`: "compartment 2, cell (3, 5) [solid = ..., ...]". */
@@ -28,6 +29,10 @@ static void describe_cell(const gs_model *m, size_t comp, size_t cell, char *buf
   if (w < (int)len) snprintf(buf + w, len - (size_t)w, "]");
 }
 
+/* Output times rank 0 may hold back under MPI: with fewer, a run whose
+ * output times come faster than its steps writes them at once. */
+#define DEFER_DEPTH 4
+
 typedef struct {
   gs_case *c;
   gs_dist *dist; /* the compartments of each MPI rank */
@@ -37,9 +42,19 @@ typedef struct {
   int bad;
   double t_rhs, t_exchange; /* seconds in the model's rates, and in the MPI boundary exchange */
   double t_written;         /* seconds in the result files at output times (rank 0) */
-  /* rebalancing (MPI): rates and output seconds at the last one, the
+  /* under MPI, rank 0's output times written while it waits at step
+   * agreements (deferred_output.h); the first failure of such a write, kept
+   * for the next output time; seconds of writing inside the steps */
+  gs_deferred_output *deferred;
+  int deferred_rc;
+  gs_error deferred_err;
+  double t_deferred;
+  /* seconds advancing the state, and in step agreements (waiting, and
+   * rank 0's deferred writing) */
+  double t_advance, t_agree;
+  /* rebalancing (MPI): busy and output seconds at the last one, the
    * estimated cost of every compartment, moves taken */
-  double rhs_mark, written_mark, *comp_cost;
+  double busy_mark, written_mark, *comp_cost;
   long rhs_calls, calls_mark; /* this rank's evaluations (the same count on every rank) */
   long rebalanced, moves_tried; /* moves_tried: GRANSIM_TEST_MOVE_COMPARTMENTS only */
 } guard_t;
@@ -119,8 +134,27 @@ static void guarded_hold(void *ctx, int on) {
   gd->c->ode.hold(gd->c->ode.ctx, on);
 }
 
-/* Step agreement across MPI ranks. */
-static double guarded_max(void *ctx, double v) { return gs_dist_max(((guard_t *)ctx)->dist, v); }
+/* One piece of a deferred output time (rank 0, waiting for the others at
+ * a step agreement); 1 while more is left. */
+static int write_piece(void *ctx) {
+  guard_t *gd = ctx;
+  if (gd->deferred_rc || !gs_deferred_output_pending(gd->deferred)) return 0;
+  const double start = now_seconds();
+  gd->deferred_rc = gs_deferred_output_work(gd->deferred, &gd->deferred_err);
+  gd->t_deferred += now_seconds() - start;
+  return !gd->deferred_rc && gs_deferred_output_pending(gd->deferred);
+}
+
+/* Step agreement across MPI ranks, where rank 0 writes held output times
+ * while the others have not arrived (every rank makes the same
+ * non-blocking call). */
+static double guarded_max(void *ctx, double v) {
+  guard_t *gd = ctx;
+  const double start = now_seconds();
+  v = gs_dist_max_while(gd->dist, v, gd->deferred ? write_piece : NULL, gd);
+  gd->t_agree += now_seconds() - start;
+  return v;
+}
 
 /* What advances the state: the case's integrator on the full vector, or,
  * under MPI, an integrator of this rank's own on its packed part. */
@@ -304,7 +338,7 @@ static int rebalance(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, gs_error 
   g->calls_mark = g->rhs_calls;
   if (!g->comp_cost && (g->comp_cost = gs_malloc(ncomp * sizeof(double), err)))
     for (size_t j = 0; j < ncomp; j++) g->comp_cost[j] = 1.0;
-  double *spent = gs_calloc(2 * (size_t)nr, sizeof(double), err); /* rates, then writing */
+  double *spent = gs_calloc(2 * (size_t)nr, sizeof(double), err); /* busy, then writing */
   size_t *lo = gs_malloc(((size_t)nr + 1) * sizeof(size_t), err);
   /* every rank must reach the same collectives: a failed allocation
    * anywhere ends the rebalancing everywhere (the failing rank's error is
@@ -315,10 +349,16 @@ static int rebalance(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, gs_error 
     free(lo);
     return failed ? GS_ENOMEM : GS_OK;
   }
-  spent[d->rank] = g->t_rhs - g->rhs_mark;
-  spent[nr + d->rank] = g->t_written - g->written_mark;
-  g->rhs_mark = g->t_rhs;
-  g->written_mark = g->t_written;
+  /* busy: advancing the state, less the waits for other ranks (boundary
+   * messages and step agreements): the rates and the integrator's own
+   * vector work, which grows with the block too (a quarter of the
+   * 32-compartment case) */
+  const double busy = g->t_advance - g->t_exchange - g->t_agree;
+  const double written = g->t_written + gs_deferred_output_seconds(g->deferred);
+  spent[d->rank] = busy - g->busy_mark;
+  spent[nr + d->rank] = written - g->written_mark;
+  g->busy_mark = busy;
+  g->written_mark = written;
   gs_parallel_sum(spent, 2 * (size_t)nr); /* the same numbers on every rank: the same decision */
   double slowest = 0;
   for (int r = 0; r < nr; r++) {
@@ -360,9 +400,11 @@ static int rebalance(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, gs_error 
 }
 
 /* --timings: each rank's seconds per phase, summed into one table that rank
- * 0 prints (phases: integration = advance minus rates and exchange, i.e.
- * the integrator's own vector work, packing and rate checks). */
-enum { PH_RHS, PH_EXCHANGE, PH_INTEGRATOR, PH_OUTPUTS, PH_FINISH, PH_N };
+ * 0 prints (phases: integrator = advance minus rates, exchange and step
+ * agreements, i.e. the integrator's own vector work, packing and rate
+ * checks; waits = step agreements, less rank 0's deferred writing, which
+ * counts as outputs). */
+enum { PH_RHS, PH_EXCHANGE, PH_INTEGRATOR, PH_WAITS, PH_OUTPUTS, PH_FINISH, PH_N };
 
 static void print_timings(const gs_dist *d, const double *mine) {
   const size_t n = (size_t)d->size * PH_N;
@@ -371,16 +413,16 @@ static void print_timings(const gs_dist *d, const double *mine) {
   memcpy(all + (size_t)d->rank * PH_N, mine, PH_N * sizeof *mine);
   if (d->size > 1) gs_parallel_sum(all, n); /* zeros elsewhere: exact */
   if (d->rank == 0) {
-    fprintf(stderr, "gransim: where the time went (s)\n  %-5s %-12s %-9s %-11s %-8s %-12s %s\n",
-            "rank", "rates (RHS)", "exchange", "integrator", "outputs", "final write",
+    fprintf(stderr, "gransim: where the time went (s)\n  %-5s %-12s %-9s %-11s %-7s %-8s %-12s %s\n",
+            "rank", "rates (RHS)", "exchange", "integrator", "waits", "outputs", "final write",
             "compartments at the end");
     for (int r = 0; r < d->size; r++) {
       const double *x = all + (size_t)r * PH_N;
       char comps[48];
       snprintf(comps, sizeof comps, d->lo[r + 1] - d->lo[r] > 1 ? "%zu-%zu" : "%zu", d->lo[r] + 1,
                d->lo[r + 1]);
-      fprintf(stderr, "  %-5d %-12.4f %-9.4f %-11.4f %-8.4f %-12.4f %s\n", r, x[PH_RHS],
-              x[PH_EXCHANGE], x[PH_INTEGRATOR], x[PH_OUTPUTS], x[PH_FINISH], comps);
+      fprintf(stderr, "  %-5d %-12.4f %-9.4f %-11.4f %-7.4f %-8.4f %-12.4f %s\n", r, x[PH_RHS],
+              x[PH_EXCHANGE], x[PH_INTEGRATOR], x[PH_WAITS], x[PH_OUTPUTS], x[PH_FINISH], comps);
     }
   }
   free(all);
@@ -448,6 +490,10 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   stepper_t step;
   memset(&step, 0, sizeof step);
   if (!rc) rc = agree(&dist, stepper_init(&step, c, &dist, &guard, err), err);
+  /* rank 0 of several holds output times back, to write them while it waits */
+  if (!rc && out && dist.size > 1 && !(guard.deferred = gs_deferred_output_create(out, m, DEFER_DEPTH, err)))
+    rc = GS_ENOMEM;
+  rc = agree(&dist, rc, err);
   double start = now_seconds(), t_end = c->times[c->ntimes - 1];
   gs_integrator_stats st = {0};
   for (size_t i = 0; !rc && i < c->ntimes; i++) {
@@ -460,7 +506,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
       rc = stepper_advance(&step, &t, stop, Y, err);
     }
     const double outputs_start = now_seconds();
-    phase[PH_INTEGRATOR] += outputs_start - advance_start;
+    guard.t_advance += outputs_start - advance_start;
     if (rc && guard.bad) {
       char where[512];
       size_t idx = guard.bad_index;
@@ -473,8 +519,17 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     if (!rc) rc = gs_dist_gather(&dist, Y, err);
     if (!rc) rc = check_state(c, Y, M1_0, t, &ymax_seen, &rep, err);
     const double write_start = now_seconds();
-    if (!rc && out) rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
-    guard.t_written += now_seconds() - write_start;
+    if (!rc && guard.deferred_rc) { /* a deferred write failed during the steps */
+      rc = guard.deferred_rc;
+      *err = guard.deferred_err;
+    }
+    if (!rc && guard.deferred) {
+      rc = gs_deferred_output_push(guard.deferred, t, Y, err);
+      if (!rc && i + 1 == c->ntimes) rc = gs_deferred_output_drain(guard.deferred, err);
+    } else if (!rc && out) {
+      rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
+      guard.t_written += now_seconds() - write_start; /* deferred writes count their own */
+    }
     rc = agree(&dist, rc, err);
     if (!rc && dist.size > 1 && i + 1 < c->ntimes)
       rc = agree(&dist, rebalance(c, &dist, &step, &guard, err), err);
@@ -497,9 +552,12 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   phase[PH_FINISH] = now_seconds() - finish_start;
   phase[PH_RHS] = guard.t_rhs;
   phase[PH_EXCHANGE] = guard.t_exchange;
-  phase[PH_INTEGRATOR] -= guard.t_rhs + guard.t_exchange;
+  phase[PH_INTEGRATOR] = guard.t_advance - guard.t_rhs - guard.t_exchange - guard.t_agree;
+  phase[PH_WAITS] = guard.t_agree - guard.t_deferred;
+  phase[PH_OUTPUTS] += guard.t_deferred;
   if (opt && opt->timings) print_timings(&dist, phase);
   stepper_free(&step);
+  gs_deferred_output_free(guard.deferred);
   free(guard.F);
   free(guard.comp_cost);
   m->comp_lo = 0; /* the model is whole again for whoever uses it next */

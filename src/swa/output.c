@@ -8,6 +8,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "io/h5_setup.h"
+
 #ifndef GRANSIM_VERSION
 #define GRANSIM_VERSION "unknown"
 #endif
@@ -150,15 +152,12 @@ int gs_swa_write(const gs_swa_case *c, const char *dir, const gs_swa_results *r,
   snprintf(h5, sizeof h5, "%s/result.h5", dir);
   snprintf(csvtmp, sizeof csvtmp, "%s/.summary.csv.partial", dir);
   snprintf(csv, sizeof csv, "%s/summary.csv", dir);
-  H5E_auto2_t fn;
-  void *data;
-  H5Eget_auto2(H5E_DEFAULT, &fn, &data);
-  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-  int bad = write_h5(c, h5tmp, r);
-  H5Eset_auto2(H5E_DEFAULT, fn, data);
-  if (bad) {
+  gs_h5_setup();
+  if (write_h5(c, h5tmp, r)) {
+    char cause[512];
+    gs_h5_cause(cause, sizeof cause);
     remove(h5tmp);
-    return gs_error_set(err, GS_EIO, "cannot write %s", h5tmp);
+    return gs_error_set(err, GS_EIO, "cannot write %s%s%s", h5tmp, *cause ? ": " : "", cause);
   }
   if (write_csv(c, csvtmp, r)) {
     remove(h5tmp);
