@@ -40,10 +40,14 @@ gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_t
 /* Append one output time: state y (nstate) and ledger (nledger). */
 int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
                     const double *ledger, gs_error *err);
-/* The same in gs_output_parts(o) pieces of a few tens of µs each, for a
- * caller that fills idle moments (an MPI rank waiting for the others):
- * parts 0, 1, ... in order, with the same t, y and ledger, none of another
- * output time in between; the last part appends the rows. */
+/* The same in gs_output_parts(o) pieces, for a caller that fills idle
+ * moments (an MPI rank waiting for the others): a compartment's summary and
+ * CSV row, one large series' row (tens of µs for the seed-000 example, ~1 ms
+ * for a deflated row of 32 compartments x 32 x 32 cells), then the small
+ * series' rows with the commit when it is due (gs_output_set_checkpoint).
+ * Parts 0, 1, ... in order, with the same t, y and ledger, none of another
+ * output time in between (refused otherwise); gs_output_finish refuses to
+ * publish an output time that is only partly written. */
 int gs_output_parts(const gs_output *o);
 int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double *y,
                          const double *ledger, int part, gs_error *err);
@@ -51,6 +55,10 @@ int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double
  * the last commit (and when 64 MiB are buffered, and at the end); 0 (the
  * default) commits every output time.  A killed run keeps what was committed. */
 void gs_output_set_checkpoint(gs_output *o, double seconds);
+/* 1 when that much wall time has passed since the last commit: output times
+ * held back by the caller should be written now, so that a killed run loses
+ * no more than the checkpoint promises. */
+int gs_output_commit_due(const gs_output *o);
 /* Checkpoint/restart: reopen the partial files left in DIR by an interrupted
  * run of the same case (same grid; checked), read back the last written time,
  * state and ledger into *t, y, ledger, and continue appending after it.

@@ -45,8 +45,9 @@ static int cmd_run(int argc, char **argv) {
              "only when the run succeeds.  --resume continues a killed run from the partial\n"
              "files in DIR.  --threads sets the OpenMP threads (default: OMP_NUM_THREADS or all).\n"
              "--timings prints, at the end, the seconds each MPI rank spent in the rates, the\n"
-             "exchange between ranks, the integrator's own work, the outputs and the final write,\n"
-             "and the compartments it held at the end (they move to balance the ranks).\n");
+             "exchange between ranks, the integrator's own work, waiting for the other ranks at\n"
+             "step agreements, the outputs and the final write, and the compartments it held\n"
+             "at the end (they move to balance the ranks).\n");
       return 0;
     } else if (!strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
     else if (!strcmp(argv[i], "--resume")) opt.resume = 1;

@@ -82,6 +82,7 @@ int gs_deferred_output_push(gs_deferred_output *q, double t, const double *y, gs
 }
 
 int gs_deferred_output_drain(gs_deferred_output *q, gs_error *err) {
+  if (q->failed) return gs_error_set(err, GS_EIO, "result files: an earlier write failed");
   int rc = GS_OK;
   while (!rc && gs_deferred_output_pending(q)) rc = gs_deferred_output_work(q, err);
   return rc;

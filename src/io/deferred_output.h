@@ -26,7 +26,8 @@ int gs_deferred_output_push(gs_deferred_output *q, double t, const double *y, gs
 int gs_deferred_output_pending(const gs_deferred_output *q);
 /* Write the next piece of the oldest held output time. */
 int gs_deferred_output_work(gs_deferred_output *q, gs_error *err);
-/* Write everything held. */
+/* Write everything held (an error once a write has failed: what is held is
+ * then lost). */
 int gs_deferred_output_drain(gs_deferred_output *q, gs_error *err);
 /* Seconds spent writing so far. */
 double gs_deferred_output_seconds(const gs_deferred_output *q);

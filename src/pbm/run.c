@@ -29,9 +29,11 @@ static void describe_cell(const gs_model *m, size_t comp, size_t cell, char *buf
   if (w < (int)len) snprintf(buf + w, len - (size_t)w, "]");
 }
 
-/* Output times rank 0 may hold back under MPI: with fewer, a run whose
- * output times come faster than its steps writes them at once. */
+/* Output times rank 0 may hold back under MPI (fewer when their copies would
+ * exceed DEFER_BYTES): when they come faster than rank 0 can write them in
+ * its waits, the oldest is written at once. */
 #define DEFER_DEPTH 4
+#define DEFER_BYTES ((size_t)64 << 20)
 
 typedef struct {
   gs_case *c;
@@ -312,8 +314,9 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
 }
 
 /* Under MPI, at an output time (every rank holds the whole state).  Each
- * rank's right-hand-side seconds since the last call are shared over its
- * compartments in proportion to their previous estimates (at first evenly),
+ * rank's busy seconds since the last call (rates and integrator work, not
+ * the waits for other ranks) are shared over its compartments in
+ * proportion to their previous estimates (at first evenly),
  * so the estimates learn the shape of the costs as compartments move; rank
  * 0's seconds writing results count as work of rank 0 alone.  When the best
  * contiguous split for those costs promises a slowest rank at least
@@ -491,8 +494,11 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   memset(&step, 0, sizeof step);
   if (!rc) rc = agree(&dist, stepper_init(&step, c, &dist, &guard, err), err);
   /* rank 0 of several holds output times back, to write them while it waits */
-  if (!rc && out && dist.size > 1 && !(guard.deferred = gs_deferred_output_create(out, m, DEFER_DEPTH, err)))
-    rc = GS_ENOMEM;
+  if (!rc && out && dist.size > 1) {
+    size_t fit = DEFER_BYTES / (n * sizeof(double));
+    int depth = fit < 1 ? 1 : fit < DEFER_DEPTH ? (int)fit : DEFER_DEPTH;
+    if (!(guard.deferred = gs_deferred_output_create(out, m, depth, err))) rc = GS_ENOMEM;
+  }
   rc = agree(&dist, rc, err);
   double start = now_seconds(), t_end = c->times[c->ntimes - 1];
   gs_integrator_stats st = {0};
@@ -525,7 +531,9 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     }
     if (!rc && guard.deferred) {
       rc = gs_deferred_output_push(guard.deferred, t, Y, err);
-      if (!rc && i + 1 == c->ntimes) rc = gs_deferred_output_drain(guard.deferred, err);
+      /* held times may not delay a due commit: a killed run loses no more
+       * than output.checkpoint promises (0: every output time commits) */
+      if (!rc && gs_output_commit_due(out)) rc = gs_deferred_output_drain(guard.deferred, err);
     } else if (!rc && out) {
       rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
       guard.t_written += now_seconds() - write_start; /* deferred writes count their own */
@@ -540,6 +548,13 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   }
   if (show) fprintf(stderr, "\n");
   const double finish_start = now_seconds();
+  /* after the loop, not at the last output time: that one may be skipped
+   * (equal to the time reached), and held times must not be lost */
+  if (!rc && guard.deferred_rc) {
+    rc = guard.deferred_rc;
+    *err = guard.deferred_err;
+  }
+  if (!rc && guard.deferred) rc = gs_deferred_output_drain(guard.deferred, err);
   if (out) {
     gs_error ferr;
     int frc = gs_output_finish(out, rc == GS_OK, &ferr);

@@ -59,20 +59,25 @@ static void percentiles(const double *vol, const double *N, size_t n, const doub
     if (m && pts[m - 1].v == pts[i].v) pts[m - 1].w += pts[i].w;
     else pts[m++] = pts[i];
   }
-  double below = 0, prev_q = 0, prev_d = gs_diameter(pts[0].v);
+  /* diameters (cube roots) only where a percentile falls: the output
+   * summaries are rank 0's work alone under MPI */
+  double below = 0, prev_q = 0;
+  size_t prev = 0;
   int next = 0;
   for (size_t i = 0; i < m && next < np; i++) {
-    double d = gs_diameter(pts[i].v);
     double q = (below + 0.5 * pts[i].w) / total;
-    while (next < np && p[next] <= q) {
-      out[next] = (i == 0 || q == prev_q) ? d : prev_d + (d - prev_d) * (p[next] - prev_q) / (q - prev_q);
-      next++;
+    if (p[next] <= q) {
+      double d = gs_diameter(pts[i].v), prev_d = gs_diameter(pts[prev].v);
+      while (next < np && p[next] <= q) {
+        out[next] = (i == 0 || q == prev_q) ? d : prev_d + (d - prev_d) * (p[next] - prev_q) / (q - prev_q);
+        next++;
+      }
     }
     below += pts[i].w;
     prev_q = q;
-    prev_d = d;
+    prev = i;
   }
-  while (next < np) out[next++] = prev_d;
+  while (next < np) out[next++] = gs_diameter(pts[prev].v);
   free(pts);
 }
 

@@ -29,11 +29,23 @@ static int mkdir_p(const char *dir, gs_error *err) {
   return GS_OK;
 }
 
+/* The cause of the first failed HDF5 call of a write, taken at once: the
+ * calls that follow (closing what was open) clear HDF5's error stack. */
+static char first_cause[512];
+
+static void note_cause(void) {
+  if (!first_cause[0]) gs_h5_cause(first_cause, sizeof first_cause);
+}
+
 static int put(hid_t loc, const char *name, int rank, const hsize_t *dims, const double *data) {
   hid_t sp = H5Screate_simple(rank, dims, NULL);
   hid_t ds = H5Dcreate2(loc, name, H5T_IEEE_F64LE, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   herr_t e = ds < 0 ? -1 : H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
-  if (ds >= 0) H5Dclose(ds);
+  if (e < 0) note_cause();
+  if (ds >= 0 && H5Dclose(ds) < 0) {
+    note_cause();
+    e = -1;
+  }
   H5Sclose(sp);
   return e < 0 ? -1 : 0;
 }
@@ -44,6 +56,7 @@ static int attr_str(hid_t loc, const char *name, const char *value) {
   hid_t sp = H5Screate(H5S_SCALAR);
   hid_t a = H5Acreate2(loc, name, t, sp, H5P_DEFAULT, H5P_DEFAULT);
   herr_t e = a < 0 ? -1 : H5Awrite(a, t, value);
+  if (e < 0) note_cause();
   if (a >= 0) H5Aclose(a);
   H5Sclose(sp);
   H5Tclose(t);
@@ -54,6 +67,7 @@ static int attr_num(hid_t loc, const char *name, double value) {
   hid_t sp = H5Screate(H5S_SCALAR);
   hid_t a = H5Acreate2(loc, name, H5T_IEEE_F64LE, sp, H5P_DEFAULT, H5P_DEFAULT);
   herr_t e = a < 0 ? -1 : H5Awrite(a, H5T_NATIVE_DOUBLE, &value);
+  if (e < 0) note_cause();
   if (a >= 0) H5Aclose(a);
   H5Sclose(sp);
   return e < 0 ? -1 : 0;
@@ -64,7 +78,10 @@ static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results
   const gs_swa_model *m = &c->model;
   size_t nt = c->ntimes, nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m);
   hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  if (f < 0) return -1;
+  if (f < 0) {
+    note_cause();
+    return -1;
+  }
   int bad = 0;
   hid_t grid = H5Gcreate2(f, "grid", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   for (int a = 0; a < g->dim; a++) {
@@ -113,7 +130,10 @@ static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results
   bad |= attr_num(f, "seed", (double)c->seed) | attr_num(f, "jumps", (double)r->stats.jumps);
   bad |= attr_num(f, "fictitious", (double)r->stats.fictitious) | attr_num(f, "ntimes", (double)nt);
   bad |= attr_str(f, "status", "complete");
-  if (H5Fclose(f) < 0) bad = 1;
+  if (H5Fclose(f) < 0) {
+    note_cause();
+    bad = 1;
+  }
   return bad ? -1 : 0;
 }
 
@@ -153,11 +173,11 @@ int gs_swa_write(const gs_swa_case *c, const char *dir, const gs_swa_results *r,
   snprintf(csvtmp, sizeof csvtmp, "%s/.summary.csv.partial", dir);
   snprintf(csv, sizeof csv, "%s/summary.csv", dir);
   gs_h5_setup();
+  first_cause[0] = '\0';
   if (write_h5(c, h5tmp, r)) {
-    char cause[512];
-    gs_h5_cause(cause, sizeof cause);
     remove(h5tmp);
-    return gs_error_set(err, GS_EIO, "cannot write %s%s%s", h5tmp, *cause ? ": " : "", cause);
+    return gs_error_set(err, GS_EIO, "cannot write %s%s%s", h5tmp, *first_cause ? ": " : "",
+                        first_cause);
   }
   if (write_csv(c, csvtmp, r)) {
     remove(h5tmp);
