@@ -119,6 +119,8 @@ csv_rows_close() {
     fail "$a has $(wc -l <"$a") lines, $b has $(wc -l <"$b")"
   awk -F, -v tol="$tol" -v only="$line" '
     function abs(v) { return v < 0 ? -v : v }
+    # a number (1.5e-05 included); text such as nan must match exactly
+    function num(v) { return v ~ /^[-+]?([0-9]+[.]?[0-9]*|[.][0-9]+)([eE][-+]?[0-9]+)?$/ }
     NR == FNR { row[FNR] = $0; next }
     only && FNR != only { next }
     {
@@ -126,7 +128,7 @@ csv_rows_close() {
       if (n != NF) { printf "line %d: %d fields vs %d\n", FNR, n, NF; bad = 1; next }
       for (i = 1; i <= NF; i++) {
         if (x[i] == $i) continue
-        if (x[i] ~ /[a-z]/ || $i ~ /[a-z]/) { printf "line %d field %d: %s vs %s\n", FNR, i, x[i], $i; bad = 1; continue }
+        if (!num(x[i]) || !num($i)) { printf "line %d field %d: %s vs %s\n", FNR, i, x[i], $i; bad = 1; continue }
         m = abs(x[i] + 0); if (abs($i + 0) > m) m = abs($i + 0)
         if (abs(x[i] - $i) > tol * m) { printf "line %d field %d: %s vs %s\n", FNR, i, x[i], $i; bad = 1 }
       }
@@ -141,4 +143,32 @@ no_result_files() {
   for f in result.h5 summary.csv .result.h5.partial .summary.csv.partial .result.h5.new; do
     [ ! -e "$1/$f" ] || fail "$1/$f exists but should not"
   done
+}
+
+# kill_part_way PID PARTIAL_CSV ERR_FILE [--match PATTERN]: waits until the
+# partial summary PARTIAL_CSV holds a few output times (so there is something
+# to resume), then a random part of the time the last four took (not of the
+# start-up, which a loaded machine can make longer than the whole rest), so
+# that the kill lands anywhere in the computation or the writing of the next
+# ones; then SIGKILLs PID, or with `--match PATTERN` every process whose
+# command line matches PATTERN then (the ranks of an mpirun PID).  PID is the
+# process watched for ending early (its stderr in ERR_FILE names why).
+kill_part_way() {
+  local pid=$1 partial=$2 errfile=$3 pattern=
+  [ "${4:-}" = --match ] && pattern=$5
+  local deadline=$((SECONDS + 120)) t_first want
+  for want in 2 6; do
+    while :; do
+      if [ -f "$partial" ] && [ "$(wc -l <"$partial")" -ge "$want" ]; then break; fi
+      kill -0 "$pid" 2>/dev/null || fail "the run ended before it could be killed (stderr: $(cat "$errfile"))"
+      [ "$SECONDS" -lt "$deadline" ] || fail "no output written by the run within 120 s"
+      sleep 0.005
+    done
+    [ "$want" = 2 ] && t_first=$(date +%s.%N)
+  done
+  sleep "$(awk -v a="$t_first" -v b="$(date +%s.%N)" -v r=$RANDOM 'BEGIN { printf "%.3f", (b - a) * r / 32768 }')"
+  local victims=("$pid")
+  [ -n "$pattern" ] && mapfile -t victims < <(pgrep -f -- "$pattern")
+  [ "${#victims[@]}" -gt 0 ] && kill -9 "${victims[@]}" 2>/dev/null ||
+    fail "the run ended before it could be killed"
 }

@@ -30,23 +30,7 @@ res=$WORK/res
 pid=$!
 BG_PIDS+=("$pid")
 partial=$res/.summary.csv.partial
-deadline=$((SECONDS + 120))
-wait_rows() { # wait_rows N: until the partial summary holds N lines
-  while :; do
-    if [ -f "$partial" ] && [ "$(wc -l <"$partial")" -ge "$1" ]; then break; fi
-    kill -0 "$pid" 2>/dev/null || fail "the run ended before it could be killed (stderr: $(cat "$WORK/killed.err"))"
-    [ "$SECONDS" -lt "$deadline" ] || fail "no output written by the run within 120 s"
-    sleep 0.005
-  done
-}
-wait_rows 2
-t_first=$(date +%s.%N)
-wait_rows 6
-# then wait a random part of the time the last four output times took (not of
-# the start-up, which a loaded machine can make longer than the whole rest), so
-# that the kill lands anywhere in the computation or the writing of the next ones
-sleep "$(awk -v a="$t_first" -v b="$(date +%s.%N)" -v r=$RANDOM 'BEGIN { printf "%.3f", (b - a) * r / 32768 }')"
-kill -9 "$pid" 2>/dev/null || fail "the run ended before it could be killed"
+kill_part_way "$pid" "$partial" "$WORK/killed.err"
 rc=0
 wait "$pid" 2>/dev/null || rc=$?
 [ "$rc" -eq 137 ] || fail "the killed run exited with $rc, expected 137 (SIGKILL)"

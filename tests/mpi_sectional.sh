@@ -12,7 +12,8 @@
 # compartments are refused with a message; an Euler step that goes negative on
 # rank 1 only stops every rank with status 1 and rank 1's message, without
 # hanging; so does a non-finite rate on rank 1 only under rk, and a result
-# file that cannot grow (rank 0's writes fail mid-run).
+# file that cannot grow (rank 0's writes fail mid-run); a 2-rank run killed
+# part-way resumes on 2 ranks and ends as an uninterrupted run.
 #
 # Usage: bash mpi_sectional.sh GRANSIM_BINARY SOURCE_DIR MPIEXEC [MPIEXEC_OPTIONS...]
 source "$(dirname "$0")/cli-lib.sh" "$1" "$2"
@@ -187,6 +188,29 @@ YAML
 run_rc 1 timeout 120 "${MPI[@]}" -np 2 "$BIN" run "$WORK/inf.yaml" --out "$WORK/inf" --quiet
 stderr_has "compartment 4" "rate of change is not finite" "failed on another MPI rank"
 no_result_files "$WORK/inf"
+
+# a run on two ranks killed part-way (rank 0 holding output times back between
+# its commits, every 0.02 s) resumes on two ranks from what was committed and
+# ends where an uninterrupted run ends
+c=$(write_case resume.yaml "title: resume on two ranks (2-D sum kernel and transfer, 4 compartments)
+$(grid_2d 4 40 1.25)
+initial: {type: exponential, number: 1, mean: [0.1, 0.05]}
+mechanisms:
+  - type: aggregation
+    kernel: {type: sum, beta0: 1}
+  - {type: transfer, rate: 1}
+output: {end: 1, count: 41, checkpoint: 0.02}")
+run_rc 0 "$BIN" run "$c" --out "$WORK/rref" --quiet --threads 1
+"${MPI[@]}" -np 2 "$BIN" run "$c" --out "$WORK/rres" --quiet --threads 1 >/dev/null 2>"$WORK/killed.err" &
+pid=$!
+BG_PIDS+=("$pid")
+kill_part_way "$pid" "$WORK/rres/.summary.csv.partial" "$WORK/killed.err" --match "run $c --out $WORK/rres"
+wait "$pid" 2>/dev/null || true
+[ -f "$WORK/rres/.result.h5.partial" ] || fail "the killed 2-rank run left no .result.h5.partial"
+[ ! -e "$WORK/rres/result.h5" ] || fail "the killed 2-rank run left result.h5"
+run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$c" --out "$WORK/rres" --resume --quiet --threads 1
+[ "$(wc -l <"$WORK/rres/summary.csv")" -eq 165 ] || fail "the resumed 2-rank run has $(wc -l <"$WORK/rres/summary.csv") lines in summary.csv, expected 1 + 41 x 4"
+csv_rows_close "$WORK/rref/summary.csv" "$WORK/rres/summary.csv" 1e-6
 
 # a write that fails mid-run (the file size limit stands in for a full disk),
 # most likely while rank 0 writes held output times during the steps: every
