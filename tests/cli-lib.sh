@@ -93,6 +93,16 @@ grid_2d() {
   done
 }
 
+# sum_kernel_2d TITLE NCOMP CELLS RATIO BETA0: the head of a 2-D test case (the
+# title, grid_2d, an exponential initial population) whose first mechanism is
+# sum-kernel aggregation; callers append further mechanisms and the output.
+sum_kernel_2d() {
+  printf 'title: %s\n' "$1"
+  grid_2d "$2" "$3" "$4"
+  printf 'initial: {type: exponential, number: 1, mean: [0.1, 0.05]}\nmechanisms:\n'
+  printf '  - type: aggregation\n    kernel: {type: sum, beta0: %s}\n' "$5"
+}
+
 # write_case NAME TEXT: writes $WORK/NAME and prints its path.
 write_case() {
   printf '%s\n' "$2" >"$WORK/$1"

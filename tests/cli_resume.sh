@@ -7,15 +7,7 @@
 # times (41) that it is then still far from done.
 source "$(dirname "$0")/cli-lib.sh" "$@"
 
-case_text="title: resume test (2-D sum-kernel aggregation, 2025 cells)
-grid:
-  axes:
-    - {name: solid, type: geometric, min: 1.0e-3, ratio: 1.25, cells: 45, zero_first: true}
-    - {name: liquid, type: geometric, min: 1.0e-3, ratio: 1.25, cells: 45, zero_first: true}
-initial: {type: exponential, number: 1, mean: [0.1, 0.05]}
-mechanisms:
-  - type: aggregation
-    kernel: {type: sum, beta0: 1}
+case_text="$(sum_kernel_2d "resume test (2-D sum-kernel aggregation, 2025 cells)" 1 45 1.25 1)
 output: {end: 1, count: 41, checkpoint: 0}   # commit every output time"
 c=$(write_case resume.yaml "$case_text")
 ntimes=41

@@ -3,12 +3,7 @@
 # summaries agree to 1e-12 relative; two runs on 2 threads agree bit for bit.
 source "$(dirname "$0")/cli-lib.sh" "$@"
 
-c=$(write_case threads.yaml "title: threads test (2-D, two compartments, both redistributions)
-$(grid_2d 2 24)
-initial: {type: exponential, number: 1, mean: [0.1, 0.05]}
-mechanisms:
-  - type: aggregation
-    kernel: {type: sum, beta0: 0.5}
+c=$(write_case threads.yaml "$(sum_kernel_2d "threads test (2-D, two compartments, both redistributions)" 2 24 1.6 0.5)
   - type: aggregation
     redistribution: fixed_pivot
     table_limit_mb: 0            # kernel rows evaluated in the right-hand side

@@ -95,12 +95,7 @@ done
 # choice once depended on the block: a block of 7 switched to the shared
 # pair loop and changed the last bits); the same numbers bit for bit as one
 # process on one thread.
-c16=$(write_case sixteen.yaml "title: threads and moves (2-D, sixteen compartments)
-$(grid_2d 16 24)
-initial: {type: exponential, number: 1, mean: [0.1, 0.05]}
-mechanisms:
-  - type: aggregation
-    kernel: {type: sum, beta0: 0.5}
+c16=$(write_case sixteen.yaml "$(sum_kernel_2d "threads and moves (2-D, sixteen compartments)" 16 24 1.6 0.5)
   - type: transfer
     rate: 1
 output: {end: 0.5, count: 6}")
@@ -192,12 +187,7 @@ no_result_files "$WORK/inf"
 # a run on two ranks killed part-way (rank 0 holding output times back between
 # its commits, every 0.02 s) resumes on two ranks from what was committed and
 # ends where an uninterrupted run ends
-c=$(write_case resume.yaml "title: resume on two ranks (2-D sum kernel and transfer, 4 compartments)
-$(grid_2d 4 40 1.25)
-initial: {type: exponential, number: 1, mean: [0.1, 0.05]}
-mechanisms:
-  - type: aggregation
-    kernel: {type: sum, beta0: 1}
+c=$(write_case resume.yaml "$(sum_kernel_2d "resume on two ranks (2-D sum kernel and transfer, 4 compartments)" 4 40 1.25 1)
   - {type: transfer, rate: 1}
 output: {end: 1, count: 41, checkpoint: 0.02}")
 run_rc 0 "$BIN" run "$c" --out "$WORK/rref" --quiet --threads 1
