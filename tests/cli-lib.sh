@@ -103,6 +103,26 @@ sum_kernel_2d() {
   printf '  - type: aggregation\n    kernel: {type: sum, beta0: %s}\n' "$5"
 }
 
+# lossy_case COMPARTMENTS: a case whose aggregation pushes mass past the end of
+# its 4-cell axis by t = 1, beyond the default checks.max_loss (fixed pivot:
+# with cell_average it takes ~1e5 steps, the pooled births of the last cell
+# switching between kept and lost).
+lossy_case() {
+  cat <<YAML
+title: mass lost through the end of the grid
+grid:
+  compartments: $1
+  axes:
+    - {name: solid, type: linear, min: 0, max: 4, cells: 4}
+initial: {type: cell, index: 1, number: 10}
+mechanisms:
+  - type: aggregation
+    redistribution: fixed_pivot
+    kernel: {type: constant, beta0: 1}
+output: {end: 5, count: 6}
+YAML
+}
+
 # write_case NAME TEXT: writes $WORK/NAME and prints its path.
 write_case() {
   printf '%s\n' "$2" >"$WORK/$1"

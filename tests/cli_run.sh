@@ -92,17 +92,7 @@ awk -v all="1-$ncomp" '/^  0 / { rows++; for (i = 2; i <= 7; i++) if ($i < 0) ba
   { show_output; fail "--timings: expected one row of non-negative seconds and compartments 1-$ncomp"; }
 
 # ---- a run that fails numerically: aggregates leave a too small grid ----------
-lossy=$(write_case lossy.yaml "grid:
-  axes:
-    - {name: solid, type: linear, min: 0, max: 4, cells: 4}
-initial: {type: cell, index: 1, number: 10}
-mechanisms:
-  # fixed pivot: with cell_average this case takes ~1e5 steps (the pooled
-  # births of the last cell switch between kept and lost)
-  - type: aggregation
-    redistribution: fixed_pivot
-    kernel: {type: constant, beta0: 1}
-output: {end: 5, count: 6}")
+lossy=$(write_case lossy.yaml "$(lossy_case 1)")
 run_rc 0 "$BIN" check "$lossy"
 fout=$WORK/failed
 run_rc 1 "$BIN" run "$lossy" --out "$fout" --threads 1

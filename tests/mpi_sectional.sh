@@ -79,10 +79,11 @@ run_rc 0 "${MPI[@]}" -np 3 "$BIN" run "$ex" --out "$WORK/np3" --quiet --threads 
 same_results "$WORK/serial" "$WORK/np3" /carried
 run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2t2" --quiet --threads 2
 same_results "$WORK/serial" "$WORK/np2t2" /carried
-# compartments moved between ranks at output times (solver.rebalance): the
-# integrators carry on with the same steps, so the results stay the same.
-# Moves follow measured times; GRANSIM_TEST_MOVE_COMPARTMENTS makes one at
-# every output time whatever the times, so this does not depend on them.
+# compartments moved between ranks between steps, in the middle of output
+# intervals (solver.rebalance): the integrators carry on with the same steps,
+# so the results stay the same. Moves follow measured times;
+# GRANSIM_TEST_MOVE_COMPARTMENTS makes one at every decision (every other
+# step) whatever the times, so this does not depend on them.
 for np in 2 3; do
   run_rc 0 "${MPI[@]}" -np $np -x GRANSIM_TEST_MOVE_COMPARTMENTS=1 "$BIN" run "$ex" --out "$WORK/moved$np" \
     --quiet --threads 1
@@ -183,6 +184,15 @@ YAML
 run_rc 1 timeout 120 "${MPI[@]}" -np 2 "$BIN" run "$WORK/inf.yaml" --out "$WORK/inf" --quiet
 stderr_has "compartment 4" "rate of change is not finite" "failed on another MPI rank"
 no_result_files "$WORK/inf"
+
+# a failed check at an output time, found by rank 0 (which alone checks the
+# whole state): rank 1 learns of it at the next output time, every rank
+# stops with status 1 and rank 0's message, with its time
+lossy_case 2 >"$WORK/lossy.yaml"
+run_rc 1 timeout 120 "${MPI[@]}" -np 2 "$BIN" run "$WORK/lossy.yaml" --out "$WORK/lossy" --quiet --threads 1
+stderr_has "checks.max_loss" "axis 'solid'" "at t = 1,"
+stderr_lacks "failed on another MPI rank"
+no_result_files "$WORK/lossy"
 
 # a run on two ranks killed part-way (rank 0 holding output times back between
 # its commits, every 0.02 s) resumes on two ranks from what was committed and

@@ -2,7 +2,8 @@
  * back through its filter pipeline is exactly what was written, for a
  * deflated dataset (compressible rows deflated, incompressible ones stored
  * raw with the filter marked skipped) and for a plain one; the deflated
- * chunks are really smaller. */
+ * chunks are really smaller; a row deflated in pieces (gs_chunk_row_*) is
+ * stored byte for byte as the row deflated at once. */
 #include <hdf5.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -52,6 +53,24 @@ static void chunk_info(hid_t d, hsize_t r, hsize_t *size, unsigned *mask) {
   CHECK(H5Dget_chunk_info_by_coord(d, off, mask, &addr, size) >= 0);
 }
 
+/* Row r of dataset a and of b are stored alike: same mask, same bytes. */
+static void check_same_chunk(hid_t a, hid_t b, hsize_t r) {
+  hsize_t sa, sb;
+  unsigned ma, mb;
+  chunk_info(a, r, &sa, &ma);
+  chunk_info(b, r, &sb, &mb);
+  CHECK(sa == sb && ma == mb);
+  if (sa != sb) return;
+  unsigned char *ba = malloc(sa), *bb = malloc(sb);
+  hsize_t off[3] = {r, 0, 0};
+  uint32_t fa, fb;
+  CHECK(H5Dread_chunk(a, H5P_DEFAULT, off, &fa, ba) >= 0);
+  CHECK(H5Dread_chunk(b, H5P_DEFAULT, off, &fb, bb) >= 0);
+  CHECK(memcmp(ba, bb, sa) == 0);
+  free(ba);
+  free(bb);
+}
+
 static void check_read_back(hid_t d, const double *want) {
   double *got = malloc(NROWS * (size_t)ROW * sizeof *got);
   CHECK(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, got) >= 0);
@@ -76,17 +95,33 @@ int main(void) {
   CHECK(gs_chunk_write_rows(w, zipped, 0, 2, ROW, rows, 1, 1) >= 0);
   CHECK(gs_chunk_write_rows(w, zipped, 2, 2, ROW, rows + 2 * ROW, 1, 1) >= 0);
   CHECK(gs_chunk_write_rows(w, plain, 0, NROWS, ROW, rows, 0, 1) >= 0);
+  /* rows deflated in uneven pieces, the last one short */
+  hid_t pieces = make_dataset(f, "pieces", 1);
+  const size_t bytes = ROW * sizeof(double), piece = 7000;
+  for (hsize_t r = 0; r < NROWS; r++) {
+    const double *row = rows + r * ROW;
+    gs_chunk_row_begin(w, bytes, 1);
+    for (size_t from = 0; from < bytes; from += piece)
+      gs_chunk_row_feed(w, (const char *)row + from, from + piece < bytes ? piece : bytes - from,
+                        from + piece >= bytes);
+    CHECK(gs_chunk_row_write(w, pieces, r, ROW, row) >= 0);
+  }
   /* a different level restarts the stream; the data still read back */
   CHECK(gs_chunk_write_rows(w, zipped, 1, 1, ROW, rows + ROW, 1, 6) >= 0);
   H5Dclose(zipped);
   H5Dclose(plain);
+  H5Dclose(pieces);
   CHECK(H5Fclose(f) >= 0);
 
   f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
   zipped = H5Dopen2(f, "zipped", H5P_DEFAULT);
   plain = H5Dopen2(f, "plain", H5P_DEFAULT);
+  pieces = H5Dopen2(f, "pieces", H5P_DEFAULT);
   check_read_back(zipped, rows);
   check_read_back(plain, rows);
+  check_read_back(pieces, rows);
+  for (hsize_t r = 0; r < NROWS; r++)
+    if (r != 1) check_same_chunk(pieces, zipped, r); /* row 1 of zipped went at level 6 last */
   const hsize_t raw = ROW * sizeof(double);
   hsize_t size;
   unsigned mask;
@@ -104,6 +139,7 @@ int main(void) {
   }
   H5Dclose(zipped);
   H5Dclose(plain);
+  H5Dclose(pieces);
   H5Fclose(f);
   unlink(path);
   gs_chunk_writer_free(w);

@@ -125,7 +125,7 @@ static int drain_f(void *vctx, double t, const double *y, double *dydt) {
 /* y' = -k y over 50 outputs at t = 0.1 i (none representable exactly). */
 static void test_decay(const char *yaml, double tol, double y0) {
   decay_ctx c = {1.3, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -153,7 +153,7 @@ static double euler_error(double h) {
   snprintf(yaml, sizeof yaml,
            "solver:\n  method: euler\n  initial_step: %.17g\n  max_step: %.17g\n", h, h);
   decay_ctx c = {1.0, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return NAN;
   gs_error err = {0};
@@ -178,7 +178,7 @@ static void test_euler_order(void) {
 static void test_invariants(const char *yaml, double tol) {
   double k[2] = {2.0, 0.7};
   const double scale[4] = {1, 1, 1, 0};
-  gs_ode ode = {4, chain_f, k, scale, 3, NULL, NULL, NULL, 0};
+  gs_ode ode = {4, chain_f, k, scale, 3, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -201,7 +201,7 @@ static void test_invariants(const char *yaml, double tol) {
 /* ---- stiffness -------------------------------------------------------------- */
 
 static long stiff_evals(const char *yaml) {
-  gs_ode ode = {2, stiff_f, NULL, NULL, 2, NULL, NULL, NULL, 0};
+  gs_ode ode = {2, stiff_f, NULL, NULL, 2, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return -1;
   gs_error err = {0};
@@ -229,7 +229,7 @@ static void test_stiff(void) {
 
 static void diffusion_run(const char *yaml, double *y, size_t n) {
   diffusion_ctx c = {n, 400.0, 0.5};
-  gs_ode ode = {n, diffusion_f, &c, NULL, n, NULL, NULL, NULL, 0};
+  gs_ode ode = {n, diffusion_f, &c, NULL, n, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   for (size_t i = 0; i < n; i++) y[i] = i < n / 3 ? 1.0 : 0.01;
@@ -254,7 +254,7 @@ static void test_gmres_matches_dense(void) {
 /* n > 1000 picks GMRES under `auto`; still accurate. */
 static void test_cvode_auto_large(void) {
   size_t n = 1200;
-  gs_ode ode = {n, decays_f, &n, NULL, n, NULL, NULL, NULL, 0};
+  gs_ode ode = {n, decays_f, &n, NULL, n, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok("solver:\n  method: cvode\n  rtol: 1e-8\n", &ode, &it)) return;
   double *y = malloc(n * sizeof *y), t = 0, worst = 0;
@@ -274,7 +274,7 @@ static void test_cvode_auto_large(void) {
  * changed between calls must restart the integration from that state. */
 static void test_cvode_restart(void) {
   decay_ctx c = {1.0, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok("solver:\n  method: cvode\n  rtol: 1e-9\n", &ode, &it)) return;
   gs_error err = {0};
@@ -290,11 +290,86 @@ static void test_cvode_restart(void) {
   gs_integrator_free(&it);
 }
 
+/* ---- interrupted advances (gs_ode.between_steps) --------------------------------- */
+
+typedef struct {
+  double k[2];
+  int every, calls; /* ask for a return after every `every`-th accepted step */
+} interrupt_ctx;
+
+/* The chain slowing down as exp(-2 t): Euler's steps keep growing, up to
+ * what the interval allows. */
+static int interrupt_f(void *vctx, double t, const double *y, double *dydt) {
+  interrupt_ctx *c = vctx;
+  double k[2] = {c->k[0] * exp(-2 * t), c->k[1] * exp(-2 * t)};
+  return chain_f(k, t, y, dydt);
+}
+
+static int interrupt_between(void *vctx) {
+  interrupt_ctx *c = vctx;
+  return ++c->calls % c->every == 0;
+}
+
+/* Two output intervals, each advance asked to return early after every
+ * `every`-th step and called again, and each time continued by a fresh
+ * integrator carrying on from the old one when `rebuild` (what an MPI move
+ * of compartments does): the very steps and state of an uninterrupted run. */
+static void test_between_steps(const char *yaml, int every, int rebuild) {
+  interrupt_ctx plain = {{3.0, 0.5}, 1, 0}, cut = {{3.0, 0.5}, every, 0};
+  gs_ode ode = {4, interrupt_f, &plain, NULL, 3, NULL, NULL, NULL, 0, NULL};
+  gs_ode ode_cut = {4, interrupt_f, &cut, NULL, 3, NULL, NULL, NULL, 0, interrupt_between};
+  gs_integrator a, b;
+  if (make_ok(yaml, &ode, &a) || make_ok(yaml, &ode_cut, &b)) return;
+  gs_error err = {0};
+  double ya[4] = {1, 0, 0, 0}, yb[4] = {1, 0, 0, 0}, ta = 0, tb = 0;
+  int returns = 0;
+  for (double t_out = 0.25; t_out <= 3; t_out += 0.25) {
+    CHECK(advance(&a, &ode, &ta, t_out, ya, &err) == GS_OK);
+    while (tb < t_out) {
+      CHECK(advance(&b, &ode_cut, &tb, t_out, yb, &err) == GS_OK);
+      if (tb < t_out) returns++;
+      if (tb < t_out && rebuild) {
+        gs_integrator fresh;
+        if (make_ok(yaml, &ode_cut, &fresh)) return;
+        fresh.type->carry(fresh.self, b.self);
+        gs_integrator_free(&b);
+        b = fresh;
+      }
+    }
+  }
+  CHECK(returns > 2);
+  CHECK(ta == tb);
+  CHECK(memcmp(ya, yb, sizeof ya) == 0);
+  CHECK(stats_of(&a).steps == stats_of(&b).steps);
+  gs_integrator_free(&a);
+  gs_integrator_free(&b);
+  /* max_steps_per_output counts the steps of the interval, not of a call */
+  char limited[256];
+  snprintf(limited, sizeof limited, "%s  max_steps_per_output: 3\n", yaml);
+  cut.calls = 0;
+  if (make_ok(limited, &ode_cut, &b)) return;
+  tb = 0;
+  double y0[4] = {1, 0, 0, 0};
+  int rc = GS_OK;
+  while (!rc && tb < 1) {
+    rc = advance(&b, &ode_cut, &tb, 1.0, y0, &err);
+    if (!rc && rebuild) {
+      gs_integrator fresh;
+      if (make_ok(limited, &ode_cut, &fresh)) return;
+      fresh.type->carry(fresh.self, b.self);
+      gs_integrator_free(&b);
+      b = fresh;
+    }
+  }
+  CHECK(rc == GS_ENUMERIC && contains(err.msg, "max_steps_per_output"));
+  gs_integrator_free(&b);
+}
+
 /* ---- failures ----------------------------------------------------------------- */
 
 static void test_rhs_failure(const char *yaml) {
   decay_ctx c = {1.0, 0, 0.5};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -311,7 +386,7 @@ static void test_rhs_failure(const char *yaml) {
 
 /* NaN must surface as an error, not as a NaN state at t_out. */
 static void test_nan(const char *yaml) {
-  gs_ode ode = {1, nan_f, NULL, NULL, 1, NULL, NULL, NULL, 0};
+  gs_ode ode = {1, nan_f, NULL, NULL, 1, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -323,7 +398,7 @@ static void test_nan(const char *yaml) {
 
 /* GSL has no step floor of its own; min_step is enforced by the wrapper. */
 static void test_rk_min_step(void) {
-  gs_ode ode = {2, stiff_f, NULL, NULL, 2, NULL, NULL, NULL, 0};
+  gs_ode ode = {2, stiff_f, NULL, NULL, 2, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok("solver:\n  method: rk\n  min_step: 1e-3\n", &ode, &it)) return;
   gs_error err = {0};
@@ -334,7 +409,7 @@ static void test_rk_min_step(void) {
 }
 
 static void test_euler_negative(void) {
-  gs_ode ode = {1, drain_f, NULL, NULL, 1, NULL, NULL, NULL, 0};
+  gs_ode ode = {1, drain_f, NULL, NULL, 1, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok("solver:\n  method: euler\n  initial_step: 0.01\n", &ode, &it)) return;
   gs_error err = {0};
@@ -351,7 +426,7 @@ static void test_max_steps(const char *method) {
   char yaml[128];
   snprintf(yaml, sizeof yaml, "solver:\n  method: %s\n  max_steps_per_output: 5\n", method);
   decay_ctx c = {1.0, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -366,7 +441,7 @@ static void test_max_steps(const char *method) {
 
 static void expect_input_error(const char *yaml, const char *part1, const char *part2) {
   decay_ctx c = {1.0, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL};
   gs_integrator it = {NULL, NULL};
   gs_error err = {0};
   int rc = make(yaml, &ode, &it, &err);
@@ -424,7 +499,7 @@ static void test_registry(void) {
   CHECK(gs_integrator_lookup("nope") == NULL);
   /* No solver map at all: rk with default settings. */
   decay_ctx c = {1.0, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL};
   gs_integrator it;
   gs_error err = {0};
   CHECK(gs_integrator_create(NULL, &ode, &it, &err) == GS_OK);
@@ -434,7 +509,7 @@ static void test_registry(void) {
   CHECK_REL(y, exp(-1.0), 1e-5);
   gs_integrator_free(&it);
   gs_integrator_free(&it); /* idempotent */
-  gs_ode bad = {2, decay_f, &c, NULL, 3, NULL, NULL, NULL, 0};
+  gs_ode bad = {2, decay_f, &c, NULL, 3, NULL, NULL, NULL, 0, NULL};
   CHECK(gs_integrator_create(NULL, &bad, &it, &err) == GS_EINPUT);
 }
 
@@ -465,6 +540,12 @@ int main(void) {
   test_gmres_matches_dense();
   test_cvode_auto_large();
   test_cvode_restart();
+
+  test_between_steps("solver:\n  method: rk\n", 1, 0);
+  test_between_steps("solver:\n  method: rk\n", 3, 1);
+  test_between_steps("solver:\n  method: rk\n  variant: rk8pd\n", 2, 1);
+  test_between_steps("solver:\n  method: euler\n", 1, 0);
+  test_between_steps("solver:\n  method: euler\n", 4, 1);
 
   test_rhs_failure("solver:\n  method: rk\n");
   test_rhs_failure("solver:\n  method: cvode\n");

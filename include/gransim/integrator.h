@@ -50,6 +50,12 @@ typedef struct gs_ode {
    * rate, so the integrator need not scan every rate again (the run driver's
    * f does; it also says where).  0: the integrator checks. */
   int rates_checked;
+  /* Optional (rk and euler call it): after every accepted step; non-zero
+   * asks advance to return at once with *t short of t_out, and the caller
+   * calls advance again for the rest of the interval, which takes the very
+   * steps an uninterrupted advance would (the MPI run driver moves
+   * compartments between ranks there).  NULL: never. */
+  int (*between_steps)(void *ctx);
 } gs_ode;
 
 typedef struct gs_integrator_stats {

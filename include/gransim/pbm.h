@@ -107,6 +107,11 @@ struct gs_model {
   /* Numbers at or below this are integration noise (the solver's absolute
    * tolerance); mechanisms may skip cells holding no more than it. */
   double noise_floor;
+  /* NULL, or ncomp seconds: the work of each compartment whose cost depends
+   * on its contents (aggregation's pair loop, breakage), which mechanisms
+   * add with gs_model_clock/gs_model_charge; the MPI rebalancing reads it to
+   * follow the costs as the granulation front moves downstream. */
+  double *comp_seconds;
 };
 
 /* Allocate an empty model around a grid (grid is moved in). */
@@ -135,6 +140,11 @@ double gs_model_held(const gs_model *m, const double *y, size_t comp, int k);
 int gs_model_add_mechanism(gs_model *m, const char *type, gs_cfg_node *node, const char *label,
                            gs_error *err);
 void gs_model_free(gs_model *m);
+
+/* Timing of one compartment's work for m->comp_seconds (no clock is read
+ * when it is NULL): start = gs_model_clock(m); ...; gs_model_charge(m, comp, start). */
+double gs_model_clock(const gs_model *m);
+void gs_model_charge(const gs_model *m, size_t comp, double start);
 
 /* Full right-hand side: dydt (nstate) and dledger (nledger) are overwritten. */
 void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger);

@@ -11,6 +11,7 @@ struct gs_chunk_writer {
   int level; /* of the open stream; -2: none open */
   unsigned char *buf;
   size_t cap;
+  int failed; /* the row in progress cannot be deflated: it goes raw */
 };
 
 gs_chunk_writer *gs_chunk_writer_new(void) {
@@ -30,43 +31,64 @@ int gs_chunk_direct_ok(void) {
   return H5Tequal(H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE) > 0;
 }
 
-/* Deflates n bytes into w->buf; returns the compressed size, or 0 when zlib
- * fails or the result would not be smaller (the chunk is then stored raw). */
-static size_t squeeze(gs_chunk_writer *w, const void *src, size_t n, int level) {
+void gs_chunk_row_begin(gs_chunk_writer *w, size_t bytes, int level) {
+  w->failed = 1;
   if (w->level != level) {
     if (w->level != -2) deflateEnd(&w->z);
     memset(&w->z, 0, sizeof w->z);
     w->level = deflateInit(&w->z, level) == Z_OK ? level : -2;
-    if (w->level == -2) return 0;
+    if (w->level == -2) return;
   } else if (deflateReset(&w->z) != Z_OK) {
-    return 0;
+    return;
   }
-  size_t bound = deflateBound(&w->z, (uLong)n);
+  size_t bound = deflateBound(&w->z, (uLong)bytes);
   if (bound > w->cap) {
     unsigned char *b = realloc(w->buf, bound);
-    if (!b) return 0;
+    if (!b) return;
     w->buf = b;
     w->cap = bound;
   }
-  w->z.next_in = (Bytef *)(uintptr_t)src; /* zlib's API is not const */
-  w->z.avail_in = (uInt)n;
   w->z.next_out = w->buf;
   w->z.avail_out = (uInt)w->cap;
-  if (deflate(&w->z, Z_FINISH) != Z_STREAM_END) return 0;
-  return w->z.total_out < n ? (size_t)w->z.total_out : 0;
+  w->failed = 0;
+}
+
+void gs_chunk_row_feed(gs_chunk_writer *w, const void *span, size_t n, int last) {
+  if (w->failed) return;
+  w->z.next_in = (Bytef *)(uintptr_t)span; /* zlib's API is not const */
+  w->z.avail_in = (uInt)n;
+  /* the output buffer holds deflateBound of the whole row: every piece fits */
+  int st = deflate(&w->z, last ? Z_FINISH : Z_NO_FLUSH);
+  if (last ? st != Z_STREAM_END : (st != Z_OK || w->z.avail_in)) w->failed = 1;
+}
+
+herr_t gs_chunk_row_write(gs_chunk_writer *w, hid_t ds, hsize_t index, size_t values,
+                          const double *row) {
+  hsize_t offset[H5S_MAX_RANK] = {0}; /* a chunk spans every dimension after time */
+  const size_t bytes = values * sizeof(double);
+  offset[0] = index;
+  /* stored raw when zlib failed or the result would not be smaller, with
+   * filter mask bit 0 set: the (only, optional) deflate filter was skipped */
+  if (!w->failed && w->z.total_out < bytes)
+    return H5Dwrite_chunk(ds, H5P_DEFAULT, 0, offset, (size_t)w->z.total_out, w->buf);
+  return H5Dwrite_chunk(ds, H5P_DEFAULT, 1u, offset, bytes, row);
 }
 
 herr_t gs_chunk_write_rows(gs_chunk_writer *w, hid_t ds, hsize_t start, hsize_t count,
                            size_t values, const double *rows, int deflate, int level) {
-  hsize_t offset[H5S_MAX_RANK] = {0}; /* a chunk spans every dimension after time */
+  hsize_t offset[H5S_MAX_RANK] = {0};
   const size_t bytes = values * sizeof(double);
   for (hsize_t r = 0; r < count; r++) {
     const double *row = rows + r * values;
-    offset[0] = start + r;
-    size_t packed = deflate ? squeeze(w, row, bytes, level) : 0;
-    /* filter mask bit 0 set: the (only, optional) deflate filter was skipped */
-    herr_t st = packed ? H5Dwrite_chunk(ds, H5P_DEFAULT, 0, offset, packed, w->buf)
-                       : H5Dwrite_chunk(ds, H5P_DEFAULT, deflate ? 1u : 0u, offset, bytes, row);
+    herr_t st;
+    if (deflate) {
+      gs_chunk_row_begin(w, bytes, level);
+      gs_chunk_row_feed(w, row, bytes, 1);
+      st = gs_chunk_row_write(w, ds, start + r, values, row);
+    } else {
+      offset[0] = start + r;
+      st = H5Dwrite_chunk(ds, H5P_DEFAULT, 0, offset, bytes, row);
+    }
     if (st < 0) return st;
   }
   return 0;

@@ -36,4 +36,16 @@ int gs_chunk_direct_ok(void);
 herr_t gs_chunk_write_rows(gs_chunk_writer *w, hid_t ds, hsize_t start, hsize_t count,
                            size_t values, const double *rows, int deflate, int level);
 
+/* The same for one row deflated in pieces, so that a caller can interleave
+ * other work (rank 0 of an MPI run writes while it waits for the others,
+ * and a 512 KiB row takes ~2 ms to deflate): gs_chunk_row_begin(w, bytes,
+ * level), then gs_chunk_row_feed() over consecutive spans of the row, then
+ * gs_chunk_row_write() with the whole row (stored raw when zlib failed or
+ * did not shrink it).  The compressed chunk is the one gs_chunk_write_rows
+ * makes. */
+void gs_chunk_row_begin(gs_chunk_writer *w, size_t bytes, int level);
+void gs_chunk_row_feed(gs_chunk_writer *w, const void *span, size_t n, int last);
+herr_t gs_chunk_row_write(gs_chunk_writer *w, hid_t ds, hsize_t index, size_t values,
+                          const double *row);
+
 #endif

@@ -618,6 +618,7 @@ static void compartment_rates(agg_t *A, const gs_model *m, double t, const doubl
                               size_t comp, acc_t *acc, int slot) {
   const evaluator ev = evaluator_for(A, slot);
   const double *N = y + comp * A->ncells;
+  const double start = gs_model_clock(m);
   double born = 0, dead = 0;
   carried_loads(A, m, comp, y, ev.pcar);
   if (A->wet == WET_OFF) {
@@ -633,6 +634,7 @@ static void compartment_rates(agg_t *A, const gs_model *m, double t, const doubl
   }
   if (birth) birth[comp] = born;
   if (death) death[comp] = dead;
+  gs_model_charge(m, comp, start);
 }
 
 /* Several compartments and threads: each thread takes whole compartments

@@ -214,6 +214,7 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
   const gs_grid *g = &m->grid;
   const int dim = B->dim;
   for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
+    const double start = gs_model_clock(m);
     const double *N = y + comp * B->ncells;
     double *d = dydt ? dydt + comp * B->ncells : NULL;
     double *lost = dledger ? gs_model_ledger(m, dledger, comp) + m->nvol : NULL;
@@ -262,6 +263,7 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
       for (int q = 0; q < dim; q++) lost[q] += excess[q];
     if (birth) birth[comp] = born;
     if (death) death[comp] = dead;
+    gs_model_charge(m, comp, start);
   }
 }
 

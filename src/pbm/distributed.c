@@ -12,6 +12,8 @@
 #include <mpi.h>
 #endif
 
+static void *split_work_alloc(size_t n, int nr);
+
 int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err) {
   memset(d, 0, sizeof *d);
   d->rank = gs_parallel_rank();
@@ -26,13 +28,23 @@ int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err) {
     const size_t comp_len = (1 + (size_t)m->ncarried) * m->grid.ncells;
     d->sendbuf = gs_malloc(GS_DIST_NSEND * comp_len * sizeof(double), err);
     d->recvbuf = gs_malloc(comp_len * sizeof(double), err);
+    /* a block of any split fits: the whole state */
+    d->statebuf = gs_malloc((m->nstate + m->nledger) * sizeof(double), err);
 #ifdef GRANSIM_HAVE_MPI
-    MPI_Request *req = gs_malloc(GS_DIST_NSEND * sizeof(MPI_Request), err);
-    for (int i = 0; req && i < GS_DIST_NSEND; i++) req[i] = MPI_REQUEST_NULL;
+    MPI_Request *req = gs_malloc((GS_DIST_NSEND + 3) * sizeof(MPI_Request), err);
+    for (int i = 0; req && i < GS_DIST_NSEND + 3; i++) req[i] = MPI_REQUEST_NULL;
     d->requests = req;
+    if (req) {
+      d->state_request = req + GS_DIST_NSEND;
+      d->lagged_request = req + GS_DIST_NSEND + 1;
+      d->sum_request = req + GS_DIST_NSEND + 2;
+    }
 #endif
   }
-  if (!d->lo || (d->size > 1 && (!d->sendbuf || !d->recvbuf || !d->requests))) {
+  d->split_work = split_work_alloc(ncomp, d->size);
+  if (!d->split_work) gs_error_set(err, GS_ENOMEM, "out of memory");
+  if (!d->lo || !d->split_work ||
+      (d->size > 1 && (!d->sendbuf || !d->recvbuf || !d->statebuf || !d->requests))) {
     gs_dist_free(d);
     return GS_ENOMEM;
   }
@@ -88,18 +100,55 @@ static int reachable(const double *P, size_t n, const double *extra, int nr, dou
   return reach[(size_t)(nr - 1) * w + n];
 }
 
-/* Bisection on the largest block's cost with an exact feasibility test,
- * then the split read back from the reachable ends. */
+/* Workspace of a split of n compartments over nr ranks: prefix sums P
+ * (n + 1), counts (n + 2), reachable ends (nr (n + 1)) in one block. */
+typedef struct {
+  double *P;
+  size_t *count;
+  unsigned char *reach;
+} split_work;
+
+static void *split_work_alloc(size_t n, int nr) {
+  const size_t head = sizeof(split_work), p = (n + 1) * sizeof(double), c = (n + 2) * sizeof(size_t);
+  split_work *w = malloc(head + p + c + (size_t)(nr > 0 ? nr : 1) * (n + 1));
+  if (!w) return NULL;
+  w->P = (double *)(w + 1); /* head is a multiple of 8 */
+  w->count = (size_t *)((char *)w->P + p);
+  w->reach = (unsigned char *)((char *)w->count + c);
+  return w;
+}
+
+static double split_with(split_work *ws, const double *cost, size_t n, const double *extra,
+                         int nr, size_t *lo);
+
 double gs_dist_balanced_split(const double *cost, size_t n, const double *extra, int nr,
                               size_t *lo) {
-  double *P = malloc((n + 1) * sizeof *P);
-  size_t *count = malloc((n + 2) * sizeof *count);
-  unsigned char *reach = malloc((size_t)nr * (n + 1));
-  if (!P || !count || !reach || nr < 1 || (size_t)nr > n) { /* keep an even split */
+  split_work *w = nr >= 1 && (size_t)nr <= n ? split_work_alloc(n, nr) : NULL;
+  if (!w) { /* keep an even split */
     for (int r = 0; r <= nr; r++) lo[r] = n * (size_t)r / (size_t)(nr > 0 ? nr : 1);
-    free(P), free(count), free(reach);
     return INFINITY;
   }
+  double worst = split_with(w, cost, n, extra, nr, lo);
+  free(w);
+  return worst;
+}
+
+double gs_dist_best_split(gs_dist *d, const double *cost, const double *extra, size_t *lo) {
+  double none[d->size];
+  if (!extra) {
+    memset(none, 0, sizeof none);
+    extra = none;
+  }
+  return split_with(d->split_work, cost, d->m->grid.ncomp, extra, d->size, lo);
+}
+
+/* Bisection on the largest block's cost with an exact feasibility test,
+ * then the split read back from the reachable ends. */
+static double split_with(split_work *ws, const double *cost, size_t n, const double *extra,
+                         int nr, size_t *lo) {
+  double *P = ws->P;
+  size_t *count = ws->count;
+  unsigned char *reach = ws->reach;
   prefix_sums(cost, n, P);
   double low = 0, hi = P[n];
   for (int r = 0; r < nr; r++) hi = fmax(hi, P[n] + extra[r]);
@@ -123,7 +172,6 @@ double gs_dist_balanced_split(const double *cost, size_t n, const double *extra,
     lo[r] = k;
     j = k;
   }
-  free(P), free(count), free(reach);
   return worst;
 }
 
@@ -151,15 +199,22 @@ void gs_dist_free(gs_dist *d) {
 #ifdef GRANSIM_HAVE_MPI
   /* the last messages are received by now or soon: every evaluation on one
    * rank has its counterpart on the next */
-  if (d->requests) MPI_Waitall(GS_DIST_NSEND, d->requests, MPI_STATUSES_IGNORE);
+  if (d->requests) {
+    gs_dist_max_lagged_finish(d);
+    gs_dist_sum_finish(d);
+    MPI_Waitall(GS_DIST_NSEND + 1, d->requests, MPI_STATUSES_IGNORE);
+  }
 #endif
+  free(d->split_work);
+  d->split_work = NULL;
   free(d->requests);
-  d->requests = NULL;
+  d->requests = d->state_request = d->lagged_request = NULL;
   free(d->lo);
   free(d->sendbuf);
   free(d->recvbuf);
+  free(d->statebuf);
   d->lo = NULL;
-  d->sendbuf = d->recvbuf = NULL;
+  d->sendbuf = d->recvbuf = d->statebuf = NULL;
 }
 
 #ifdef GRANSIM_HAVE_MPI
@@ -239,34 +294,87 @@ double gs_dist_max_while(gs_dist *d, double v, int (*work)(void *), void *ctx) {
 #endif
 }
 
-int gs_dist_gather(gs_dist *d, double *y, gs_error *err) {
-#ifdef GRANSIM_HAVE_MPI
-  if (d->size < 2) return GS_OK;
+/* Rank r's three runs of the full vector: offsets and lengths. */
+static void block_of(const gs_dist *d, int r, size_t off[3], size_t len[3]) {
   const gs_model *m = d->m;
-  /* three runs of y per block: numbers, carried, ledger; units per compartment */
   const size_t unit[3] = {m->grid.ncells, (size_t)m->ncarried * m->grid.ncells, 2 * (size_t)m->nvol};
   const size_t base[3] = {0, m->nnum, m->nstate};
-  int *counts = malloc((size_t)d->size * sizeof(int)), *displs = malloc((size_t)d->size * sizeof(int));
-  if (!counts || !displs) {
-    free(counts);
-    free(displs);
-    return gs_error_set(err, GS_ENOMEM, "out of memory gathering the state");
+  for (int s = 0; s < 3; s++) {
+    off[s] = base[s] + d->lo[r] * unit[s];
+    len[s] = (d->lo[r + 1] - d->lo[r]) * unit[s];
   }
-  for (int part = 0; part < 3; part++) {
-    if (!unit[part]) continue;
-    for (int r = 0; r < d->size; r++) {
-      counts[r] = (int)((d->lo[r + 1] - d->lo[r]) * unit[part]);
-      displs[r] = (int)(d->lo[r] * unit[part]);
+}
+
+void gs_dist_collect(gs_dist *d, double *y) {
+#ifdef GRANSIM_HAVE_MPI
+  if (d->size < 2) return;
+  enum { TAG_STATE = 1 }; /* the boundary exchange uses tag 0 */
+  if (d->rank) {
+    /* the last output time's block has long arrived: rank 0 received it
+     * before this rank could pass that time's step agreements */
+    MPI_Wait(d->state_request, MPI_STATUS_IGNORE);
+    gs_dist_pack(d, y, d->statebuf);
+    MPI_Isend(d->statebuf, (int)d->nlocal, MPI_DOUBLE, 0, TAG_STATE, MPI_COMM_WORLD, d->state_request);
+    return;
+  }
+  for (int r = 1; r < d->size; r++) {
+    size_t off[3], len[3];
+    block_of(d, r, off, len);
+    MPI_Recv(d->statebuf, (int)(len[0] + len[1] + len[2]), MPI_DOUBLE, r, TAG_STATE, MPI_COMM_WORLD,
+             MPI_STATUS_IGNORE);
+    const double *b = d->statebuf;
+    for (int s = 0; s < 3; s++) {
+      memcpy(y + off[s], b, len[s] * sizeof(double));
+      b += len[s];
     }
-    MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, y + base[part], counts, displs, MPI_DOUBLE,
-                   MPI_COMM_WORLD);
   }
-  free(counts);
-  free(displs);
 #else
   (void)d;
   (void)y;
-  (void)err;
 #endif
-  return GS_OK;
+}
+
+double gs_dist_max_lagged(gs_dist *d, double v) {
+  double previous = gs_dist_max_lagged_finish(d);
+#ifdef GRANSIM_HAVE_MPI
+  if (d->size > 1) {
+    d->lagged_in = v;
+    MPI_Iallreduce(&d->lagged_in, &d->lagged_out, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD,
+                   d->lagged_request);
+    d->lagged_pending = 1;
+  }
+#else
+  (void)v;
+#endif
+  return previous;
+}
+
+double gs_dist_max_lagged_finish(gs_dist *d) {
+  if (!d->lagged_pending) return 0;
+#ifdef GRANSIM_HAVE_MPI
+  MPI_Wait(d->lagged_request, MPI_STATUS_IGNORE);
+#endif
+  d->lagged_pending = 0;
+  return d->lagged_out;
+}
+
+void gs_dist_sum_post(gs_dist *d, double *v, size_t n) {
+  gs_dist_sum_finish(d);
+#ifdef GRANSIM_HAVE_MPI
+  if (d->size > 1) {
+    MPI_Iallreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD, d->sum_request);
+    d->sum_pending = 1;
+  }
+#else
+  (void)v;
+  (void)n;
+#endif
+}
+
+void gs_dist_sum_finish(gs_dist *d) {
+  if (!d->sum_pending) return;
+#ifdef GRANSIM_HAVE_MPI
+  MPI_Wait(d->sum_request, MPI_STATUS_IGNORE);
+#endif
+  d->sum_pending = 0;
 }

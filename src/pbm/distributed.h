@@ -5,8 +5,8 @@
  * vector, packed into one local vector) and evaluates only their rates;
  * before each right-hand side the last compartment of every block goes to
  * the next rank (the inflow of transfer); the integrators agree on every
- * step with all-reduces (max); the full state is assembled on every rank
- * only at output times.  Without MPI (or outside mpirun, or on one rank)
+ * step with all-reduces (max); the full state is assembled on rank 0 only,
+ * at output times, without the other ranks waiting for it.  Without MPI (or outside mpirun, or on one rank)
  * one block holds everything. */
 #ifndef GRANSIM_DISTRIBUTED_H
 #define GRANSIM_DISTRIBUTED_H
@@ -27,6 +27,15 @@ typedef struct {
   double *sendbuf, *recvbuf;
   void *requests; /* MPI_Request[GS_DIST_NSEND] under MPI */
   int next_send;
+  /* output times: a rank's block on its way to rank 0 (see gs_dist_collect),
+   * and the all-reduce of gs_dist_max_lagged in flight */
+  double *statebuf;
+  void *state_request, *lagged_request;
+  double lagged_in, lagged_out;
+  int lagged_pending;
+  void *sum_request; /* gs_dist_sum_post's all-reduce in flight, if sum_pending */
+  int sum_pending;
+  void *split_work; /* gs_dist_best_split's, allocated once */
 } gs_dist;
 
 /* Boundary messages a rank may have in flight: a rank with cheaper
@@ -45,6 +54,9 @@ void gs_dist_resplit(gs_dist *d, gs_model *m, const size_t *lo);
  * largest block's cost. */
 double gs_dist_balanced_split(const double *cost, size_t n, const double *extra, int nr,
                               size_t *lo);
+/* The same for this distribution's ranks, with no allocation (so every
+ * rank computes the same split from the same costs); extra may be NULL. */
+double gs_dist_best_split(gs_dist *d, const double *cost, const double *extra, size_t *lo);
 void gs_dist_free(gs_dist *d);
 /* This rank's parts of a full vector <-> the packed local vector. */
 void gs_dist_pack(const gs_dist *d, const double *full, double *local);
@@ -62,7 +74,19 @@ double gs_dist_max(gs_dist *d, double v);
  * this one or gs_dist_max at the same call: MPI matches a non-blocking
  * collective only with non-blocking ones. */
 double gs_dist_max_while(gs_dist *d, double v, int (*work)(void *), void *ctx);
-/* Every rank receives every block of the full vector y (numbers, carried,
- * ledger), each rank's own parts being current. */
-int gs_dist_gather(gs_dist *d, double *y, gs_error *err);
+/* Rank 0 receives every other rank's block of the full vector y (numbers,
+ * carried, ledger) into y; the others send theirs without waiting for it to
+ * arrive (their y is current only in their own block). */
+void gs_dist_collect(gs_dist *d, double *y);
+/* A maximum over the ranks that nobody waits for: posts v and returns the
+ * maximum posted at the previous call (0 at the first), which every rank has
+ * long contributed by then. */
+double gs_dist_max_lagged(gs_dist *d, double v);
+/* The maximum of the last gs_dist_max_lagged still in flight (0 if none). */
+double gs_dist_max_lagged_finish(gs_dist *d);
+/* A sum over the ranks of v[0..n), in place, that nobody waits for: v must
+ * stay untouched until gs_dist_sum_finish, which completes it (at once if
+ * none is in flight; one at a time). */
+void gs_dist_sum_post(gs_dist *d, double *v, size_t n);
+void gs_dist_sum_finish(gs_dist *d);
 #endif

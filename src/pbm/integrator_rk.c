@@ -43,8 +43,15 @@ typedef struct {
   gsl_odeiv2_evolve *evolve;
   double *scale; /* per-component absolute-tolerance scale, as given to GSL */
   double h;      /* step proposed for the next advance; <= 0 until chosen */
+  /* the interval of the last advance (a call that ended early through
+   * between_steps continues it) and the steps taken in it */
+  double interval_end;
+  long interval_steps;
   const gs_ode *ode; /* the system of the advance() in progress */
   int rhs_failed; /* 1: f returned an error; 2: f gave a non-finite value */
+  /* under MPI, the step's one agreement (in the controller) was reached,
+   * and it found a non-finite state on some rank */
+  int agreed, agreed_nonfinite;
   size_t fail_index;
   double fail_t, fail_value;
   gs_integrator_stats stats;
@@ -98,8 +105,18 @@ static int gs_rk_agree(gs_rk *self) {
 typedef struct {
   double atol, rtol;
   const double *scale; /* per-component absolute-tolerance scale */
-  const gs_rk *rk;     /* for the ode of the advance in progress (reduce_max) */
+  gs_rk *rk;           /* for the ode of the advance in progress (reduce_max) */
 } gs_rk_control;
+
+/* Under MPI a step needs one agreement, in the controller: the largest
+ * error, or a failure anywhere, which outranks any error (a failed f, then a
+ * non-finite state).  Two agreements (error, then failures) had made a rank
+ * that waited for the others at the first wait again at the second. */
+#define GS_RK_AGREED_RHS_FAILED 4e300
+#define GS_RK_AGREED_NONFINITE 2e300
+#define GS_RK_ERROR_CAP 1e300
+
+static int gs_rk_all_finite(const double *y, size_t n);
 
 static void *gs_rk_control_alloc(void) { return calloc(1, sizeof(gs_rk_control)); }
 
@@ -122,8 +139,20 @@ static int gs_rk_control_hadjust(void *state, size_t dim, unsigned int ord, cons
     double r = fabs(yerr[i]) / (c->rtol * fabs(y[i]) + c->atol * c->scale[i]);
     if (r > rmax) rmax = r;
   }
-  const gs_ode *ode = c->rk->ode;
-  if (ode->reduce_max) rmax = ode->reduce_max(ode->ctx, rmax);
+  gs_rk *rk = c->rk;
+  const gs_ode *ode = rk->ode;
+  if (ode->reduce_max) {
+    double mine = rk->rhs_failed                ? GS_RK_AGREED_RHS_FAILED
+                  : !gs_rk_all_finite(y, dim)   ? GS_RK_AGREED_NONFINITE
+                                                : fmin(rmax, GS_RK_ERROR_CAP);
+    double all = ode->reduce_max(ode->ctx, mine);
+    rk->agreed = 1;
+    rk->agreed_nonfinite = all >= GS_RK_AGREED_NONFINITE && all < GS_RK_AGREED_RHS_FAILED;
+    if (all >= GS_RK_AGREED_RHS_FAILED && !rk->rhs_failed) rk->rhs_failed = 3;
+    /* a failure: take the step as it is; gs_rk_check_finite rolls it back */
+    if (all >= GS_RK_AGREED_NONFINITE) return GSL_ODEIV_HADJ_NIL;
+    rmax = all;
+  }
   if (rmax > 1.1) { /* shrink, by at most 5, a fraction S more than the error suggests */
     *h = h_old * fmax(0.2, S / pow(rmax, 1.0 / ord));
     return GSL_ODEIV_HADJ_DEC;
@@ -203,6 +232,7 @@ static int gs_rk_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_e
   gs_rk *self = gs_calloc(1, sizeof *self, err);
   if (!self) return GS_ENOMEM;
   self->n = ode->n;
+  self->interval_end = NAN; /* no interval yet */
   double h0;
   int variant = 1;
   int rc = gs_integrator_common_keys(solver, &self->rtol, &self->atol, &h0, &self->h_min,
@@ -272,9 +302,17 @@ static int gs_rk_fail(gs_rk *self, int status, double t0, double h, double *t, d
 /* A step GSL accepted may still be unusable: NaN slips through its error
  * control (NaN never exceeds the tolerance), so roll such a step back. */
 static int gs_rk_check_finite(gs_rk *self, double t0, double *t, double *y, gs_error *err) {
-  int ok = gs_rk_all_finite(y, self->n);
-  if (self->ode->reduce_max) { /* one agreement per step: a failed f anywhere, or a NaN */
-    double bad = self->ode->reduce_max(self->ode->ctx, self->rhs_failed ? 2.0 : ok ? 0.0 : 1.0);
+  int ok;
+  if (!self->ode->reduce_max) {
+    ok = gs_rk_all_finite(y, self->n);
+  } else {
+    /* failures anywhere: agreed in the controller with the error (GSL calls
+     * it after every step it tries), otherwise here */
+    double bad = self->agreed ? (self->rhs_failed ? 2.0 : self->agreed_nonfinite ? 1.0 : 0.0)
+                              : self->ode->reduce_max(self->ode->ctx,
+                                                      self->rhs_failed                  ? 2.0
+                                                      : gs_rk_all_finite(y, self->n) ? 0.0
+                                                                                        : 1.0);
     if (bad == 2.0) {
       if (!self->rhs_failed) self->rhs_failed = 3;
       memcpy(y, self->evolve->y0, self->n * sizeof *y);
@@ -315,13 +353,18 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
     int rc = gs_rk_initial_step(self, *t, t_out - *t, y, err);
     if (rc) return rc;
   }
-  for (long steps = 0; *t < t_out; steps++) {
-    if (steps >= self->max_steps)
+  if (t_out != self->interval_end) { /* a new interval, not the rest of one */
+    self->interval_end = t_out;
+    self->interval_steps = 0;
+  }
+  for (; *t < t_out; self->interval_steps++) {
+    if (self->interval_steps >= self->max_steps)
       return gs_error_set(err, GS_ENUMERIC,
                           "integrator rk: max_steps_per_output = %ld steps taken at t = %.9g "
                           "before reaching %.9g",
                           self->max_steps, *t, t_out);
     double t0 = *t, h = fmin(self->h, self->h_max);
+    self->agreed = 0;
     /* evolve shortens the step that would pass t_out and then sets t = t_out
      * exactly; it leaves h at the controller's proposal for later calls. */
     int status = gsl_odeiv2_evolve_apply(self->evolve, self->control, self->step, &sys, t, t_out,
@@ -336,6 +379,10 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
     self->stats.last_step = self->evolve->last_step;
     rc = gs_rk_check_min_step(self, *t, t_out, err);
     if (rc) return rc;
+    if (ode->between_steps && ode->between_steps(ode->ctx)) {
+      self->interval_steps++;
+      return GS_OK;
+    }
   }
   return GS_OK;
 }
@@ -354,6 +401,8 @@ static void gs_rk_carry(void *vto, const void *vfrom) {
   const gs_rk *from = vfrom;
   to->h = from->h;
   to->stats = from->stats;
+  to->interval_end = from->interval_end;
+  to->interval_steps = from->interval_steps;
 }
 
 const gs_integrator_type gs_integrator_rk = {

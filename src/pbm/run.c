@@ -54,9 +54,15 @@ typedef struct {
   /* seconds advancing the state, and in step agreements (waiting, and
    * rank 0's deferred writing) */
   double t_advance, t_agree;
-  /* rebalancing (MPI): busy and output seconds at the last one, the
-   * estimated cost of every compartment, moves taken */
-  double busy_mark, written_mark, *comp_cost;
+  /* rebalancing (MPI): busy and output seconds at the last measurement;
+   * the costs measured (rebalance_measure), a split's lo; moves taken */
+  double busy_mark, written_mark, *spent;
+  size_t *split_lo;
+  long window_evals, evals_needed; /* evaluations in the last window, and in the next */
+  long steps_seen, posted_at;      /* steps taken, and when the last window was summed */
+  int move_wanted;
+  double move_seconds; /* the last move took (the slowest rank) */
+  double advance_start, t_advance_now; /* the advance in progress began; busy then */
   long rhs_calls, calls_mark; /* this rank's evaluations (the same count on every rank) */
   long rebalanced, moves_tried; /* moves_tried: GRANSIM_TEST_MOVE_COMPARTMENTS only */
 } guard_t;
@@ -158,6 +164,8 @@ static double guarded_max(void *ctx, double v) {
   return v;
 }
 
+static int between_steps(void *ctx);
+
 /* What advances the state: the case's integrator on the full vector, or,
  * under MPI, an integrator of this rank's own on its packed part. */
 typedef struct {
@@ -187,7 +195,7 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
   if (!s->yl || !s->scale || !guard->F) return GS_ENOMEM;
   gs_dist_pack(d, c->abs_scale, s->scale);
   /* numbers and carried volumes come first in the packed vector too */
-  s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max, 1};
+  s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max, 1, between_steps};
   s->it = &s->own;
   return gs_integrator_create(gs_cfg_get(gs_cfg_root(c->cfg), "solver"), &s->ode, &s->own, err);
 }
@@ -313,92 +321,128 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
   return GS_OK;
 }
 
-/* Under MPI, at an output time (every rank holds the whole state).  Each
- * rank's busy seconds since the last call (rates and integrator work, not
- * the waits for other ranks) are shared over its compartments in
- * proportion to their previous estimates (at first evenly),
- * so the estimates learn the shape of the costs as compartments move; rank
- * 0's seconds writing results count as work of rank 0 alone.  When the best
- * contiguous split for those costs promises a slowest rank at least
- * c->rebalance cheaper than the measured one, the ranks take it and rebuild
- * their integrators, which carry on with the old step size and counters
+/* Rebalancing, under MPI, between steps (gs_ode.between_steps).  The cost
+ * of each compartment over a window of evaluations is what the model
+ * measured of its content-dependent work (m->comp_seconds: aggregation's
+ * pair loop, breakage), plus an even share of the rest of its rank's busy
+ * seconds (rates and integrator work, not the waits for other ranks); rank
+ * 0's seconds writing results count as work of rank 0 alone.  The ranks sum
+ * these without waiting and decide one step later, on identical numbers,
+ * so every rank takes the same decision without an agreement of its own.
+ * When the best contiguous split for those costs promises a slowest rank at
+ * least c->rebalance cheaper than the measured one, the integrators return
+ * early, the ranks take the split and rebuild their integrators, which
+ * carry on with the old step size, counters and interval
  * (gs_integrator_type.carry): not a single step changes, so the results are
  * the same for any split (a rebuilt RK integrator evaluates f once more at
  * the start of its first step, so the count of evaluations grows by one per
- * move). */
-#define MIN_EVALS 200 /* evaluations measured before a rebalancing decision */
-static int rebalance(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, gs_error *err) {
-  const size_t ncomp = c->model.grid.ncomp;
-  const int nr = d->size;
-  if (c->rebalance < 0 || !s->it->type->carry) return GS_OK; /* the same on every rank */
-  /* Decide on at least MIN_EVALS evaluations: the seed-000 example's output
-   * intervals hold ~1 ms of rates each, whose timings are mostly noise on a
-   * shared machine (deciding every interval moved compartments back and
-   * forth up to 11 times).  Every rank counts the same evaluations, so all
-   * skip together. */
-  const int forced = getenv("GRANSIM_TEST_MOVE_COMPARTMENTS") != NULL;
-  if (!forced && g->rhs_calls - g->calls_mark < MIN_EVALS) return GS_OK;
+ * move).  Deciding between steps rather than at output times follows the
+ * granulation front as it moves downstream: in the 32-compartment case the
+ * 18 output intervals had been too coarse for it. */
+#define MIN_EVALS 20        /* the shortest window */
+#define MAX_EVALS 2000      /* the longest */
+#define WINDOW_SECONDS 0.02 /* a window holds about this much work of the slowest rank */
+
+/* Each rank's costs over the window, summed over the ranks without
+ * waiting: per compartment, then each rank's writing. */
+static void rebalance_measure(gs_case *c, gs_dist *d, guard_t *g) {
+  gs_model *m = &c->model;
+  const size_t ncomp = m->grid.ncomp;
+  g->window_evals = g->rhs_calls - g->calls_mark;
   g->calls_mark = g->rhs_calls;
-  if (!g->comp_cost && (g->comp_cost = gs_malloc(ncomp * sizeof(double), err)))
-    for (size_t j = 0; j < ncomp; j++) g->comp_cost[j] = 1.0;
-  double *spent = gs_calloc(2 * (size_t)nr, sizeof(double), err); /* busy, then writing */
-  size_t *lo = gs_malloc(((size_t)nr + 1) * sizeof(size_t), err);
-  /* every rank must reach the same collectives: a failed allocation
-   * anywhere ends the rebalancing everywhere (the failing rank's error is
-   * then agreed on by the caller) */
-  const int failed = !g->comp_cost || !spent || !lo;
-  if (gs_dist_max(d, failed ? 1.0 : 0.0) > 0) {
-    free(spent);
-    free(lo);
-    return failed ? GS_ENOMEM : GS_OK;
-  }
+  memset(g->spent, 0, (ncomp + (size_t)d->size) * sizeof(double));
   /* busy: advancing the state, less the waits for other ranks (boundary
    * messages and step agreements): the rates and the integrator's own
    * vector work, which grows with the block too (a quarter of the
    * 32-compartment case) */
-  const double busy = g->t_advance - g->t_exchange - g->t_agree;
+  const double busy = g->t_advance_now - g->t_exchange - g->t_agree;
   const double written = g->t_written + gs_deferred_output_seconds(g->deferred);
-  spent[d->rank] = busy - g->busy_mark;
-  spent[nr + d->rank] = written - g->written_mark;
+  const size_t own_lo = d->lo[d->rank], own_hi = d->lo[d->rank + 1];
+  double measured = 0;
+  for (size_t j = own_lo; j < own_hi; j++) measured += m->comp_seconds[j];
+  const double rest = fmax(0.0, busy - g->busy_mark - measured) / (double)(own_hi - own_lo);
+  for (size_t j = own_lo; j < own_hi; j++) g->spent[j] = m->comp_seconds[j] + rest;
+  memset(m->comp_seconds, 0, ncomp * sizeof(double));
+  g->spent[ncomp + (size_t)d->rank] = written - g->written_mark;
   g->busy_mark = busy;
   g->written_mark = written;
-  gs_parallel_sum(spent, 2 * (size_t)nr); /* the same numbers on every rank: the same decision */
+  gs_dist_sum_post(d, g->spent, ncomp + (size_t)d->size); /* zeros elsewhere: exact */
+}
+
+/* The decision on the last window, into g->split_lo; 1 for a move.  The
+ * next window is sized to hold WINDOW_SECONDS of the slowest rank's work:
+ * shorter ones are mostly timing noise on a shared machine (the seed-000
+ * example's output intervals hold ~1 ms of rates each; deciding on each had
+ * moved compartments back and forth up to 11 times). */
+static int rebalance_decide(gs_case *c, gs_dist *d, guard_t *g) {
+  const size_t ncomp = c->model.grid.ncomp;
+  const int nr = d->size;
+  size_t *lo = g->split_lo;
+  gs_dist_sum_finish(d);
   double slowest = 0;
   for (int r = 0; r < nr; r++) {
-    double before = 0;
-    for (size_t j = d->lo[r]; j < d->lo[r + 1]; j++) before += g->comp_cost[j];
-    for (size_t j = d->lo[r]; j < d->lo[r + 1]; j++)
-      g->comp_cost[j] = before > 0 ? spent[r] * g->comp_cost[j] / before
-                                   : spent[r] / (double)(d->lo[r + 1] - d->lo[r]);
-    slowest = fmax(slowest, spent[r] + spent[nr + r]);
+    double block = g->spent[ncomp + (size_t)r];
+    for (size_t j = d->lo[r]; j < d->lo[r + 1]; j++) block += g->spent[j];
+    slowest = fmax(slowest, block);
   }
-  double largest = gs_dist_balanced_split(g->comp_cost, ncomp, spent + nr, nr, lo);
-  if (forced) {
-    /* tests only: a move at every output time whatever the costs, one
-     * block boundary after the other, so that tests/mpi_sectional.sh can
-     * check that moves change no result without depending on timings */
+  const double evals = slowest > 0 ? WINDOW_SECONDS * (double)g->window_evals / slowest : MAX_EVALS;
+  g->evals_needed = evals < MIN_EVALS ? MIN_EVALS : evals > MAX_EVALS ? MAX_EVALS : (long)evals;
+  double largest = gs_dist_best_split(d, g->spent, g->spent + ncomp, lo);
+  if (getenv("GRANSIM_TEST_MOVE_COMPARTMENTS")) {
+    /* tests only: a move at every decision whatever the costs, one block
+     * boundary after the other, so that tests/mpi_sectional.sh can check
+     * that moves change no result without depending on timings */
     memcpy(lo, d->lo, ((size_t)nr + 1) * sizeof *lo);
     int b = 1 + (int)(g->moves_tried++ % (long)(nr - 1));
     if (lo[b] - lo[b - 1] > 1) lo[b]--;
     else if (lo[b + 1] - lo[b] > 1) lo[b]++;
-    largest = -1; /* take it */
+    return 1;
   }
-  int rc = GS_OK;
-  /* the ranks compute the same split from the same sums; only a failure
-   * inside gs_dist_balanced_split (no memory: an infinite cost) could set
-   * one apart, so a move needs every rank's consent */
-  int move = memcmp(lo, d->lo, ((size_t)nr + 1) * sizeof *lo) && largest < (1 - c->rebalance) * slowest;
-  if (gs_dist_max(d, move ? 0.0 : 1.0) > 0) move = 0;
-  if (move) {
-    stepper_t old = *s; /* old.own is the old integrator (old.it points into *s) */
-    gs_dist_resplit(d, &c->model, lo);
-    rc = stepper_init(s, c, d, g, err);
-    if (!rc) s->it->type->carry(s->it->self, old.own.self);
-    stepper_free(&old);
-    g->rebalanced++;
+  /* worth it when the window would have been faster by more than the
+   * threshold and by more than a move costs (the last one's, agreed) */
+  return memcmp(lo, d->lo, ((size_t)nr + 1) * sizeof *lo) && largest < (1 - c->rebalance) * slowest &&
+         slowest - largest > g->move_seconds;
+}
+
+/* gs_ode.between_steps of the MPI integrators: measure when a window is
+ * full, decide one step later (by then the sum has long arrived; every rank
+ * counts the same steps and evaluations, so all do the same). */
+static int between_steps(void *ctx) {
+  guard_t *g = ctx;
+  g->steps_seen++;
+  if (!g->spent) return 0; /* no rebalancing */
+  if (!g->dist->sum_pending) {
+    if (getenv("GRANSIM_TEST_MOVE_COMPARTMENTS") || g->rhs_calls - g->calls_mark >= g->evals_needed) {
+      g->t_advance_now = g->t_advance + (now_seconds() - g->advance_start);
+      rebalance_measure(g->c, g->dist, g);
+      g->posted_at = g->steps_seen;
+    }
+    return 0;
   }
-  free(spent);
-  free(lo);
+  if (g->steps_seen == g->posted_at) return 0;
+  return g->move_wanted = rebalance_decide(g->c, g->dist, g);
+}
+
+/* The move decided between steps.  Y: this rank's block is current (the
+ * integrator returned early); rank 0 collects the others' and sends the
+ * whole state to every rank, which then takes its new block. */
+static int rebalance_move(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, double *Y,
+                          gs_error *err) {
+  gs_model *m = &c->model;
+  const double start = now_seconds();
+  g->move_wanted = 0;
+  gs_dist_collect(d, Y);
+  gs_parallel_broadcast(Y, m->nstate + m->nledger);
+  stepper_t old = *s; /* old.own is the old integrator (old.it points into *s) */
+  gs_dist_resplit(d, m, g->split_lo);
+  int rc = stepper_init(s, c, d, g, err);
+  if (!rc) s->it->type->carry(s->it->self, old.own.self);
+  stepper_free(&old);
+  g->rebalanced++;
+  rc = agree(d, rc, err);
+  /* fresh integrator vectors cost page faults: 1-11 ms per move in the
+   * 32-compartment case */
+  g->move_seconds = gs_dist_max(d, now_seconds() - start);
   return rc;
 }
 
@@ -437,6 +481,38 @@ static void progress(const gs_case *c, double t, double t_end, const gs_integrat
   fprintf(stderr, "\rgransim: t = %-10.4g of %-10.4g (%3.0f%%)  %ld steps  %.1f s   ", t, t_end,
           span > 0 ? 100.0 * (t - c->t0) / span : 100.0, st->steps, elapsed);
   fflush(stderr);
+}
+
+/* At an output time (rank 0): check the state, then write it, or under MPI
+ * hold it for writing in the waits of the next steps. */
+static int output_time(gs_case *c, gs_output *out, guard_t *gd, double t, double *Y,
+                       const double *M1_0, double *ymax_seen, gs_run_report *rep, gs_error *err) {
+  const gs_model *m = &c->model;
+  int rc = check_state(c, Y, M1_0, t, ymax_seen, rep, err);
+  if (!rc && gd->deferred_rc) { /* a deferred write failed during the steps */
+    *err = gd->deferred_err;
+    return gd->deferred_rc;
+  }
+  if (rc || !out) return rc;
+  if (gd->deferred) {
+    rc = gs_deferred_output_push(gd->deferred, t, Y, err);
+    /* held times may not delay a due commit: a killed run loses no more
+     * than output.checkpoint promises (0: every output time commits) */
+    if (!rc && gs_output_commit_due(out)) rc = gs_deferred_output_drain(gd->deferred, err);
+    return rc;
+  }
+  const double write_start = now_seconds();
+  rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
+  gd->t_written += now_seconds() - write_start; /* deferred writes count their own */
+  return rc;
+}
+
+/* The run stops for a failure at an output time: rank 0's own (rc, its
+ * message in own), or another rank's (its code: agreed). */
+static int failed_at_output(int rc, int agreed, const gs_error *own, gs_error *err) {
+  if (!rc) return gs_error_set(err, agreed, "the run failed on another MPI rank");
+  *err = *own;
+  return rc;
 }
 
 int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_report *rep_out,
@@ -493,6 +569,17 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   stepper_t step;
   memset(&step, 0, sizeof step);
   if (!rc) rc = agree(&dist, stepper_init(&step, c, &dist, &guard, err), err);
+  /* the compartments' own costs, for the rebalancing */
+  if (!rc && dist.size > 1 && c->rebalance >= 0 &&
+      (!(m->comp_seconds = gs_calloc(g->ncomp, sizeof(double), err)) ||
+       !(guard.spent = gs_calloc(g->ncomp + (size_t)dist.size, sizeof(double), err)) ||
+       !(guard.split_lo = gs_calloc((size_t)dist.size + 1, sizeof(size_t), err))))
+    rc = GS_ENOMEM;
+  guard.evals_needed = MIN_EVALS;
+  if (!rc && step.it && !step.it->type->carry) { /* cvode: no rebalancing */
+    free(guard.spent);
+    guard.spent = NULL;
+  }
   /* rank 0 of several holds output times back, to write them while it waits */
   if (!rc && out && dist.size > 1) {
     size_t fit = DEFER_BYTES / (n * sizeof(double));
@@ -500,16 +587,19 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     if (!(guard.deferred = gs_deferred_output_create(out, m, depth, err))) rc = GS_ENOMEM;
   }
   rc = agree(&dist, rc, err);
+  int out_rc = GS_OK; /* rank 0's first failure at an output time, and its message */
+  gs_error out_err = {0};
   double start = now_seconds(), t_end = c->times[c->ntimes - 1];
   gs_integrator_stats st = {0};
   for (size_t i = 0; !rc && i < c->ntimes; i++) {
     if (c->times[i] <= t) continue;
     /* stop at every time where a rate switches on or off (spray windows,
      * feeds): an integrator cannot step over a jump in f to tolerance */
-    const double advance_start = now_seconds();
+    const double advance_start = guard.advance_start = now_seconds();
     while (!rc && t < c->times[i]) {
       double stop = fmin(c->times[i], gs_model_next_switch(m, t));
       rc = stepper_advance(&step, &t, stop, Y, err);
+      if (!rc && guard.move_wanted) rc = rebalance_move(c, &dist, &step, &guard, Y, err);
     }
     const double outputs_start = now_seconds();
     guard.t_advance += outputs_start - advance_start;
@@ -521,32 +611,28 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
       else snprintf(where, sizeof where, "volume ledger entry %zu", idx - m->nstate);
       rc = gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: the rate of change is not finite (NaN or infinity); check kernel and mechanism parameters", guard.bad_t, where);
     }
-    /* integrator failures are agreed already; gather only a good state */
-    if (!rc) rc = gs_dist_gather(&dist, Y, err);
-    if (!rc) rc = check_state(c, Y, M1_0, t, &ymax_seen, &rep, err);
-    const double write_start = now_seconds();
-    if (!rc && guard.deferred_rc) { /* a deferred write failed during the steps */
-      rc = guard.deferred_rc;
-      *err = guard.deferred_err;
-    }
-    if (!rc && guard.deferred) {
-      rc = gs_deferred_output_push(guard.deferred, t, Y, err);
-      /* held times may not delay a due commit: a killed run loses no more
-       * than output.checkpoint promises (0: every output time commits) */
-      if (!rc && gs_output_commit_due(out)) rc = gs_deferred_output_drain(guard.deferred, err);
-    } else if (!rc && out) {
-      rc = gs_output_write(out, m, t, Y, Y + m->nstate, err);
-      guard.t_written += now_seconds() - write_start; /* deferred writes count their own */
-    }
-    rc = agree(&dist, rc, err);
-    if (!rc && dist.size > 1 && i + 1 < c->ntimes)
-      rc = agree(&dist, rebalance(c, &dist, &step, &guard, err), err);
+    /* integrator failures are agreed already; collect only a good state */
+    if (!rc) gs_dist_collect(&dist, Y);
+    if (!rc && root && !out_rc)
+      out_rc = output_time(c, out, &guard, t, Y, M1_0, &ymax_seen, &rep, &out_err);
+    /* one process stops at once; under MPI rank 0's failure reaches the
+     * others at the next output time, so that they never wait here for its
+     * checks and writing (until then rank 0 steps on with them and writes
+     * nothing more) */
+    const int worst = dist.size > 1 ? (int)gs_dist_max_lagged(&dist, (double)out_rc) : out_rc;
+    if (!rc && worst) rc = failed_at_output(out_rc, worst, &out_err, err);
     phase[PH_OUTPUTS] += now_seconds() - outputs_start;
     if (step.it && step.it->type) /* not after a failed rebuild */
       step.it->type->get_stats(step.it->self, &st);
     if (show) progress(c, t, t_end, &st, now_seconds() - start);
   }
   if (show) fprintf(stderr, "\n");
+  const int late = dist.size > 1 ? (int)gs_dist_max_lagged_finish(&dist) : 0;
+  if (!rc && late) rc = failed_at_output(out_rc, late, &out_err, err);
+  if (out_rc) { /* rank 0's own failure came first */
+    rc = out_rc;
+    *err = out_err;
+  }
   const double finish_start = now_seconds();
   /* after the loop, not at the last output time: that one may be skipped
    * (equal to the time reached), and held times must not be lost */
@@ -574,7 +660,10 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   stepper_free(&step);
   gs_deferred_output_free(guard.deferred);
   free(guard.F);
-  free(guard.comp_cost);
+  free(m->comp_seconds);
+  m->comp_seconds = NULL;
+  free(guard.spent);
+  free(guard.split_lo);
   m->comp_lo = 0; /* the model is whole again for whoever uses it next */
   m->comp_hi = g->ncomp;
   gs_dist_free(&dist);
@@ -582,6 +671,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   rep.stats = st;
   rep.rebalanced = guard.rebalanced;
   rep.wall_seconds = now_seconds() - start;
+  if (yout && dist.size > 1 && !rc) gs_parallel_broadcast(Y, n); /* only rank 0's is whole */
   if (yout) memcpy(yout, Y, n * sizeof(double));
   if (rep_out) *rep_out = rep;
   free(Y);
