@@ -62,6 +62,10 @@ typedef struct {
   long steps_seen, posted_at;      /* steps taken, and when the last window was summed */
   int move_wanted;
   double move_seconds; /* the last move took (the slowest rank) */
+  /* the failure agreement of the last output time (gs_dist_max_lagged):
+   * posted after step lagged_posted_at, and its outcome once known */
+  long lagged_posted_at;
+  int stop_code;
   double advance_start, t_advance_now; /* the advance in progress began; busy then */
   long rhs_calls, calls_mark; /* this rank's evaluations (the same count on every rank) */
   long rebalanced, moves_tried; /* moves_tried: GRANSIM_TEST_MOVE_COMPARTMENTS only */
@@ -410,6 +414,12 @@ static int rebalance_decide(gs_case *c, gs_dist *d, guard_t *g) {
 static int between_steps(void *ctx) {
   guard_t *g = ctx;
   g->steps_seen++;
+  /* the last output time's failures, one step after it (rank 0 posted its
+   * part before stepping on): a failure stops every rank here, not one
+   * whole output interval later */
+  if (g->dist->lagged_pending && g->steps_seen > g->lagged_posted_at &&
+      (g->stop_code = (int)gs_dist_max_lagged_finish(g->dist)))
+    return 1;
   if (!g->spent) return 0; /* no rebalancing */
   if (!g->dist->sum_pending) {
     if (getenv("GRANSIM_TEST_MOVE_COMPARTMENTS") || g->rhs_calls - g->calls_mark >= g->evals_needed) {
@@ -534,8 +544,8 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     for (int k = 0; k < m->nvol; k++) M1_0[comp * (size_t)m->nvol + (size_t)k] = gs_model_held(m, c->y0, comp, k);
   double t = c->t0, ymax_seen = 0;
   /* under MPI each rank evaluates its own block of compartments; rank 0
-   * alone writes files and progress (every rank holds the full state at
-   * output times, so the checks below run everywhere on the same numbers) */
+   * alone checks the whole state at output times and writes files and
+   * progress (the others hold only their own block current) */
   gs_dist dist;
   int rc = gs_dist_init(&dist, m, err);
   if (rc) {
@@ -599,6 +609,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     while (!rc && t < c->times[i]) {
       double stop = fmin(c->times[i], gs_model_next_switch(m, t));
       rc = stepper_advance(&step, &t, stop, Y, err);
+      if (!rc && guard.stop_code) rc = failed_at_output(out_rc, guard.stop_code, &out_err, err);
       if (!rc && guard.move_wanted) rc = rebalance_move(c, &dist, &step, &guard, Y, err);
     }
     const double outputs_start = now_seconds();
@@ -620,6 +631,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
      * checks and writing (until then rank 0 steps on with them and writes
      * nothing more) */
     const int worst = dist.size > 1 ? (int)gs_dist_max_lagged(&dist, (double)out_rc) : out_rc;
+    guard.lagged_posted_at = guard.steps_seen;
     if (!rc && worst) rc = failed_at_output(out_rc, worst, &out_err, err);
     phase[PH_OUTPUTS] += now_seconds() - outputs_start;
     if (step.it && step.it->type) /* not after a failed rebuild */
@@ -628,11 +640,11 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   }
   if (show) fprintf(stderr, "\n");
   const int late = dist.size > 1 ? (int)gs_dist_max_lagged_finish(&dist) : 0;
-  if (!rc && late) rc = failed_at_output(out_rc, late, &out_err, err);
-  if (out_rc) { /* rank 0's own failure came first */
-    rc = out_rc;
-    *err = out_err;
-  }
+  gs_dist_sum_finish(&dist); /* a rebalancing sum still in flight writes into guard.spent */
+  /* rank 0's failure came first: rank 0 says so, the others that it failed
+   * there (not what went wrong in the steps they took after it) */
+  if (late || guard.stop_code || out_rc)
+    rc = failed_at_output(out_rc, late ? late : guard.stop_code ? guard.stop_code : out_rc, &out_err, err);
   const double finish_start = now_seconds();
   /* after the loop, not at the last output time: that one may be skipped
    * (equal to the time reached), and held times must not be lost */
