@@ -44,6 +44,18 @@ same_results() {
   done
 }
 
+# same_on_two_ranks CASE TAG: CASE run in one process ($WORK/TAG1), on two
+# ranks ($WORK/TAG2) and on two ranks with a move at every decision
+# ($WORK/TAG2m) gives the same results.
+same_on_two_ranks() {
+  run_rc 0 "$BIN" run "$1" --out "$WORK/${2}1" --quiet --threads 1
+  run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$1" --out "$WORK/${2}2" --quiet --threads 1
+  same_results "$WORK/${2}1" "$WORK/${2}2"
+  run_rc 0 "${MPI[@]}" -np 2 -x GRANSIM_TEST_MOVE_COMPARTMENTS=1 "$BIN" run "$1" --out "$WORK/${2}2m" --quiet --threads 1
+  stderr_has "compartments moved between ranks"
+  same_results "$WORK/${2}1" "$WORK/${2}2m"
+}
+
 ex="$SRC/examples/corimix-continuous.yaml"
 run_rc 0 "$BIN" run "$ex" --out "$WORK/serial" --quiet --threads 1
 run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2" --quiet --threads 1 --timings
@@ -123,17 +135,41 @@ mechanisms:
     rate: 0.5
 solver: {method: euler, safety: 0.05}
 output: {end: 2, count: 5}")
-run_rc 0 "$BIN" run "$c" --out "$WORK/e1" --quiet --threads 1
-run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$c" --out "$WORK/e2" --quiet --threads 1
-same_results "$WORK/e1" "$WORK/e2"
-# Euler carries over too; solver.rebalance: none keeps the blocks even when forced
-run_rc 0 "${MPI[@]}" -np 2 -x GRANSIM_TEST_MOVE_COMPARTMENTS=1 "$BIN" run "$c" --out "$WORK/e2m" --quiet --threads 1
-stderr_has "compartments moved between ranks"
-same_results "$WORK/e1" "$WORK/e2m"
+# Euler carries over moves too
+same_on_two_ranks "$c" e
+# solver.rebalance: none keeps the blocks even when forced
 sed 's/method: euler, safety: 0.05/method: euler, safety: 0.05, rebalance: none/' "$c" >"$WORK/fixed.yaml"
 run_rc 0 "${MPI[@]}" -np 2 -x GRANSIM_TEST_MOVE_COMPARTMENTS=1 "$BIN" run "$WORK/fixed.yaml" --out "$WORK/e2f" --quiet --threads 1
 stderr_lacks "compartments moved between ranks"
 same_results "$WORK/e1" "$WORK/e2f"
+
+# every kind of mechanism on ranks (the ranks' right-hand sides work on their
+# packed local vectors with the previous rank's last compartment as a halo):
+# size growth, liquid addition, fixed-pivot breakage, a Madec kernel, feed
+# and transfer on a (solid, liquid) grid, moved or not
+cm=$(write_case mechanisms.yaml "title: every mechanism on ranks (2-D, four compartments)
+grid:
+  compartments: 4
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 18, zero_first: true}
+    - {name: liquid, type: geometric, min: 1.0e-3, ratio: 1.6, cells: 18, zero_first: true}
+initial: {type: exponential, number: 1, mean: [0.05, 0.02]}
+mechanisms:
+  - type: aggregation
+    kernel: {type: madec, beta0: 1e-3, alpha: 1, delta: 1, liquid_content: fraction, liquid_axis: liquid}
+  - type: breakage
+    redistribution: fixed_pivot
+    selection: {type: power, s0: 0.01, exponent: 0.5}
+    daughters: {type: power, exponent: 1}
+  - {type: growth, axis: solid, constant: 0.001, linear: 0.01, start: 0, end: 1.5}
+  - {type: liquid_addition, rate: [0.01, 0, 0.005, 0], start: 0.5, end: 1.5, solid_axes: [solid]}
+  - type: feed
+    compartment: 2
+    distribution: {type: exponential, number: 2, mean: [0.05, 0.02]}
+  - {type: transfer, rate: 1}
+solver: {method: rk, rtol: 1e-6}
+output: {end: 2, count: 5}")
+same_on_two_ranks "$cm" k
 
 # refused: cvode on several ranks; more ranks than compartments
 sed 's/method: euler, safety: 0.05/method: cvode/' "$c" >"$WORK/cvode.yaml"

@@ -107,6 +107,16 @@ struct gs_model {
   /* Numbers at or below this are integration noise (the solver's absolute
    * tolerance); mechanisms may skip cells holding no more than it. */
   double noise_floor;
+  /* Where compartment c's state lies in the vectors mechanisms are given
+   * (read and written only through gs_model_numbers, gs_model_carried and
+   * gs_model_ledger): numbers at (c - view_lo) * ncells, carried totals from
+   * view_carried, ledger at (c - view_lo) * 2 nvol.  The full layout:
+   * view_lo 0, view_carried nnum.  Under MPI a rank's right-hand side works
+   * on its packed local vector directly (view_lo its first compartment; no
+   * copy into a full-size vector and back), the compartment before its
+   * block, which transfer reads, in `halo` (numbers, then carried). */
+  size_t view_lo, view_carried;
+  const double *halo;
   /* NULL, or ncomp seconds: the work of each compartment whose cost depends
    * on its contents (aggregation's pair loop, breakage), which mechanisms
    * add with gs_model_clock/gs_model_charge; the MPI rebalancing reads it to
@@ -120,17 +130,27 @@ int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err);
 int gs_model_set_carried(gs_model *m, const char *const *names, int n, gs_error *err);
 /* Index of a carried quantity by name, or -1. */
 int gs_model_carried_index(const gs_model *m, const char *name);
+/* Numbers of compartment comp in state y (see gs_model.view_lo). */
+static inline double *gs_model_numbers(const gs_model *m, double *y, size_t comp) {
+  return y + (comp - m->view_lo) * m->grid.ncells;
+}
+static inline const double *gs_model_numbers_c(const gs_model *m, const double *y, size_t comp) {
+  return comp < m->view_lo ? m->halo : y + (comp - m->view_lo) * m->grid.ncells;
+}
 /* Totals of carried quantity q in compartment comp of state y. */
 static inline double *gs_model_carried(const gs_model *m, double *y, size_t comp, int q) {
-  return y + m->nnum + (comp * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
+  return y + m->view_carried +
+         ((comp - m->view_lo) * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
 }
 static inline const double *gs_model_carried_c(const gs_model *m, const double *y, size_t comp,
                                                int q) {
-  return y + m->nnum + (comp * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
+  if (comp < m->view_lo) return m->halo + (1 + (size_t)q) * m->grid.ncells;
+  return y + m->view_carried +
+         ((comp - m->view_lo) * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
 }
 /* Ledger of compartment comp: [0, nvol) exchanged, [nvol, 2 nvol) lost. */
 static inline double *gs_model_ledger(const gs_model *m, double *ledger, size_t comp) {
-  return ledger + comp * 2 * (size_t)m->nvol;
+  return ledger + (comp - m->view_lo) * 2 * (size_t)m->nvol;
 }
 /* Name of volume coordinate k (axis or carried quantity). */
 const char *gs_model_vol_name(const gs_model *m, int k);

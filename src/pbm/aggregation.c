@@ -559,7 +559,7 @@ static evaluator evaluator_for(const agg_t *A, int slot) {
 /* Loads per particle of compartment comp. */
 static void carried_loads(const agg_t *A, const gs_model *m, size_t comp, const double *y,
                           double *pcar) {
-  const double *N = y + comp * A->ncells;
+  const double *N = gs_model_numbers_c(m, y, comp);
   for (int q = 0; q < A->nc; q++) {
     const double *Q = gs_model_carried_c(m, y, comp, q);
     double *p = pcar + (size_t)q * A->ncells;
@@ -576,7 +576,7 @@ static const double *wet_cells(agg_t *A, const gs_model *m, size_t comp, double 
                                const double *y) {
   double *psi = A->wet_ok + comp * A->ncells;
   if (m->hold || (m->in_integrator && t == A->wet_t[comp])) return psi;
-  const double *N = y + comp * A->ncells, *L = gs_model_carried_c(m, y, comp, A->wet_liquid);
+  const double *N = gs_model_numbers_c(m, y, comp), *L = gs_model_carried_c(m, y, comp, A->wet_liquid);
   const double lo = A->wet_min * (1 - 0.5 * A->wet_ramp), hi = A->wet_min * (1 + 0.5 * A->wet_ramp);
   for (size_t c = 0; c < A->ncells; c++) {
     double content = N[c] > 0 ? L[c] / (N[c] * m->grid.volume[c]) : 0.0;
@@ -592,7 +592,7 @@ static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const doubl
                  acc_t *acc, const evaluator *ev) {
   compartment_pairs(A, comp, t, Nv, m, acc, ev->slot, ev->pcar);
   acc_t *r = &acc[ev->res];
-  double *d = dydt ? dydt + comp * A->ncells : NULL;
+  double *d = dydt ? gs_model_numbers(m, dydt, comp) : NULL;
   for (size_t c = 0; c < A->ncells; c++) {
     *dead += sign * r->death[c];
     if (d) d[c] -= sign * r->death[c];
@@ -617,7 +617,7 @@ static void compartment_rates(agg_t *A, const gs_model *m, double t, const doubl
                               double *dydt, double *dledger, double *birth, double *death,
                               size_t comp, acc_t *acc, int slot) {
   const evaluator ev = evaluator_for(A, slot);
-  const double *N = y + comp * A->ncells;
+  const double *N = gs_model_numbers_c(m, y, comp);
   const double start = gs_model_clock(m);
   double born = 0, dead = 0;
   carried_loads(A, m, comp, y, ev.pcar);

@@ -215,8 +215,8 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
   const int dim = B->dim;
   for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
     const double start = gs_model_clock(m);
-    const double *N = y + comp * B->ncells;
-    double *d = dydt ? dydt + comp * B->ncells : NULL;
+    const double *N = gs_model_numbers_c(m, y, comp);
+    double *d = dydt ? gs_model_numbers(m, dydt, comp) : NULL;
     double *lost = dledger ? gs_model_ledger(m, dledger, comp) + m->nvol : NULL;
     double born = 0, dead = 0, excess[GS_MAX_DIM] = {0};
     if (B->scheme == CELL_AVERAGE) {

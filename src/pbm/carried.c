@@ -87,7 +87,7 @@ static int carried_create(gs_cfg_node *node, const gs_model *m, void **self, int
 static void spray_compartment(const carried_t *C, const gs_model *m, const double *y,
                               double *dydt, double *dledger, size_t comp) {
   const gs_grid *g = &m->grid;
-  const double *N = y + comp * g->ncells;
+  const double *N = gs_model_numbers_c(m, y, comp);
   const double solid = gs_dot_strided(N, g->volume, 1, g->ncells);
   if (!(solid > 0) || C->q[comp] == 0.0) return;
   double per = C->q[comp] / solid, *dL = gs_model_carried(m, dydt, comp, C->liquid);
@@ -100,7 +100,7 @@ static void consolidation_compartment(const carried_t *C, const gs_model *m, con
                                       double *dydt, double *dledger, size_t comp) {
   const gs_grid *g = &m->grid;
   const double target = C->emin / (1 - C->emin); /* pore volume per solid volume at e_min */
-  const double *N = y + comp * g->ncells;
+  const double *N = gs_model_numbers_c(m, y, comp);
   const double *L = gs_model_carried_c(m, y, comp, C->liquid);
   const double *G = gs_model_carried_c(m, y, comp, C->gas);
   double *dG = gs_model_carried(m, dydt, comp, C->gas), lost = 0;

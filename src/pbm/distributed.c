@@ -222,14 +222,8 @@ void gs_dist_free(gs_dist *d) {
  * packed, they travel as one message (each message costs ~1.5 µs here). */
 static void pack_comp(const gs_model *m, const double *y, size_t comp, double *buf) {
   const size_t n = m->grid.ncells, nq = (size_t)m->ncarried * n;
-  memcpy(buf, y + comp * n, n * sizeof(double));
-  memcpy(buf + n, y + m->nnum + comp * nq, nq * sizeof(double));
-}
-
-static void unpack_comp(const gs_model *m, const double *buf, size_t comp, double *y) {
-  const size_t n = m->grid.ncells, nq = (size_t)m->ncarried * n;
-  memcpy(y + comp * n, buf, n * sizeof(double));
-  memcpy(y + m->nnum + comp * nq, buf + n, nq * sizeof(double));
+  memcpy(buf, gs_model_numbers_c(m, y, comp), n * sizeof(double));
+  if (nq) memcpy(buf + n, gs_model_carried_c(m, y, comp, 0), nq * sizeof(double));
 }
 
 /* The send does not wait for the message to arrive: Open MPI's blocking
@@ -239,7 +233,7 @@ static void unpack_comp(const gs_model *m, const double *buf, size_t comp, doubl
  * the step's agreement, where rank 0 can use the time for output work.
  * Messages are matched in order, and the ring's slot is reused only once
  * its earlier send is complete. */
-static void exchange(gs_dist *d, double *y, size_t send_comp, int to, size_t recv_comp, int from) {
+static const double *exchange(gs_dist *d, const double *y, size_t send_comp, int to, int from) {
   const gs_model *m = d->m;
   const size_t len = (1 + (size_t)m->ncarried) * m->grid.ncells;
   if (to != MPI_PROC_NULL) {
@@ -250,23 +244,22 @@ static void exchange(gs_dist *d, double *y, size_t send_comp, int to, size_t rec
     MPI_Isend(buf, (int)len, MPI_DOUBLE, to, 0, MPI_COMM_WORLD, req);
     d->next_send = (d->next_send + 1) % GS_DIST_NSEND;
   }
-  if (from != MPI_PROC_NULL) {
-    MPI_Recv(d->recvbuf, (int)len, MPI_DOUBLE, from, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-    unpack_comp(m, d->recvbuf, recv_comp, y);
-  }
+  if (from == MPI_PROC_NULL) return NULL;
+  MPI_Recv(d->recvbuf, (int)len, MPI_DOUBLE, from, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  return d->recvbuf;
 }
 #endif
 
-void gs_dist_sync(gs_dist *d, double *y) {
+const double *gs_dist_sync(gs_dist *d, const double *y) {
 #ifdef GRANSIM_HAVE_MPI
-  if (d->size < 2) return;
+  if (d->size < 2) return NULL;
   const int r = d->rank;
   int to = r + 1 < d->size ? r + 1 : MPI_PROC_NULL, from = r > 0 ? r - 1 : MPI_PROC_NULL;
-  size_t send = d->lo[r + 1] - 1, recv = d->lo[r] > 0 ? d->lo[r] - 1 : 0;
-  exchange(d, y, send, to, recv, from);
+  return exchange(d, y, d->lo[r + 1] - 1, to, from);
 #else
   (void)d;
   (void)y;
+  return NULL;
 #endif
 }
 
@@ -294,6 +287,7 @@ double gs_dist_max_while(gs_dist *d, double v, int (*work)(void *), void *ctx) {
 #endif
 }
 
+#ifdef GRANSIM_HAVE_MPI
 /* Rank r's three runs of the full vector: offsets and lengths. */
 static void block_of(const gs_dist *d, int r, size_t off[3], size_t len[3]) {
   const gs_model *m = d->m;
@@ -304,6 +298,7 @@ static void block_of(const gs_dist *d, int r, size_t off[3], size_t len[3]) {
     len[s] = (d->lo[r + 1] - d->lo[r]) * unit[s];
   }
 }
+#endif
 
 void gs_dist_collect(gs_dist *d, double *y) {
 #ifdef GRANSIM_HAVE_MPI

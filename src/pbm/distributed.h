@@ -63,10 +63,12 @@ void gs_dist_pack(const gs_dist *d, const double *full, double *local);
 void gs_dist_unpack(const gs_dist *d, const double *local, double *full);
 /* Index in the full vector of entry i of the local vector. */
 size_t gs_dist_full_index(const gs_dist *d, size_t i);
-/* Receive the compartment before this block (numbers and carried totals)
- * from the previous rank; send the last one to the next without waiting for
- * it to arrive. */
-void gs_dist_sync(gs_dist *d, double *y);
+/* Send the last compartment of this block in y (numbers and carried
+ * totals, found through the model's view, gs_model.view_lo) to the next
+ * rank without waiting for it to arrive; receive the compartment before the
+ * block from the previous rank and return it (numbers, then carried: the
+ * model's halo), NULL on rank 0 or without MPI. */
+const double *gs_dist_sync(gs_dist *d, const double *y);
 /* Maximum of v over the ranks (v itself on one rank). */
 double gs_dist_max(gs_dist *d, double v);
 /* The same, calling work(ctx) for as long as the other ranks have not all

@@ -165,9 +165,9 @@ static void grow_rhs(void *self, const gs_model *m, double t, const double *y, d
   const gs_grid *g = &m->grid;
   if (!active(G, t)) return;
   for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
-    const double *N = y + comp * g->ncells;
+    const double *N = gs_model_numbers_c(m, y, comp);
     if (compartment_rates(G, g, comp, N))
-      gs_growth_apply(g, G->axis, G->G, N, dydt + comp * g->ncells,
+      gs_growth_apply(g, G->axis, G->G, N, gs_model_numbers(m, dydt, comp),
                       gs_model_ledger(m, dledger, comp), gs_model_ledger(m, dledger, comp) + m->nvol);
   }
 }
@@ -181,8 +181,8 @@ static void grow_precondition(void *self, const gs_model *m, double t, const dou
   const gs_grid *g = &m->grid;
   if (!active(G, t)) return;
   for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++)
-    if (compartment_rates(G, g, comp, y + comp * g->ncells))
-      gs_growth_solve(g, G->axis, G->G, gamma, z + comp * g->ncells, G->work);
+    if (compartment_rates(G, g, comp, gs_model_numbers_c(m, y, comp)))
+      gs_growth_solve(g, G->axis, G->G, gamma, gs_model_numbers(m, z, comp), G->work);
 }
 
 static double grow_switch(void *self, double t) {

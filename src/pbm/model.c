@@ -31,6 +31,7 @@ int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err) {
   m->grid = *grid;
   memset(grid, 0, sizeof *grid);
   m->nnum = m->nstate = m->grid.ncomp * m->grid.ncells;
+  m->view_carried = m->nnum; /* the full layout */
   m->nvol = m->grid.dim;
   m->comp_lo = 0;
   m->comp_hi = m->grid.ncomp;
@@ -73,7 +74,7 @@ const char *gs_model_vol_name(const gs_model *m, int k) {
 double gs_model_held(const gs_model *m, const double *y, size_t comp, int k) {
   const gs_grid *g = &m->grid;
   if (k < g->dim)
-    return gs_dot_strided(y + comp * g->ncells, g->x + k, (size_t)g->dim, g->ncells);
+    return gs_dot_strided(gs_model_numbers_c(m, y, comp), g->x + k, (size_t)g->dim, g->ncells);
   return gs_sum(gs_model_carried_c(m, y, comp, k - g->dim), g->ncells);
 }
 
@@ -144,14 +145,14 @@ void gs_model_charge(const gs_model *m, size_t comp, double start) {
 
 void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger) {
   const size_t lo = m->comp_lo, nc = m->comp_hi - m->comp_lo, n = m->grid.ncells;
+  const size_t nq = (size_t)m->ncarried * n, nl = 2 * (size_t)m->nvol;
   if (nc == m->grid.ncomp) {
     memset(dydt, 0, m->nstate * sizeof(double));
     memset(dledger, 0, m->nledger * sizeof(double));
   } else { /* under MPI only this rank's compartments are written and read back */
-    const size_t nq = (size_t)m->ncarried * n, nl = 2 * (size_t)m->nvol;
-    memset(dydt + lo * n, 0, nc * n * sizeof(double));
-    if (nq) memset(dydt + m->nnum + lo * nq, 0, nc * nq * sizeof(double));
-    memset(dledger + lo * nl, 0, nc * nl * sizeof(double));
+    memset(gs_model_numbers(m, dydt, lo), 0, nc * n * sizeof(double));
+    if (nq) memset(gs_model_carried(m, dydt, lo, 0), 0, nc * nq * sizeof(double));
+    memset(gs_model_ledger(m, dledger, lo), 0, nc * nl * sizeof(double));
   }
   for (size_t i = 0; i < m->nmech; i++)
     m->mech[i].type->rhs(m->mech[i].self, m, t, y, dydt, dledger);

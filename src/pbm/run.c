@@ -38,7 +38,7 @@ static void describe_cell(const gs_model *m, size_t comp, size_t cell, char *buf
 typedef struct {
   gs_case *c;
   gs_dist *dist; /* the compartments of each MPI rank */
-  double *Y, *F; /* under MPI: full state and rates, this rank's parts current */
+  double *Y; /* under MPI: the full state, this rank's part current after each advance */
   double bad_t;
   size_t bad_index; /* in the full vector */
   int bad;
@@ -114,24 +114,28 @@ static int guarded_rhs(void *ctx, double t, const double *y, double *dydt) {
   return check_rates(gd, t, dydt, m->nstate + m->nledger, NULL);
 }
 
-/* The same on this MPI rank's packed part yl of the state: the full state
- * gets yl and the neighbour's last compartment, the model evaluates this
- * rank's compartments, and their rates are packed into fl. */
+/* The same on this MPI rank's packed part yl of the state: the model reads
+ * and writes the packed vectors directly (gs_model.view_lo), with the
+ * previous rank's last compartment, which transfer brings in, as its halo. */
 static int local_rhs(void *ctx, double t, const double *yl, double *fl) {
   guard_t *gd = ctx;
   gs_model *m = &gd->c->model;
+  gs_dist *d = gd->dist;
   const double start = now_seconds();
-  gs_dist_unpack(gd->dist, yl, gd->Y);
-  gs_dist_sync(gd->dist, gd->Y);
+  m->view_lo = m->comp_lo;
+  m->view_carried = d->len[0];
+  m->halo = gs_dist_sync(d, yl);
   const double synced = now_seconds();
   m->in_integrator = 1;
-  gs_model_rhs(m, t, gd->Y, gd->F, gd->F + m->nstate);
+  gs_model_rhs(m, t, yl, fl, fl + d->len[0] + d->len[1]);
   m->in_integrator = 0;
+  m->view_lo = 0; /* the full layout for everyone else */
+  m->view_carried = m->nnum;
+  m->halo = NULL;
   gd->t_exchange += synced - start;
   gd->t_rhs += now_seconds() - synced;
   gd->rhs_calls++;
-  gs_dist_pack(gd->dist, gd->F, fl);
-  return check_rates(gd, t, fl, gd->dist->nlocal, gd->dist);
+  return check_rates(gd, t, fl, d->nlocal, d);
 }
 
 /* The case's preconditioner, reached through the guard's case. */
@@ -195,8 +199,7 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
   s->local = d;
   s->yl = gs_malloc(d->nlocal * sizeof(double), err);
   s->scale = gs_malloc(d->nlocal * sizeof(double), err);
-  if (!guard->F) guard->F = gs_malloc(c->ode.n * sizeof(double), err);
-  if (!s->yl || !s->scale || !guard->F) return GS_ENOMEM;
+  if (!s->yl || !s->scale) return GS_ENOMEM;
   gs_dist_pack(d, c->abs_scale, s->scale);
   /* numbers and carried volumes come first in the packed vector too */
   s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max, 1, between_steps};
@@ -346,6 +349,8 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
 #define MIN_EVALS 20        /* the shortest window */
 #define MAX_EVALS 2000      /* the longest */
 #define WINDOW_SECONDS 0.02 /* a window holds about this much work of the slowest rank */
+/* a move must pay for itself within this many windows like the last one */
+#define MOVE_PAYBACK_WINDOWS 4
 
 /* Each rank's costs over the window, summed over the ranks without
  * waiting: per compartment, then each rank's writing. */
@@ -403,9 +408,10 @@ static int rebalance_decide(gs_case *c, gs_dist *d, guard_t *g) {
     return 1;
   }
   /* worth it when the window would have been faster by more than the
-   * threshold and by more than a move costs (the last one's, agreed) */
+   * threshold, and the gain of a few such windows exceeds what a move costs
+   * (the last one's, agreed) */
   return memcmp(lo, d->lo, ((size_t)nr + 1) * sizeof *lo) && largest < (1 - c->rebalance) * slowest &&
-         slowest - largest > g->move_seconds;
+         MOVE_PAYBACK_WINDOWS * (slowest - largest) > g->move_seconds;
 }
 
 /* gs_ode.between_steps of the MPI integrators: measure when a window is
@@ -671,7 +677,6 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   if (opt && opt->timings) print_timings(&dist, phase);
   stepper_free(&step);
   gs_deferred_output_free(guard.deferred);
-  free(guard.F);
   free(m->comp_seconds);
   m->comp_seconds = NULL;
   free(guard.spent);

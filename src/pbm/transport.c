@@ -75,7 +75,7 @@ static void feed_rhs(void *self, const gs_model *m, double t, const double *y, d
   const feed_t *F = self;
   const gs_grid *g = &m->grid;
   if (t < F->start || t >= F->end || F->comp < m->comp_lo || F->comp >= m->comp_hi) return;
-  double *d = dydt + F->comp * g->ncells;
+  double *d = gs_model_numbers(m, dydt, F->comp);
   for (size_t c = 0; c < g->ncells; c++) d[c] += F->rate[c];
   for (int q = 0; q < m->ncarried; q++) {
     if (F->ratio[q] == 0.0) continue;
@@ -171,9 +171,9 @@ static void transfer_compartment(const transfer_t *T, const gs_model *m, const d
   for (int from = comp > 0 ? -1 : 0; from <= 0; from++) { /* -1: inflow from comp - 1 */
     const size_t sc = from == 0 ? comp : comp - 1;        /* source compartment */
     const double k = T->k[sc], sign = from == 0 ? -1.0 : 1.0;
-    const double *N = y + sc * n;
+    const double *N = gs_model_numbers_c(m, y, sc);
     double moved[GS_MAX_VOL];
-    add_scaled(dydt + comp * n, N, sign * k, n);
+    add_scaled(gs_model_numbers(m, dydt, comp), N, sign * k, n);
     for (size_t a = 0; a < dim; a++) moved[a] = k * gs_dot_strided(N, g->x + a, dim, n);
     for (int q = 0; q < m->ncarried; q++) {
       const double *Q = gs_model_carried_c(m, y, sc, q);
