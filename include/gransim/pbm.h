@@ -135,7 +135,7 @@ static inline double *gs_model_numbers(const gs_model *m, double *y, size_t comp
   return y + (comp - m->view_lo) * m->grid.ncells;
 }
 static inline const double *gs_model_numbers_c(const gs_model *m, const double *y, size_t comp) {
-  return comp < m->view_lo ? m->halo : y + (comp - m->view_lo) * m->grid.ncells;
+  return y + (comp - m->view_lo) * m->grid.ncells;
 }
 /* Totals of carried quantity q in compartment comp of state y. */
 static inline double *gs_model_carried(const gs_model *m, double *y, size_t comp, int q) {
@@ -144,9 +144,17 @@ static inline double *gs_model_carried(const gs_model *m, double *y, size_t comp
 }
 static inline const double *gs_model_carried_c(const gs_model *m, const double *y, size_t comp,
                                                int q) {
-  if (comp < m->view_lo) return m->halo + (1 + (size_t)q) * m->grid.ncells;
   return y + m->view_carried +
          ((comp - m->view_lo) * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
+}
+/* The compartment before comp, which flows into it (transfer): in y, or
+ * under MPI the halo when comp is the first of the rank's block (numbers
+ * for q < 0, else carried quantity q). */
+static inline const double *gs_model_upstream_c(const gs_model *m, const double *y, size_t comp,
+                                                int q) {
+  if (comp == m->view_lo && m->view_lo > 0)
+    return m->halo + (q < 0 ? 0 : (1 + (size_t)q) * m->grid.ncells);
+  return q < 0 ? gs_model_numbers_c(m, y, comp - 1) : gs_model_carried_c(m, y, comp - 1, q);
 }
 /* Ledger of compartment comp: [0, nvol) exchanged, [nvol, 2 nvol) lost. */
 static inline double *gs_model_ledger(const gs_model *m, double *ledger, size_t comp) {
@@ -163,8 +171,13 @@ void gs_model_free(gs_model *m);
 
 /* Timing of one compartment's work for m->comp_seconds (no clock is read
  * when it is NULL): start = gs_model_clock(m); ...; gs_model_charge(m, comp, start). */
-double gs_model_clock(const gs_model *m);
-void gs_model_charge(const gs_model *m, size_t comp, double start);
+double gs_model_seconds(void);
+static inline double gs_model_clock(const gs_model *m) {
+  return m->comp_seconds ? gs_model_seconds() : 0;
+}
+static inline void gs_model_charge(const gs_model *m, size_t comp, double start) {
+  if (m->comp_seconds) m->comp_seconds[comp] += gs_model_seconds() - start;
+}
 
 /* Full right-hand side: dydt (nstate) and dledger (nledger) are overwritten. */
 void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger);

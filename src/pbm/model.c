@@ -132,15 +132,10 @@ void gs_model_precondition(const gs_model *m, double t, const double *y, double 
       m->mech[i].type->precondition(m->mech[i].self, m, t, y, gamma, z);
 }
 
-double gs_model_clock(const gs_model *m) {
-  if (!m->comp_seconds) return 0;
+double gs_model_seconds(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-void gs_model_charge(const gs_model *m, size_t comp, double start) {
-  if (m->comp_seconds) m->comp_seconds[comp] += gs_model_clock(m) - start;
 }
 
 void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger) {

@@ -171,12 +171,12 @@ static void transfer_compartment(const transfer_t *T, const gs_model *m, const d
   for (int from = comp > 0 ? -1 : 0; from <= 0; from++) { /* -1: inflow from comp - 1 */
     const size_t sc = from == 0 ? comp : comp - 1;        /* source compartment */
     const double k = T->k[sc], sign = from == 0 ? -1.0 : 1.0;
-    const double *N = gs_model_numbers_c(m, y, sc);
+    const double *N = from == 0 ? gs_model_numbers_c(m, y, sc) : gs_model_upstream_c(m, y, comp, -1);
     double moved[GS_MAX_VOL];
     add_scaled(gs_model_numbers(m, dydt, comp), N, sign * k, n);
     for (size_t a = 0; a < dim; a++) moved[a] = k * gs_dot_strided(N, g->x + a, dim, n);
     for (int q = 0; q < m->ncarried; q++) {
-      const double *Q = gs_model_carried_c(m, y, sc, q);
+      const double *Q = from == 0 ? gs_model_carried_c(m, y, sc, q) : gs_model_upstream_c(m, y, comp, q);
       add_scaled(gs_model_carried(m, dydt, comp, q), Q, sign * k, n);
       moved[dim + (size_t)q] = k * gs_sum(Q, n);
     }
