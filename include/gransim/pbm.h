@@ -4,13 +4,14 @@
  * pivot of `cell` in compartment `comp` (a number, not a density).
  *
  * Ledger: the model also integrates, alongside y, the external exchange of
- * every coordinate's total volume, per compartment:
- *   ledger[comp * 2*dim + k]        = volume of coordinate k brought in (feed,
- *                                     transfer in, growth) minus taken out
- *                                     (transfer out, product), integrated in time;
- *   ledger[comp * 2*dim + dim + k]  = volume of coordinate k lost through the
- *                                     grid boundaries (aggregates beyond the
- *                                     last pivot, fragments below the first).
+ * every volume coordinate's total (the dim axes, then the carried
+ * quantities: nvol in all), per compartment:
+ *   ledger[comp * 2*nvol + k]        = volume of coordinate k brought in (feed,
+ *                                      transfer in, growth) minus taken out
+ *                                      (transfer out, product), integrated in time;
+ *   ledger[comp * 2*nvol + nvol + k] = volume of coordinate k lost through the
+ *                                      grid boundaries (aggregates beyond the
+ *                                      last pivot, fragments below the first).
  * Because the ledger is a linear functional of dy/dt, every integrator
  * (Runge–Kutta, BDF, Euler) preserves
  *     M1_k(y(t)) - M1_k(y(0)) = ledger_in_out_k(t) - ledger_lost_k(t)
@@ -22,6 +23,7 @@
 #ifndef GRANSIM_PBM_H
 #define GRANSIM_PBM_H
 
+#include <assert.h>
 #include <stddef.h>
 #include "gransim/cfg.h"
 #include "gransim/grid.h"
@@ -152,6 +154,7 @@ static inline const double *gs_model_carried_c(const gs_model *m, const double *
  * for q < 0, else carried quantity q). */
 static inline const double *gs_model_upstream_c(const gs_model *m, const double *y, size_t comp,
                                                 int q) {
+  assert(!(comp == m->view_lo && m->view_lo > 0) || m->halo); /* a view needs its halo */
   if (comp == m->view_lo && m->view_lo > 0)
     return m->halo + (q < 0 ? 0 : (1 + (size_t)q) * m->grid.ncells);
   return q < 0 ? gs_model_numbers_c(m, y, comp - 1) : gs_model_carried_c(m, y, comp - 1, q);

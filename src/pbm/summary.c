@@ -14,7 +14,7 @@
 
 double gs_moment(const gs_model *m, const double *y, size_t comp, const int *powers) {
   const gs_grid *g = &m->grid;
-  const double *N = y + comp * g->ncells;
+  const double *N = gs_model_numbers_c(m, y, comp);
   double s = 0;
   for (size_t c = 0; c < g->ncells; c++) {
     double f = N[c];
@@ -83,7 +83,7 @@ static void percentiles(const double *vol, const double *N, size_t n, const doub
 
 void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s) {
   const gs_grid *g = &m->grid;
-  const double *N = y + comp * g->ncells;
+  const double *N = gs_model_numbers_c(m, y, comp);
   memset(s, 0, sizeof *s);
   /* granule volume per cell: the size axes, plus what a particle carries
    * (liquid and gas fill the pores of the granule: seed 000's external volume) */
