@@ -545,7 +545,7 @@ int main(void) {
   test_between_steps("solver:\n  method: rk\n", 3, 1);
   test_between_steps("solver:\n  method: rk\n  variant: rk8pd\n", 2, 1);
   test_between_steps("solver:\n  method: euler\n", 1, 0);
-  test_between_steps("solver:\n  method: euler\n", 4, 1);
+  test_between_steps("solver:\n  method: euler\n", 2, 1);
 
   test_rhs_failure("solver:\n  method: rk\n");
   test_rhs_failure("solver:\n  method: cvode\n");

@@ -19,6 +19,7 @@
 #include <stdlib.h>
 
 #include "gransim/integrator.h"
+#include "pbm/integrator_interval.h"
 
 int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
                               double *initial_step, double *min_step, double *max_step,
@@ -34,10 +35,8 @@ typedef struct {
   long max_steps;
   double dt;      /* step carried between calls; 0 until the first call */
   double dt_min;  /* resolved min_step */
-  /* the interval of the last advance (a call that ended early through
-   * between_steps continues it), its steps and its step bound */
-  double interval_end, interval_h_max;
-  long interval_steps;
+  gs_interval interval;  /* the output interval in progress */
+  double interval_h_max; /* and its step bound (max_step, else its length) */
   double *f;
   gs_integrator_stats stats;
 } gs_euler;
@@ -53,7 +52,7 @@ static int gs_euler_create(gs_cfg_node *solver, const gs_ode *ode, void **out, g
   gs_euler *self = gs_calloc(1, sizeof *self, err);
   if (!self) return GS_ENOMEM;
   self->n = ode->n;
-  self->interval_end = NAN; /* no interval yet */
+  gs_interval_init(&self->interval);
   double rtol, atol;
   int rc = gs_integrator_common_keys(solver, &rtol, &atol, &self->h_init, &self->h_min,
                                      &self->h_max, &self->max_steps, err);
@@ -160,24 +159,13 @@ static int gs_euler_advance(void *vself, const gs_ode *ode, double *t, double t_
                         self->n, *t, t_out);
   if (t_out == *t) return GS_OK;
   if (self->dt <= 0) gs_euler_first_call(self, t_out - *t);
-  if (t_out != self->interval_end) { /* a new interval, not the rest of one (between_steps) */
-    self->interval_end = t_out;
-    self->interval_steps = 0;
+  if (gs_interval_begin(&self->interval, t_out))
     self->interval_h_max = isnan(self->h_max) ? t_out - *t : self->h_max;
-  }
-  const double h_max = self->interval_h_max;
-  for (; *t < t_out; self->interval_steps++) {
-    if (self->interval_steps >= self->max_steps)
-      return gs_error_set(err, GS_ENUMERIC,
-                          "integrator euler: max_steps_per_output = %ld steps taken at t = %.9g "
-                          "before reaching %.9g",
-                          self->max_steps, *t, t_out);
-    int rc = gs_euler_step(self, ode, t, t_out, h_max, y, err);
+  while (*t < t_out) {
+    int rc = gs_interval_budget(&self->interval, self->max_steps, "euler", *t, err);
+    if (!rc) rc = gs_euler_step(self, ode, t, t_out, self->interval_h_max, y, err);
     if (rc) return rc;
-    if (ode->between_steps && ode->between_steps(ode->ctx)) {
-      self->interval_steps++;
-      return GS_OK;
-    }
+    if (gs_interval_step_done(&self->interval, ode)) return GS_OK;
   }
   return GS_OK;
 }
@@ -193,9 +181,8 @@ static void gs_euler_carry(void *vto, const void *vfrom) {
   to->dt = from->dt;
   to->dt_min = from->dt_min;
   to->stats = from->stats;
-  to->interval_end = from->interval_end;
+  to->interval = from->interval;
   to->interval_h_max = from->interval_h_max;
-  to->interval_steps = from->interval_steps;
 }
 
 const gs_integrator_type gs_integrator_euler = {

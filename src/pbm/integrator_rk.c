@@ -23,6 +23,7 @@
 #include <gsl/gsl_odeiv2.h>
 
 #include "gransim/integrator.h"
+#include "pbm/integrator_interval.h"
 
 int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
                               double *initial_step, double *min_step, double *max_step,
@@ -43,10 +44,7 @@ typedef struct {
   gsl_odeiv2_evolve *evolve;
   double *scale; /* per-component absolute-tolerance scale, as given to GSL */
   double h;      /* step proposed for the next advance; <= 0 until chosen */
-  /* the interval of the last advance (a call that ended early through
-   * between_steps continues it) and the steps taken in it */
-  double interval_end;
-  long interval_steps;
+  gs_interval interval; /* the output interval in progress */
   const gs_ode *ode; /* the system of the advance() in progress */
   int rhs_failed; /* 1: f returned an error; 2: f gave a non-finite value */
   /* under MPI, the step's one agreement (in the controller) was reached,
@@ -232,7 +230,7 @@ static int gs_rk_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_e
   gs_rk *self = gs_calloc(1, sizeof *self, err);
   if (!self) return GS_ENOMEM;
   self->n = ode->n;
-  self->interval_end = NAN; /* no interval yet */
+  gs_interval_init(&self->interval);
   double h0;
   int variant = 1;
   int rc = gs_integrator_common_keys(solver, &self->rtol, &self->atol, &h0, &self->h_min,
@@ -353,16 +351,10 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
     int rc = gs_rk_initial_step(self, *t, t_out - *t, y, err);
     if (rc) return rc;
   }
-  if (t_out != self->interval_end) { /* a new interval, not the rest of one */
-    self->interval_end = t_out;
-    self->interval_steps = 0;
-  }
-  for (; *t < t_out; self->interval_steps++) {
-    if (self->interval_steps >= self->max_steps)
-      return gs_error_set(err, GS_ENUMERIC,
-                          "integrator rk: max_steps_per_output = %ld steps taken at t = %.9g "
-                          "before reaching %.9g",
-                          self->max_steps, *t, t_out);
+  gs_interval_begin(&self->interval, t_out);
+  while (*t < t_out) {
+    int rc = gs_interval_budget(&self->interval, self->max_steps, "rk", *t, err);
+    if (rc) return rc;
     double t0 = *t, h = fmin(self->h, self->h_max);
     self->agreed = 0;
     /* evolve shortens the step that would pass t_out and then sets t = t_out
@@ -372,17 +364,14 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
     self->stats.rejected += (long)self->evolve->failed_steps;
     self->evolve->failed_steps = 0;
     if (status != GSL_SUCCESS) return gs_rk_fail(self, status, t0, h, t, y, err);
-    int rc = gs_rk_check_finite(self, t0, t, y, err);
+    rc = gs_rk_check_finite(self, t0, t, y, err);
     if (rc) return rc;
     self->h = h;
     self->stats.steps++;
     self->stats.last_step = self->evolve->last_step;
     rc = gs_rk_check_min_step(self, *t, t_out, err);
     if (rc) return rc;
-    if (ode->between_steps && ode->between_steps(ode->ctx)) {
-      self->interval_steps++;
-      return GS_OK;
-    }
+    if (gs_interval_step_done(&self->interval, ode)) return GS_OK;
   }
   return GS_OK;
 }
@@ -401,8 +390,7 @@ static void gs_rk_carry(void *vto, const void *vfrom) {
   const gs_rk *from = vfrom;
   to->h = from->h;
   to->stats = from->stats;
-  to->interval_end = from->interval_end;
-  to->interval_steps = from->interval_steps;
+  to->interval = from->interval;
 }
 
 const gs_integrator_type gs_integrator_rk = {
