@@ -73,6 +73,7 @@ typedef struct {
   int nthreads;
   size_t work_len;
   double *work;          /* per thread: death, B, V[3], fp birth, row  */
+  size_t *dirty;         /* per thread: [lo, hi) of the cells its summed arrays may hold non-zero */
 } agg_t;
 
 static size_t packed_offset(size_t a, size_t n) { return a * n - a * (a - 1) / 2; }
@@ -97,6 +98,7 @@ static void agg_free(void *self) {
   free(A->wet_t);
   free(A->masked);
   free(A->work);
+  free(A->dirty);
   free(A);
 }
 
@@ -229,7 +231,12 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     if (!A->span || !A->span_valid || !A->span_t) rc = GS_ENOMEM;
     A->work_len = (size_t)(7 + A->nc) * A->ncells + A->n[2];
     A->work = gs_malloc((size_t)A->nthreads * A->work_len * sizeof(double), err);
-    if (!A->work) rc = GS_ENOMEM;
+    A->dirty = gs_malloc(2 * (size_t)A->nthreads * sizeof(size_t), err);
+    if (!A->work || !A->dirty) rc = GS_ENOMEM;
+    for (int t = 0; !rc && t < A->nthreads; t++) { /* all of it, the first time */
+      A->dirty[2 * t] = 0;
+      A->dirty[2 * t + 1] = A->ncells;
+    }
   }
   if (rc) {
     agg_free(A);
@@ -245,11 +252,33 @@ typedef struct {
   double *cvol[GS_MAX_CARRIED]; /* pooled carried loads per target cell */
   const double *pcar;           /* loads per particle of the compartment (read only) */
   double lost_n, lost_v[3], lost_c[GS_MAX_CARRIED];
+  /* [lo, hi): the cells written in the summed arrays (deaths of the cells
+   * taking part, births at their targets).  Large grids hold their
+   * population in a band, and the passes over the cells, with the zeroing
+   * before the next use, had cost more than the pairs (32 x 32 bins). */
+  size_t lo, hi;
 } acc_t;
 
 /* Per-thread work: death, births, vol[3], cvol[nc], fp (zeroed and summed
  * over threads), then row and wrow (scratch). */
-static size_t summed_len(const agg_t *A) { return (size_t)(6 + A->nc) * A->ncells; }
+static size_t summed_arrays(const agg_t *A) { return (size_t)(6 + A->nc); }
+static size_t summed_len(const agg_t *A) { return summed_arrays(A) * A->ncells; }
+
+/* Zero the cells of thread tid's summed arrays that its last use wrote. */
+static void clear_dirty(const agg_t *A, int tid) {
+  double *w = A->work + (size_t)tid * A->work_len;
+  const size_t lo = A->dirty[2 * tid], hi = A->dirty[2 * tid + 1];
+  if (lo < hi)
+    for (size_t k = 0; k < summed_arrays(A); k++) memset(w + k * A->ncells + lo, 0, (hi - lo) * sizeof(double));
+  A->dirty[2 * tid] = A->ncells;
+  A->dirty[2 * tid + 1] = 0;
+}
+
+/* Thread tid's summed arrays are written in [lo, hi) now. */
+static void mark_dirty(const agg_t *A, int tid, size_t lo, size_t hi) {
+  if (lo < A->dirty[2 * tid]) A->dirty[2 * tid] = lo;
+  if (hi > A->dirty[2 * tid + 1]) A->dirty[2 * tid + 1] = hi;
+}
 
 static acc_t thread_acc(const agg_t *A, int tid) {
   double *w = A->work + (size_t)tid * A->work_len;
@@ -263,7 +292,9 @@ static acc_t thread_acc(const agg_t *A, int tid) {
   acc.fp = w + (5 + nc) * n;
   acc.row = w + (6 + nc) * n;
   acc.wrow = w + (7 + nc) * n;
-  memset(w, 0, summed_len(A) * sizeof(double));
+  clear_dirty(A, tid);
+  acc.lo = n;
+  acc.hi = 0;
   return acc;
 }
 
@@ -306,6 +337,12 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
   const double *E2 = DIM > 2 ? A->fp_excess[2] + a2 * n2 : NULL;
   const size_t s0 = A->stride[0], s1 = A->stride[1], s2 = A->stride[2], big = A->big;
   double death_a = 0, lost_n = 0, lost0 = 0, lost1 = 0, lost2 = 0;
+  /* cells written: deaths of a and of the partners after it; births at the
+   * pivot sums, which lie at or after a on every axis, hence at or after a
+   * (fixed pivot: up to the last cell; cell average: up to the last target
+   * of each row, where the targets never decrease) */
+  const size_t touched_lo = a;
+  size_t touched_hi = FP ? ncells : a + 1;
   for (size_t i0 = a0; i0 < n0; i0++) {
     for (size_t i1 = (i0 == a0 ? a1 : 0); i1 < n1; i1++) {
       const size_t r = i0 * n1 + i1, row_end = span[2 * r + 1];
@@ -327,6 +364,7 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
       for (size_t j = 0; j < len; j++) wr[j] = Na * bb[j] * Nb[j];
       if (bbase + row_start == a) wr[0] *= 0.5; /* a self-pair counts once */
       double *restrict db = death + bbase + row_start;
+      if (bbase + row_end > touched_hi) touched_hi = bbase + row_end; /* rows only grow */
       for (size_t j = 0; j < len; j++) {
         db[j] += wr[j];
         death_a += wr[j];
@@ -392,6 +430,7 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
         if (DIM > 2) lost2 += w * (xa2 + x2[b]);
       }
       if (!FP && t_run != (size_t)-1) {
+        if (t_run + 1 > touched_hi) touched_hi = t_run + 1;
         births[t_run] += rb;
         v0[t_run] += r0;
         if (DIM > 1) v1[t_run] += r1;
@@ -402,6 +441,8 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
     }
   }
   death[a] += death_a;
+  if (touched_lo < acc->lo) acc->lo = touched_lo;
+  if (touched_hi > acc->hi) acc->hi = touched_hi;
   acc->lost_n += lost_n;
   acc->lost_v[off] += lost0;
   if (DIM > 1) acc->lost_v[off + 1] += lost1;
@@ -427,6 +468,8 @@ static void reduce_threads(const agg_t *A, int nth, acc_t *acc) {
     const double *src = A->work + (size_t)t * A->work_len;
     double *dst = A->work;
     for (size_t i = 0; i < summed_len(A); i++) dst[i] += src[i];
+    if (acc[t].lo < acc[0].lo) acc[0].lo = acc[t].lo;
+    if (acc[t].hi > acc[0].hi) acc[0].hi = acc[t].hi;
     acc[0].lost_n += acc[t].lost_n;
     for (int q = 0; q < 3; q++) acc[0].lost_v[q] += acc[t].lost_v[q];
     for (int q = 0; q < GS_MAX_CARRIED; q++) acc[0].lost_c[q] += acc[t].lost_c[q];
@@ -496,6 +539,7 @@ static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
       const size_t r = a / A->n[2], i = a % A->n[2];
       if (N[a] != 0.0 && i >= span[2 * r] && i < span[2 * r + 1]) pairs_of(A, comp, N, a, &acc[slot]);
     }
+    mark_dirty(A, slot, acc[slot].lo, acc[slot].hi);
     return;
   }
   int nth = 1;
@@ -512,8 +556,10 @@ static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
       if (N[a] != 0.0 && i >= span[2 * r] && i < span[2 * r + 1])
         pairs_of(A, comp, N, a, &acc[tid]);
     }
+    mark_dirty(A, tid, acc[tid].lo, acc[tid].hi);
   }
   reduce_threads(A, nth, acc);
+  mark_dirty(A, 0, acc[0].lo, acc[0].hi); /* the others' sums added into thread 0's */
 }
 
 /* Redistribute pooled births (cell average) or copy fixed-pivot births into
@@ -522,13 +568,13 @@ static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double 
                            double *dydt, double *const *qdst) {
   double placed = 0;
   if (A->scheme == FIXED_PIVOT) {
-    for (size_t c = 0; c < A->ncells; c++) {
+    for (size_t c = acc->lo; c < acc->hi; c++) {
       dydt[c] += sign * acc->fp[c];
       placed += sign * acc->fp[c];
     }
     return placed;
   }
-  for (size_t t = 0; t < A->ncells; t++) {
+  for (size_t t = acc->lo; t < acc->hi; t++) {
     double B = acc->births[t];
     if (B == 0.0) continue;
     double vbar[GS_MAX_DIM], excess[GS_MAX_DIM] = {0}, qtot[GS_MAX_CARRIED];
@@ -593,18 +639,21 @@ static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const doubl
   compartment_pairs(A, comp, t, Nv, m, acc, ev->slot, ev->pcar);
   acc_t *r = &acc[ev->res];
   double *d = dydt ? gs_model_numbers(m, dydt, comp) : NULL;
-  /* summed in a register: through the pointer, which may alias d, every
-   * cell waited for the previous store (~4 % of the seed-000 example) */
-  double dead_sum = *dead;
-  for (size_t c = 0; c < A->ncells; c++) dead_sum += sign * r->death[c];
-  *dead = dead_sum;
-  if (d)
-    for (size_t c = 0; c < A->ncells; c++) d[c] -= sign * r->death[c];
+  /* the cells outside [lo, hi) hold no deaths or births */
+  const size_t lo = r->lo, hi = r->hi;
+  if (d) {
+    for (size_t c = lo; c < hi; c++) d[c] -= sign * r->death[c];
+  } else { /* number_rates: the total only (in a register: through the pointer,
+            * which may alias, every cell waited for the previous store) */
+    double dead_sum = *dead;
+    for (size_t c = lo; c < hi; c++) dead_sum += sign * r->death[c];
+    *dead = dead_sum;
+  }
   double *qdst[GS_MAX_CARRIED] = {NULL, NULL};
   for (int q = 0; d && q < A->nc; q++) {
     qdst[q] = gs_model_carried(m, dydt, comp, q);
     const double *p = ev->pcar + (size_t)q * A->ncells;
-    for (size_t c = 0; c < A->ncells; c++) qdst[q][c] -= sign * r->death[c] * p[c];
+    for (size_t c = lo; c < hi; c++) qdst[q][c] -= sign * r->death[c] * p[c];
   }
   double *scratch = d ? d : r->row; /* number_rates: place into a scratch row */
   if (!d) memset(scratch, 0, A->ncells * sizeof(double));
