@@ -10,7 +10,9 @@ int gs_lever_place(const gs_grid *g, size_t cell, const double *v, double count,
  * seed-000 grids): the four nodes and their factors found once for the
  * particles and every carried quantity.  Each amount is multiplied by the
  * factors in the order gs_lever_spread uses, so the results are the same bit
- * for bit.  Returns 0 when the general path must place the packet. */
+ * for bit (as built here, without contraction into fused multiply-adds,
+ * which a compiler could apply to the two paths differently).  Returns 0
+ * when the general path must place the packet. */
 static int place_two_axes(const gs_grid *g, size_t cell, const double *v, double count,
                           double *dst, int nq, const double *qtot, double *const *qdst) {
   const size_t n1 = g->stride[0], i0 = cell / n1, i1 = cell - i0 * n1;

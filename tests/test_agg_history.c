@@ -1,0 +1,136 @@
+/* Aggregation's right-hand side depends on its arguments only.  The
+ * mechanism keeps per-thread accumulators between evaluations and clears
+ * only the cells the last use wrote (the population of a large grid sits in
+ * a band); a cell left uncleared would add an earlier evaluation's sums to a
+ * later one.  So: evaluations on states whose populations occupy different
+ * cells, one after the other, must give the bits of a fresh model's single
+ * evaluation, in each way the work is shared:
+ *  - one thread;
+ *  - a team sharing one compartment's pair loop (576 cells, 2 threads);
+ *  - threads taking whole compartments (8 x 576 cells, 2 threads);
+ * with cell-average redistribution and carried loads (wet "either": two
+ * passes), and with fixed pivot.  Also: a stray cell holding a denormal
+ * number with a finite load (its load per particle overflows) takes part in
+ * no event and leaves every rate finite. */
+#include <omp.h>
+
+#include "pbm_testlib.h"
+
+#define NAX 24 /* cells per axis: 576 per compartment */
+
+static char *case_yaml(int ncomp, int fixed_pivot) {
+  return tl_fmt("grid:\n  compartments: %d\n  axes:\n"
+                "    - {name: a, type: geometric, min: 1.0e-3, ratio: 1.6, cells: %d}\n"
+                "    - {name: b, type: geometric, min: 1.0e-3, ratio: 1.6, cells: %d}\n"
+                "%s"
+                "mechanisms:\n"
+                "  - {type: aggregation, redistribution: %s, %s kernel: {type: sum, beta0: 1.0e-3}}\n"
+                "output: {end: 1}\n",
+                ncomp, NAX, NAX, fixed_pivot ? "" : "  carried: [liquid, gas]\n",
+                fixed_pivot ? "fixed_pivot" : "cell_average",
+                fixed_pivot ? "" : "wet: {min_content: 0.05, partners: either},");
+}
+
+/* State k: a population in a box of cells [lo0, hi0) x [lo1, hi1) per
+ * compartment, different for each k and compartment. */
+static void fill_state(const gs_model *m, int k, double *y) {
+  static const size_t boxes[3][4] = {{0, 18, 0, 18}, {12, 20, 14, 22}, {2, 6, 1, 5}};
+  const gs_grid *g = &m->grid;
+  memset(y, 0, m->nstate * sizeof *y);
+  tl_rng r = {1000u + (uint64_t)k};
+  for (size_t comp = 0; comp < g->ncomp; comp++) {
+    const size_t *b = boxes[(k + comp) % 3];
+    double *N = gs_model_numbers(m, y, comp);
+    for (size_t i = b[0]; i < b[1]; i++)
+      for (size_t j = b[2]; j < b[3]; j++) {
+        size_t c = i * NAX + j;
+        N[c] = 1e3 * (0.1 + tl_uniform(&r));
+        /* liquid / solid: wet (0.3) or dry (0.01) at random; gas 0.2 of the solid */
+        for (int q = 0; q < m->ncarried; q++)
+          gs_model_carried(m, y, comp, q)[c] =
+              N[c] * g->volume[c] * (q == 0 ? (tl_uniform(&r) < 0.6 ? 0.3 : 0.01) : 0.2);
+      }
+  }
+}
+
+/* Rates of state k: into d (nstate) and dl (nledger). */
+static void rates(const gs_model *m, int k, double *y, double *d, double *dl) {
+  fill_state(m, k, y);
+  gs_model_rhs(m, 0.1 * k, y, d, dl);
+}
+
+static void check_history(const char *what, int threads, int ncomp, int fixed_pivot) {
+  omp_set_num_threads(threads); /* before the case: the mechanism sizes its slots by it */
+  char *yaml = case_yaml(ncomp, fixed_pivot);
+  gs_case c;
+  if (tl_case(yaml, &c)) {
+    free(yaml);
+    return;
+  }
+  const gs_model *m = &c.model;
+  const size_t ns = m->nstate, nl = m->nledger;
+  double *y = malloc(ns * sizeof *y), *d = malloc(ns * sizeof *d), *dl = malloc(nl * sizeof *dl);
+  double *fresh = malloc(ns * sizeof *fresh), *fresh_l = malloc(nl * sizeof *fresh_l);
+  /* the states in turn on one model (wide, high, low, wide again) */
+  static const int order[] = {0, 1, 2, 0, 2, 1};
+  int differ = 0;
+  for (size_t i = 0; i < sizeof order / sizeof *order; i++) {
+    rates(m, order[i], y, d, dl);
+    gs_case other;
+    if (tl_case(yaml, &other)) break;
+    rates(&other.model, order[i], y, fresh, fresh_l);
+    if (memcmp(d, fresh, ns * sizeof *d) || memcmp(dl, fresh_l, nl * sizeof *dl)) differ++;
+    gs_case_free(&other);
+  }
+  printf("aggregation history, %s (%d thread(s), %d compartment(s)): %d of %zu evaluations differ "
+         "from a fresh model's\n", what, threads, ncomp, differ, sizeof order / sizeof *order);
+  CHECK(differ == 0);
+  free(y);
+  free(d);
+  free(dl);
+  free(fresh);
+  free(fresh_l);
+  free(yaml);
+  gs_case_free(&c);
+}
+
+/* A denormal number with a finite load next to the population: no event
+ * involves it (its pairs' rates underflow to zero), so no load may be lost
+ * from it, and 0 x (an overflowed load) must not turn its rate into NaN. */
+static void check_denormal_cell(void) {
+  omp_set_num_threads(1);
+  char *yaml = case_yaml(1, 0);
+  gs_case c;
+  if (tl_case(yaml, &c)) {
+    free(yaml);
+    return;
+  }
+  const gs_model *m = &c.model;
+  double *y = malloc(m->nstate * sizeof *y), *d = malloc(m->nstate * sizeof *d);
+  double *dl = malloc(m->nledger * sizeof *dl);
+  fill_state(m, 2, y);
+  const size_t stray = 3 * NAX + 9; /* inside the range the pairs write, outside the box */
+  gs_model_numbers(m, y, 0)[stray] = 4.9e-324;
+  gs_model_carried(m, y, 0, 0)[stray] = 1e-3;
+  gs_model_rhs(m, 0, y, d, dl);
+  size_t bad = 0;
+  for (size_t i = 0; i < m->nstate; i++) bad += !isfinite(d[i]);
+  printf("aggregation, a denormal number with a finite load: %zu non-finite rates\n", bad);
+  CHECK(bad == 0);
+  free(y);
+  free(d);
+  free(dl);
+  free(yaml);
+  gs_case_free(&c);
+}
+
+int main(void) {
+  check_history("cell average, carried, wet either", 1, 1, 0);
+  check_history("cell average, carried, wet either", 2, 1, 0);
+  check_history("cell average, carried, wet either", 2, 8, 0);
+  check_history("fixed pivot", 1, 1, 1);
+  check_history("fixed pivot", 2, 1, 1);
+  check_history("fixed pivot", 2, 8, 1);
+  check_denormal_cell();
+  TEST_EXIT();
+}
