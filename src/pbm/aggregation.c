@@ -655,8 +655,8 @@ static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const doubl
     const double *p = ev->pcar + (size_t)q * A->ncells;
     /* cells without events lose no load; skipping them also keeps a load
      * that overflows (a stray denormal number) from making 0 x inf = NaN */
-    for (size_t c = lo; c < hi; c++)
-      if (r->death[c] != 0.0) qdst[q][c] -= sign * r->death[c] * p[c];
+    for (size_t c = lo; c < hi; c++) /* a select, not a branch: it vectorises */
+      qdst[q][c] -= r->death[c] != 0.0 ? sign * r->death[c] * p[c] : 0.0;
   }
   double *scratch = d ? d : r->row; /* number_rates: place into a scratch row */
   if (!d) memset(scratch, 0, A->ncells * sizeof(double));
