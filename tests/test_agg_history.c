@@ -11,7 +11,9 @@
  * with cell-average redistribution and carried loads (wet "either": two
  * passes), and with fixed pivot.  Also: a stray cell holding a denormal
  * number with a finite load (its load per particle overflows) takes part in
- * no event and leaves every rate finite. */
+ * no event and leaves every rate finite; and a model made for one thread,
+ * evaluated after the program asked OpenMP for more, keeps the team it has
+ * scratch for (a larger team had written past the per-thread accumulators). */
 #include <omp.h>
 
 #include "pbm_testlib.h"
@@ -59,7 +61,9 @@ static void rates(const gs_model *m, int k, double *y, double *d, double *dl) {
   gs_model_rhs(m, 0.1 * k, y, d, dl);
 }
 
-static void check_history(const char *what, int threads, int ncomp, int fixed_pivot) {
+/* threads_later: OpenMP's team size set after the models are made */
+static void check_history(const char *what, int threads, int ncomp, int fixed_pivot,
+                          int threads_later) {
   omp_set_num_threads(threads); /* before the case: the mechanism sizes its slots by it */
   char *yaml = case_yaml(ncomp, fixed_pivot);
   gs_case c;
@@ -75,15 +79,18 @@ static void check_history(const char *what, int threads, int ncomp, int fixed_pi
   static const int order[] = {0, 1, 2, 0, 2, 1};
   int differ = 0;
   for (size_t i = 0; i < sizeof order / sizeof *order; i++) {
-    rates(m, order[i], y, d, dl);
     gs_case other;
+    omp_set_num_threads(threads);
     if (tl_case(yaml, &other)) break;
+    omp_set_num_threads(threads_later);
+    rates(m, order[i], y, d, dl);
     rates(&other.model, order[i], y, fresh, fresh_l);
     if (memcmp(d, fresh, ns * sizeof *d) || memcmp(dl, fresh_l, nl * sizeof *dl)) differ++;
     gs_case_free(&other);
   }
-  printf("aggregation history, %s (%d thread(s), %d compartment(s)): %d of %zu evaluations differ "
-         "from a fresh model's\n", what, threads, ncomp, differ, sizeof order / sizeof *order);
+  printf("aggregation history, %s (%d thread(s), then %d asked; %d compartment(s)): %d of %zu "
+         "evaluations differ from a fresh model's\n",
+         what, threads, threads_later, ncomp, differ, sizeof order / sizeof *order);
   CHECK(differ == 0);
   free(y);
   free(d);
@@ -125,12 +132,15 @@ static void check_denormal_cell(void) {
 }
 
 int main(void) {
-  check_history("cell average, carried, wet either", 1, 1, 0);
-  check_history("cell average, carried, wet either", 2, 1, 0);
-  check_history("cell average, carried, wet either", 2, 8, 0);
-  check_history("fixed pivot", 1, 1, 1);
-  check_history("fixed pivot", 2, 1, 1);
-  check_history("fixed pivot", 2, 8, 1);
+  check_history("cell average, carried, wet either", 1, 1, 0, 1);
+  check_history("cell average, carried, wet either", 2, 1, 0, 2);
+  check_history("cell average, carried, wet either", 2, 8, 0, 2);
+  check_history("fixed pivot", 1, 1, 1, 1);
+  check_history("fixed pivot", 2, 1, 1, 2);
+  check_history("fixed pivot", 2, 8, 1, 2);
+  /* made for one thread, evaluated with 4 asked: the team it was made for */
+  check_history("cell average, carried, wet either", 1, 1, 0, 4);
+  check_history("cell average, carried, wet either", 1, 8, 0, 4);
   check_denormal_cell();
   TEST_EXIT();
 }

@@ -531,7 +531,7 @@ static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
   }
   const size_t *span = A->span + comp * 2 * A->nrows;
   /* small grids (or one thread): a parallel region costs more than the pairs */
-  if (slot < 0 && gs_threads_for(A->ncells, 401) < 2) slot = 0;
+  if (slot < 0 && (A->nthreads < 2 || gs_threads_for(A->ncells, 401) < 2)) slot = 0;
   if (slot >= 0) {
     acc[slot] = thread_acc(A, slot);
     acc[slot].pcar = pcar;
@@ -543,7 +543,9 @@ static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
     return;
   }
   int nth = 1;
-#pragma omp parallel
+  /* at most the team the per-thread scratch was made for (a program may
+   * ask OpenMP for more threads after the case is built) */
+#pragma omp parallel num_threads(A->nthreads)
   {
 #pragma omp single
     nth = omp_get_num_threads();
@@ -708,7 +710,7 @@ static void agg_rates(agg_t *A, const gs_model *m, double t, const double *y, do
    * compartment between this path (its sums in one thread, as in one
    * process) and the shared pair loop (sums added in another order). */
   if (A->ncomp > 1 && A->nthreads > 1 && gs_threads_for(A->ncells * A->ncomp, 4096) > 1) {
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) num_threads(A->nthreads)
     for (size_t comp = lo; comp < hi; comp++)
       compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, omp_get_thread_num());
   } else {
