@@ -62,6 +62,7 @@ typedef struct {
   size_t *span;          /* per compartment and row: [lo, hi) of the cells taking part */
   int *span_valid;       /* per compartment: spans computed at least once */
   double *span_t;        /* per compartment: time of the state they were computed from */
+  size_t *prange;        /* per compartment: [lo, hi) of the cells in the spans */
   int nc;                /* carried quantities */
   double *pcar;          /* nc * ncells: load per particle in the compartment being evaluated */
   int wet, wet_liquid;   /* WET_*; carried index of the liquid */
@@ -93,6 +94,7 @@ static void agg_free(void *self) {
   free(A->span);
   free(A->span_valid);
   free(A->span_t);
+  free(A->prange);
   free(A->pcar);
   free(A->wet_ok);
   free(A->wet_t);
@@ -224,11 +226,15 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     A->masked = gs_calloc(nslot * A->ncells, sizeof(double), err);
     if (!A->pcar || !A->wet_ok || !A->wet_t || !A->masked) rc = GS_ENOMEM;
     for (size_t c = 0; !rc && c < A->ncomp; c++) A->wet_t[c] = NAN; /* not chosen yet */
+    /* loads are computed only where pairs read them (ensure_loads): a read
+     * elsewhere would show as NaN, not as a load of another compartment */
+    for (size_t i = 0; !rc && i < nslot * ((size_t)A->nc * A->ncells + 1); i++) A->pcar[i] = NAN;
     A->nrows = A->n[0] * A->n[1];
     A->span = gs_malloc(2 * A->nrows * A->ncomp * sizeof(size_t), err);
     A->span_valid = gs_calloc(A->ncomp, sizeof(int), err);
     A->span_t = gs_calloc(A->ncomp, sizeof(double), err);
-    if (!A->span || !A->span_valid || !A->span_t) rc = GS_ENOMEM;
+    A->prange = gs_calloc(2 * A->ncomp, sizeof(size_t), err);
+    if (!A->span || !A->span_valid || !A->span_t || !A->prange) rc = GS_ENOMEM;
     A->work_len = (size_t)(7 + A->nc) * A->ncells + A->n[2];
     A->work = gs_malloc((size_t)A->nthreads * A->work_len * sizeof(double), err);
     A->dirty = gs_malloc(2 * (size_t)A->nthreads * sizeof(size_t), err);
@@ -496,6 +502,7 @@ static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
     }
   }
   const double nmin = A->negligible * ntot, vmin = A->negligible * vtot;
+  size_t first = A->ncells, last = 0;
   for (size_t r = 0; r < A->nrows; r++) {
     size_t lo = n2, hi = 0;
     for (size_t i = 0; i < n2; i++) {
@@ -510,25 +517,35 @@ static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
     }
     span[2 * r] = lo;
     span[2 * r + 1] = hi;
+    if (lo < hi) {
+      if (first == A->ncells) first = r * n2 + lo;
+      last = r * n2 + hi;
+    }
   }
+  A->prange[2 * comp] = first;
+  A->prange[2 * comp + 1] = last;
   A->span_valid[comp] = 1;
 }
 
-/* Pair loop of one compartment.  slot < 0: this compartment alone, split
- * over the OpenMP team (result in acc[0]); slot >= 0: called by thread
- * `slot` of a team that splits the compartments, so the loop is serial
- * (result in acc[slot]). */
-static void compartment_pairs(agg_t *A, size_t comp, double t, const double *N,
-                              const gs_model *m, acc_t *acc, int slot, const double *pcar) {
-  /* The participating cells are chosen once per time value under an
-   * integrator, and kept while held (Jacobian-vector difference quotients,
-   * whose perturbed state has tolerance-sized noise in every cell): Newton
-   * iterations then see one smooth right-hand side. */
+/* Choose the cells taking part in compartment comp's pair loop for the
+ * numbers N (find_spans), or keep the last choice: it is made once per
+ * time value under an integrator, and kept while held (Jacobian-vector
+ * difference quotients, whose perturbed state has tolerance-sized noise in
+ * every cell), so that Newton iterations see one smooth right-hand side. */
+static void choose_cells(agg_t *A, size_t comp, double t, const double *N, const gs_model *m) {
   int keep = A->span_valid[comp] && (m->hold || (m->in_integrator && t == A->span_t[comp]));
   if (!keep) {
     find_spans(A, comp, N, A->negligible > 0 ? m->noise_floor : 0.0);
     A->span_t[comp] = t;
   }
+}
+
+/* Pair loop of one compartment over the cells choose_cells chose.  slot < 0: this compartment alone, split
+ * over the OpenMP team (result in acc[0]); slot >= 0: called by thread
+ * `slot` of a team that splits the compartments, so the loop is serial
+ * (result in acc[slot]). */
+static void compartment_pairs(agg_t *A, size_t comp, const double *N, acc_t *acc, int slot,
+                              const double *pcar) {
   const size_t *span = A->span + comp * 2 * A->nrows;
   /* small grids (or one thread): a parallel region costs more than the pairs */
   if (slot < 0 && (A->nthreads < 2 || gs_threads_for(A->ncells, 401) < 2)) slot = 0;
@@ -595,24 +612,44 @@ typedef struct {
   int slot, res;  /* res: the acc entry and work slot holding the results */
   double *pcar;   /* nc * ncells loads per particle */
   double *masked; /* ncells */
+  size_t loaded_lo, loaded_hi; /* the cells of pcar computed for this compartment */
 } evaluator;
 
 static evaluator evaluator_for(const agg_t *A, int slot) {
   int res = slot < 0 ? 0 : slot;
   evaluator e = {slot, res, A->pcar + (size_t)res * ((size_t)A->nc * A->ncells + 1),
-                 A->masked + (size_t)res * A->ncells};
+                 A->masked + (size_t)res * A->ncells, 0, 0};
   return e;
 }
 
-/* Loads per particle of compartment comp. */
+/* Loads per particle of compartment comp's cells [lo, hi). */
 static void carried_loads(const agg_t *A, const gs_model *m, size_t comp, const double *y,
-                          double *pcar) {
+                          double *pcar, size_t lo, size_t hi) {
   const double *N = gs_model_numbers_c(m, y, comp);
   for (int q = 0; q < A->nc; q++) {
     const double *Q = gs_model_carried_c(m, y, comp, q);
     double *p = pcar + (size_t)q * A->ncells;
-    for (size_t c = 0; c < A->ncells; c++) p[c] = N[c] > 0 ? Q[c] / N[c] : 0.0;
+    for (size_t c = lo; c < hi; c++) p[c] = N[c] > 0 ? Q[c] / N[c] : 0.0;
   }
+}
+
+/* The loads of the cells taking part (the only ones the pairs read; the
+ * losses read them only where there are deaths): computed for that range
+ * alone, a pass at a time, since a large grid's population sits in a band. */
+static void ensure_loads(const agg_t *A, const gs_model *m, size_t comp, const double *y,
+                         evaluator *ev) {
+  const size_t lo = A->prange[2 * comp], hi = A->prange[2 * comp + 1];
+  if (lo >= hi) return;
+  if (ev->loaded_lo >= ev->loaded_hi) {
+    carried_loads(A, m, comp, y, ev->pcar, lo, hi);
+    ev->loaded_lo = lo;
+    ev->loaded_hi = hi;
+    return;
+  }
+  if (lo < ev->loaded_lo) carried_loads(A, m, comp, y, ev->pcar, lo, ev->loaded_lo);
+  if (hi > ev->loaded_hi) carried_loads(A, m, comp, y, ev->pcar, ev->loaded_hi, hi);
+  if (lo < ev->loaded_lo) ev->loaded_lo = lo;
+  if (hi > ev->loaded_hi) ev->loaded_hi = hi;
 }
 
 /* Wetness psi of the cells of compartment comp: 0 below min_content, 1
@@ -635,10 +672,12 @@ static const double *wet_cells(agg_t *A, const gs_model *m, size_t comp, double 
 }
 
 /* One pass of pairs over the numbers Nv, its rates added with sign. */
-static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const double *Nv,
-                 double sign, double *dydt, double *dledger, double *born, double *dead,
-                 acc_t *acc, const evaluator *ev) {
-  compartment_pairs(A, comp, t, Nv, m, acc, ev->slot, ev->pcar);
+static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const double *y,
+                 const double *Nv, double sign, double *dydt, double *dledger, double *born,
+                 double *dead, acc_t *acc, evaluator *ev) {
+  choose_cells(A, comp, t, Nv, m);
+  ensure_loads(A, m, comp, y, ev);
+  compartment_pairs(A, comp, Nv, acc, ev->slot, ev->pcar);
   acc_t *r = &acc[ev->res];
   double *d = dydt ? gs_model_numbers(m, dydt, comp) : NULL;
   /* the cells outside [lo, hi) hold no deaths or births */
@@ -673,21 +712,20 @@ static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const doubl
 static void compartment_rates(agg_t *A, const gs_model *m, double t, const double *y,
                               double *dydt, double *dledger, double *birth, double *death,
                               size_t comp, acc_t *acc, int slot) {
-  const evaluator ev = evaluator_for(A, slot);
+  evaluator ev = evaluator_for(A, slot);
   const double *N = gs_model_numbers_c(m, y, comp);
   const double start = gs_model_clock(m);
   double born = 0, dead = 0;
-  carried_loads(A, m, comp, y, ev.pcar);
   if (A->wet == WET_OFF) {
-    pass(A, m, comp, t, N, 1.0, dydt, dledger, &born, &dead, acc, &ev);
+    pass(A, m, comp, t, y, N, 1.0, dydt, dledger, &born, &dead, acc, &ev);
   } else {
     const double *psi = wet_cells(A, m, comp, t, y);
     /* both: pair weight psi_a psi_b, so the numbers psi N; either:
      * 1 - (1 - psi_a)(1 - psi_b), all pairs minus those of (1 - psi) N */
     const int both = A->wet == WET_BOTH;
     for (size_t c = 0; c < A->ncells; c++) ev.masked[c] = (both ? psi[c] : 1.0 - psi[c]) * N[c];
-    if (!both) pass(A, m, comp, t, N, 1.0, dydt, dledger, &born, &dead, acc, &ev);
-    pass(A, m, comp, t, ev.masked, both ? 1.0 : -1.0, dydt, dledger, &born, &dead, acc, &ev);
+    if (!both) pass(A, m, comp, t, y, N, 1.0, dydt, dledger, &born, &dead, acc, &ev);
+    pass(A, m, comp, t, y, ev.masked, both ? 1.0 : -1.0, dydt, dledger, &born, &dead, acc, &ev);
   }
   if (birth) birth[comp] = born;
   if (death) death[comp] = dead;
