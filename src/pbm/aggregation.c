@@ -226,7 +226,7 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     A->masked = gs_calloc(nslot * A->ncells, sizeof(double), err);
     if (!A->pcar || !A->wet_ok || !A->wet_t || !A->masked) rc = GS_ENOMEM;
     for (size_t c = 0; !rc && c < A->ncomp; c++) A->wet_t[c] = NAN; /* not chosen yet */
-    /* loads are computed only where pairs read them (ensure_loads): a read
+    /* loads are computed only where pairs read them (carried_loads): a read
      * elsewhere would show as NaN, not as a load of another compartment */
     for (size_t i = 0; !rc && i < nslot * ((size_t)A->nc * A->ncells + 1); i++) A->pcar[i] = NAN;
     A->nrows = A->n[0] * A->n[1];
@@ -601,7 +601,11 @@ static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double 
     for (int q = 0; q < A->nc; q++) qtot[q] = sign * acc->cvol[q][t];
     gs_lever_place_carried(g, t, vbar, sign * B, dydt, excess, qdst ? A->nc : 0, qtot, qdst);
     placed += sign * B;
-    for (int k = 0; k < A->dim; k++) acc->lost_v[A->off + k] += excess[k];
+    /* excess carries the packet's sign already, and pass() books lost_v
+     * times sign: unsigned here, like the pairs' losses (with the sign
+     * twice, the dry pass of wet "either" had booked its clamped volume
+     * with the wrong sign) */
+    for (int k = 0; k < A->dim; k++) acc->lost_v[A->off + k] += sign * excess[k];
   }
   return placed;
 }
@@ -612,19 +616,21 @@ typedef struct {
   int slot, res;  /* res: the acc entry and work slot holding the results */
   double *pcar;   /* nc * ncells loads per particle */
   double *masked; /* ncells */
-  size_t loaded_lo, loaded_hi; /* the cells of pcar computed for this compartment */
 } evaluator;
 
 static evaluator evaluator_for(const agg_t *A, int slot) {
   int res = slot < 0 ? 0 : slot;
   evaluator e = {slot, res, A->pcar + (size_t)res * ((size_t)A->nc * A->ncells + 1),
-                 A->masked + (size_t)res * A->ncells, 0, 0};
+                 A->masked + (size_t)res * A->ncells};
   return e;
 }
 
-/* Loads per particle of compartment comp's cells [lo, hi). */
+/* Loads per particle of compartment comp's cells that take part (the only
+ * ones the pairs read, and the losses where there are deaths): a large
+ * grid's population sits in a band. */
 static void carried_loads(const agg_t *A, const gs_model *m, size_t comp, const double *y,
-                          double *pcar, size_t lo, size_t hi) {
+                          double *pcar) {
+  const size_t lo = A->prange[2 * comp], hi = A->prange[2 * comp + 1];
   const double *N = gs_model_numbers_c(m, y, comp);
   for (int q = 0; q < A->nc; q++) {
     const double *Q = gs_model_carried_c(m, y, comp, q);
@@ -633,24 +639,6 @@ static void carried_loads(const agg_t *A, const gs_model *m, size_t comp, const 
   }
 }
 
-/* The loads of the cells taking part (the only ones the pairs read; the
- * losses read them only where there are deaths): computed for that range
- * alone, a pass at a time, since a large grid's population sits in a band. */
-static void ensure_loads(const agg_t *A, const gs_model *m, size_t comp, const double *y,
-                         evaluator *ev) {
-  const size_t lo = A->prange[2 * comp], hi = A->prange[2 * comp + 1];
-  if (lo >= hi) return;
-  if (ev->loaded_lo >= ev->loaded_hi) {
-    carried_loads(A, m, comp, y, ev->pcar, lo, hi);
-    ev->loaded_lo = lo;
-    ev->loaded_hi = hi;
-    return;
-  }
-  if (lo < ev->loaded_lo) carried_loads(A, m, comp, y, ev->pcar, lo, ev->loaded_lo);
-  if (hi > ev->loaded_hi) carried_loads(A, m, comp, y, ev->pcar, ev->loaded_hi, hi);
-  if (lo < ev->loaded_lo) ev->loaded_lo = lo;
-  if (hi > ev->loaded_hi) ev->loaded_hi = hi;
-}
 
 /* Wetness psi of the cells of compartment comp: 0 below min_content, 1
  * above, linear across the relative width `ramp` around it (a step makes the
@@ -671,12 +659,16 @@ static const double *wet_cells(agg_t *A, const gs_model *m, size_t comp, double 
   return psi;
 }
 
-/* One pass of pairs over the numbers Nv, its rates added with sign. */
+/* One pass of pairs over the numbers Nv, its rates added with sign; choose:
+ * choose the cells taking part from Nv and find their loads, else keep the
+ * last pass's. */
 static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const double *y,
-                 const double *Nv, double sign, double *dydt, double *dledger, double *born,
-                 double *dead, acc_t *acc, evaluator *ev) {
-  choose_cells(A, comp, t, Nv, m);
-  ensure_loads(A, m, comp, y, ev);
+                 const double *Nv, double sign, int choose, double *dydt, double *dledger,
+                 double *born, double *dead, acc_t *acc, const evaluator *ev) {
+  if (choose) {
+    choose_cells(A, comp, t, Nv, m);
+    carried_loads(A, m, comp, y, ev->pcar);
+  }
   compartment_pairs(A, comp, Nv, acc, ev->slot, ev->pcar);
   acc_t *r = &acc[ev->res];
   double *d = dydt ? gs_model_numbers(m, dydt, comp) : NULL;
@@ -712,20 +704,22 @@ static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const doubl
 static void compartment_rates(agg_t *A, const gs_model *m, double t, const double *y,
                               double *dydt, double *dledger, double *birth, double *death,
                               size_t comp, acc_t *acc, int slot) {
-  evaluator ev = evaluator_for(A, slot);
+  const evaluator ev = evaluator_for(A, slot);
   const double *N = gs_model_numbers_c(m, y, comp);
   const double start = gs_model_clock(m);
   double born = 0, dead = 0;
   if (A->wet == WET_OFF) {
-    pass(A, m, comp, t, y, N, 1.0, dydt, dledger, &born, &dead, acc, &ev);
+    pass(A, m, comp, t, y, N, 1.0, 1, dydt, dledger, &born, &dead, acc, &ev);
   } else {
     const double *psi = wet_cells(A, m, comp, t, y);
     /* both: pair weight psi_a psi_b, so the numbers psi N; either:
      * 1 - (1 - psi_a)(1 - psi_b), all pairs minus those of (1 - psi) N */
     const int both = A->wet == WET_BOTH;
     for (size_t c = 0; c < A->ncells; c++) ev.masked[c] = (both ? psi[c] : 1.0 - psi[c]) * N[c];
-    if (!both) pass(A, m, comp, t, y, N, 1.0, dydt, dledger, &born, &dead, acc, &ev);
-    pass(A, m, comp, t, y, ev.masked, both ? 1.0 : -1.0, dydt, dledger, &born, &dead, acc, &ev);
+    /* either: the dry pairs subtracted are among the cells of all pairs (a
+     * dry cell negligible in the whole compartment takes part in neither) */
+    if (!both) pass(A, m, comp, t, y, N, 1.0, 1, dydt, dledger, &born, &dead, acc, &ev);
+    pass(A, m, comp, t, y, ev.masked, both ? 1.0 : -1.0, both, dydt, dledger, &born, &dead, acc, &ev);
   }
   if (birth) birth[comp] = born;
   if (death) death[comp] = dead;
