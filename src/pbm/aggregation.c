@@ -540,10 +540,10 @@ static void choose_cells(agg_t *A, size_t comp, double t, const double *N, const
   }
 }
 
-/* Pair loop of one compartment over the cells choose_cells chose.  slot < 0: this compartment alone, split
- * over the OpenMP team (result in acc[0]); slot >= 0: called by thread
- * `slot` of a team that splits the compartments, so the loop is serial
- * (result in acc[slot]). */
+/* Pair loop of one compartment over the cells choose_cells chose.  slot <
+ * 0: this compartment alone, split over the OpenMP team (result in acc[0]);
+ * slot >= 0: called by thread `slot` of a team that splits the
+ * compartments, so the loop is serial (result in acc[slot]). */
 static void compartment_pairs(agg_t *A, size_t comp, const double *N, acc_t *acc, int slot,
                               const double *pcar) {
   const size_t *span = A->span + comp * 2 * A->nrows;
