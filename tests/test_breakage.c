@@ -90,7 +90,9 @@ static void test_t4(void) {
                sq ? "^2" : "", schemes[s], t, tl_relerr(M0, M0x), M1 / M1_0 - 1, -lost / M1_0, dist);
         /* the ledger: M1 - M1(0) = -lost exactly */
         CHECK(fabs(M1 - M1_0 + lost) <= 1e-12 * M1_0);
-        CHECK(lost <= 0 && -lost < 5e-7 * M1_0);
+        /* volume is only ever gained below the first pivot (lost <= 0), up to
+         * the round-off of the ledger's sum (3e-16 seen for S = v^2) */
+        CHECK(lost <= 1e-14 * M1_0 && -lost < 5e-7 * M1_0);
         if (!sq) CHECK_REL(M0, 1 + t * M1_0, 1.2e-7); /* dM0/dt = M1 exactly; M1 grows by the gain */
         else CHECK(tl_relerr(M0, M0x) < tol_m0sq[s]);
         CHECK(dist < tol_dist[sq][s]);

@@ -56,6 +56,11 @@ typedef struct gs_ode {
    * steps an uninterrupted advance would (the MPI run driver moves
    * compartments between ranks there).  NULL: never. */
   int (*between_steps)(void *ctx);
+  /* 1 when f jumps at the time the next advance starts from (a rate
+   * switched on or off there): derivatives an integrator kept from before
+   * (the last step's end-of-step derivative, a multistep history) do not
+   * hold there and are evaluated afresh.  The caller sets it per advance. */
+  int jumped;
 } gs_ode;
 
 typedef struct gs_integrator_stats {

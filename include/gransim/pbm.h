@@ -119,6 +119,16 @@ struct gs_model {
    * block, which transfer reads, in `halo` (numbers, then carried). */
   size_t view_lo, view_carried;
   const double *halo;
+  /* The interval [switch_lo, switch_hi] being integrated, which holds no
+   * switch (gs_model_next_switch) inside it, or switch_lo > switch_hi for
+   * none.  Mechanisms active over a time window decide on or off at its
+   * midpoint (gs_window_on), so that an evaluation at an end that is a
+   * switch time sees the interval's rates: RK stages and the end-of-step
+   * derivative fall on t + h exactly, and with the rate after the switch
+   * there the step ending at the switch failed its error test at every
+   * size above ~1e-4 s (the seed-000 example: 17 rejected steps creeping
+   * up to the spray's start). */
+  double switch_lo, switch_hi;
   /* NULL, or ncomp seconds: the work of each compartment whose cost depends
    * on its contents (aggregation's pair loop, breakage), which mechanisms
    * add with gs_model_clock/gs_model_charge; the MPI rebalancing reads it to
@@ -188,6 +198,10 @@ void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, do
 double gs_model_next_switch(const gs_model *m, double t);
 /* Helper for mechanisms active in [start, end). */
 double gs_window_next_switch(double start, double end, double t);
+/* 1 if a mechanism active in [start, end) is on for an evaluation at t: at
+ * t itself, or, inside the interval m->switch_lo..switch_hi, at its
+ * midpoint. */
+int gs_window_on(const gs_model *m, double start, double end, double t);
 /* 1 if some mechanism provides a preconditioner. */
 int gs_model_has_preconditioner(const gs_model *m);
 /* Approximate solution of (I - gamma J) z = r over the numbers and the

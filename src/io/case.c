@@ -309,7 +309,7 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
                       : i < m->nstate   ? vtyp
                                         : scale[(i - m->nstate) % (size_t)m->nvol];
   c->ode = (gs_ode){n, model_ode, m, c->abs_scale, m->nstate,
-                    gs_model_has_preconditioner(m) ? model_psolve : NULL, model_hold, NULL, 0, NULL};
+                    gs_model_has_preconditioner(m) ? model_psolve : NULL, model_hold, NULL, 0, NULL, 0};
   gs_cfg_node *solver = gs_cfg_get(root, "solver");
   if (solver && gs_cfg_require_kind(solver, GS_CFG_MAP, err)) return GS_EINPUT;
   c->rebalance = 0.05;

@@ -127,7 +127,7 @@ static void carried_compartment(const carried_t *C, const gs_model *m, const dou
 static void carried_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
                         double *dledger) {
   const carried_t *C = self;
-  if (C->kind == SPRAY && (t < C->start || t >= C->end)) return;
+  if (C->kind == SPRAY && !gs_window_on(m, C->start, C->end, t)) return;
   const size_t lo = m->comp_lo, hi = m->comp_hi;
   if (gs_threads_for((hi - lo) * m->grid.ncells, 20000) > 1) {
 #pragma omp parallel for schedule(static)

@@ -143,8 +143,8 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
   return GS_OK;
 }
 
-static int active(const grow_t *G, double t) {
-  return G->kind == KIND_CONSOLIDATION || (t >= G->start && t < G->end);
+static int active(const grow_t *G, const gs_model *m, double t) {
+  return G->kind == KIND_CONSOLIDATION || gs_window_on(m, G->start, G->end, t);
 }
 
 /* Rates of compartment comp into G->G; 0 when nothing grows there. */
@@ -163,7 +163,7 @@ static void grow_rhs(void *self, const gs_model *m, double t, const double *y, d
                      double *dledger) {
   grow_t *G = self;
   const gs_grid *g = &m->grid;
-  if (!active(G, t)) return;
+  if (!active(G, m, t)) return;
   for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
     const double *N = gs_model_numbers_c(m, y, comp);
     if (compartment_rates(G, g, comp, N))
@@ -179,7 +179,7 @@ static void grow_precondition(void *self, const gs_model *m, double t, const dou
                               double gamma, double *z) {
   grow_t *G = self;
   const gs_grid *g = &m->grid;
-  if (!active(G, t)) return;
+  if (!active(G, m, t)) return;
   for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++)
     if (compartment_rates(G, g, comp, gs_model_numbers_c(m, y, comp)))
       gs_growth_solve(g, G->axis, G->G, gamma, gs_model_numbers(m, z, comp), G->work);

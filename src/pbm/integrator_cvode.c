@@ -336,6 +336,8 @@ static int gs_cvode_advance(void *vself, const gs_ode *ode, double *t, double t_
   self->ode = ode;
   self->rhs_failed = 0;
   self->msg[0] = '\0';
+  /* across a jump in f the history of past steps is that of another f */
+  if (ode->jumped) self->needs_reinit = 1;
   int rc = gs_cvode_prepare(self, *t, y, err);
   /* The stop time makes CVODE land on t_out instead of stepping past it and
    * interpolating, so f is never evaluated beyond t_out. */

@@ -28,6 +28,8 @@ const gs_mech_type *gs_mech_lookup(const char *name) {
 
 int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err) {
   memset(m, 0, sizeof *m);
+  m->switch_lo = 1; /* no interval: windows decide at t */
+  m->switch_hi = 0;
   m->grid = *grid;
   memset(grid, 0, sizeof *grid);
   m->nnum = m->nstate = m->grid.ncomp * m->grid.ncells;
@@ -108,6 +110,12 @@ double gs_window_next_switch(double start, double end, double t) {
   if (t < start) return start;
   if (t < end) return end;
   return INFINITY;
+}
+
+int gs_window_on(const gs_model *m, double start, double end, double t) {
+  if (m->switch_lo <= m->switch_hi && t >= m->switch_lo && t <= m->switch_hi)
+    t = 0.5 * (m->switch_lo + m->switch_hi);
+  return t >= start && t < end;
 }
 
 double gs_model_next_switch(const gs_model *m, double t) {

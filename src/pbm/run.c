@@ -202,7 +202,7 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
   if (!s->yl || !s->scale) return GS_ENOMEM;
   gs_dist_pack(d, c->abs_scale, s->scale);
   /* numbers and carried volumes come first in the packed vector too */
-  s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max, 1, between_steps};
+  s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max, 1, between_steps, 0};
   s->it = &s->own;
   return gs_integrator_create(gs_cfg_get(gs_cfg_root(c->cfg), "solver"), &s->ode, &s->own, err);
 }
@@ -608,14 +608,22 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   gs_error out_err = {0};
   double start = now_seconds(), t_end = c->times[c->ntimes - 1];
   gs_integrator_stats st = {0};
+  double switch_reached = NAN; /* the switch time the last advance ended at */
   for (size_t i = 0; !rc && i < c->ntimes; i++) {
     if (c->times[i] <= t) continue;
     /* stop at every time where a rate switches on or off (spray windows,
      * feeds): an integrator cannot step over a jump in f to tolerance */
     const double advance_start = guard.advance_start = now_seconds();
     while (!rc && t < c->times[i]) {
-      double stop = fmin(c->times[i], gs_model_next_switch(m, t));
+      const double next_switch = gs_model_next_switch(m, t);
+      const double stop = fmin(c->times[i], next_switch);
+      m->switch_lo = t; /* windows decide once for the interval (gs_window_on) */
+      m->switch_hi = stop;
+      step.ode.jumped = t == switch_reached;
       rc = stepper_advance(&step, &t, stop, Y, err);
+      m->switch_lo = 1;
+      m->switch_hi = 0;
+      if (!rc && t == next_switch) switch_reached = t;
       if (!rc && guard.stop_code) rc = failed_at_output(out_rc, guard.stop_code, &out_err, err);
       if (!rc && guard.move_wanted) rc = rebalance_move(c, &dist, &step, &guard, Y, err);
     }

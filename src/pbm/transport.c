@@ -74,7 +74,7 @@ static void feed_rhs(void *self, const gs_model *m, double t, const double *y, d
   (void)y;
   const feed_t *F = self;
   const gs_grid *g = &m->grid;
-  if (t < F->start || t >= F->end || F->comp < m->comp_lo || F->comp >= m->comp_hi) return;
+  if (!gs_window_on(m, F->start, F->end, t) || F->comp < m->comp_lo || F->comp >= m->comp_hi) return;
   double *d = gs_model_numbers(m, dydt, F->comp);
   for (size_t c = 0; c < g->ncells; c++) d[c] += F->rate[c];
   for (int q = 0; q < m->ncarried; q++) {
