@@ -68,6 +68,19 @@ typedef struct {
   int stop_code;
   double advance_start, t_advance_now; /* the advance in progress began; busy then */
   long rhs_calls, calls_mark; /* this rank's evaluations (the same count on every rank) */
+  /* under MPI, an output time whose checks and copy (rank 0) and failure
+   * agreement (every rank) wait for the first step agreement after it
+   * (post_output_time); the run loop's state they need; seconds of it spent
+   * inside the advances */
+  int output_held;
+  double held_t;
+  gs_output *out;
+  const double *M1_0;
+  double *ymax_seen;
+  gs_run_report *rep;
+  int *out_rc;
+  gs_error *out_err;
+  double t_held;
   long rebalanced, moves_tried; /* moves_tried: GRANSIM_TEST_MOVE_COMPARTMENTS only */
 } guard_t;
 
@@ -164,8 +177,11 @@ static int write_piece(void *ctx) {
 /* Step agreement across MPI ranks, where rank 0 writes held output times
  * while the others have not arrived (every rank makes the same
  * non-blocking call). */
+static double post_output_time(guard_t *g);
+
 static double guarded_max(void *ctx, double v) {
   guard_t *gd = ctx;
+  gd->t_held += post_output_time(gd);
   const double start = now_seconds();
   v = gs_dist_max_while(gd->dist, v, gd->deferred ? write_piece : NULL, gd);
   gd->t_agree += now_seconds() - start;
@@ -211,6 +227,8 @@ static int stepper_advance(stepper_t *s, double *t, double t_out, double *Y, gs_
   if (!s->local) return s->it->type->advance(s->it->self, &s->ode, t, t_out, Y, err);
   gs_dist_pack(s->local, Y, s->yl);
   int rc = s->it->type->advance(s->it->self, &s->ode, t, t_out, s->yl, err);
+  guard_t *g = s->ode.ctx; /* if no step agreement did: Y still holds that time */
+  g->t_held += post_output_time(g);
   gs_dist_unpack(s->local, s->yl, Y);
   return rc;
 }
@@ -364,7 +382,7 @@ static void rebalance_measure(gs_case *c, gs_dist *d, guard_t *g) {
    * messages and step agreements): the rates and the integrator's own
    * vector work, which grows with the block too (a quarter of the
    * 32-compartment case) */
-  const double busy = g->t_advance_now - g->t_exchange - g->t_agree;
+  const double busy = g->t_advance_now - g->t_exchange - g->t_agree - g->t_held;
   const double written = g->t_written + gs_deferred_output_seconds(g->deferred);
   const size_t own_lo = d->lo[d->rank], own_hi = d->lo[d->rank + 1];
   double measured = 0;
@@ -420,9 +438,10 @@ static int rebalance_decide(gs_case *c, gs_dist *d, guard_t *g) {
 static int between_steps(void *ctx) {
   guard_t *g = ctx;
   g->steps_seen++;
-  /* the last output time's failures, one step after it (rank 0 posted its
-   * part before stepping on): a failure stops every rank here, not one
-   * whole output interval later */
+  if (g->stop_code) return 1;
+  /* the last output time's failures, one step after it (every rank posted
+   * its part at that step's agreement): a failure stops every rank here,
+   * not one whole output interval later */
   if (g->dist->lagged_pending && g->steps_seen > g->lagged_posted_at &&
       (g->stop_code = (int)gs_dist_max_lagged_finish(g->dist)))
     return 1;
@@ -447,6 +466,7 @@ static int rebalance_move(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, doub
   gs_model *m = &c->model;
   const double start = now_seconds();
   g->move_wanted = 0;
+  g->t_held += post_output_time(g); /* its block comes before the move's */
   gs_dist_collect(d, Y);
   gs_parallel_broadcast(Y, m->nstate + m->nledger);
   stepper_t old = *s; /* old.own is the old integrator (old.it points into *s) */
@@ -524,6 +544,30 @@ static int output_time(gs_case *c, gs_output *out, guard_t *gd, double t, double
   return rc;
 }
 
+/* An output time held under MPI, at the first step agreement after it
+ * (every rank, in the same order among the collective calls): rank 0
+ * collects the other blocks, checks and holds the state, and every rank
+ * posts its failure agreement.  At the output time itself rank 0 had done
+ * this before its first boundary message of the next interval, and the next
+ * rank waited for it (~25 µs per output time, 2 ms of the example); at the
+ * agreement rank 0 has sent every message of the step, and it is usually
+ * early there.  The state of that time stays in Y until the next advance
+ * returns (the integrators work on their packed copies). */
+static double post_output_time(guard_t *g) {
+  if (!g->output_held) return 0;
+  g->output_held = 0;
+  const double start = now_seconds();
+  gs_dist_collect(g->dist, g->Y);
+  if (g->dist->rank == 0 && !*g->out_rc)
+    *g->out_rc = output_time(g->c, g->out, g, g->held_t, g->Y, g->M1_0, g->ymax_seen, g->rep,
+                             g->out_err);
+  /* the last one was agreed one step after it was posted (between_steps) */
+  const int earlier = (int)gs_dist_max_lagged(g->dist, (double)*g->out_rc);
+  if (earlier && !g->stop_code) g->stop_code = earlier;
+  g->lagged_posted_at = g->steps_seen;
+  return now_seconds() - start;
+}
+
 /* The run stops for a failure at an output time: rank 0's own (rc, its
  * message in own), or another rank's (its code: agreed). */
 static int failed_at_output(int rc, int agreed, const gs_error *own, gs_error *err) {
@@ -582,6 +626,9 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   guard.c = c;
   guard.dist = &dist;
   guard.Y = Y;
+  guard.M1_0 = M1_0;
+  guard.ymax_seen = &ymax_seen;
+  guard.rep = &rep;
   double phase[PH_N] = {0};
   stepper_t step;
   memset(&step, 0, sizeof step);
@@ -606,6 +653,9 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   rc = agree(&dist, rc, err);
   int out_rc = GS_OK; /* rank 0's first failure at an output time, and its message */
   gs_error out_err = {0};
+  guard.out = out;
+  guard.out_rc = &out_rc;
+  guard.out_err = &out_err;
   double start = now_seconds(), t_end = c->times[c->ntimes - 1];
   gs_integrator_stats st = {0};
   double switch_reached = NAN; /* the switch time the last advance ended at */
@@ -637,23 +687,28 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
       else snprintf(where, sizeof where, "volume ledger entry %zu", idx - m->nstate);
       rc = gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: the rate of change is not finite (NaN or infinity); check kernel and mechanism parameters", guard.bad_t, where);
     }
-    /* integrator failures are agreed already; collect only a good state */
-    if (!rc) gs_dist_collect(&dist, Y);
-    if (!rc && root && !out_rc)
+    if (dist.size > 1) {
+      /* the checks and the failure agreement wait for the next step's
+       * agreement (post_output_time); rank 0's failure then reaches the
+       * others one step later, so that they never wait for its checks and
+       * writing (until then rank 0 steps on with them and writes nothing
+       * more).  Integrator failures are agreed already: hold only a good
+       * state. */
+      if (!rc) {
+        guard.output_held = 1;
+        guard.held_t = t;
+      }
+    } else if (!rc && !out_rc) {
       out_rc = output_time(c, out, &guard, t, Y, M1_0, &ymax_seen, &rep, &out_err);
-    /* one process stops at once; under MPI rank 0's failure reaches the
-     * others at the next output time, so that they never wait here for its
-     * checks and writing (until then rank 0 steps on with them and writes
-     * nothing more) */
-    const int worst = dist.size > 1 ? (int)gs_dist_max_lagged(&dist, (double)out_rc) : out_rc;
-    guard.lagged_posted_at = guard.steps_seen;
-    if (!rc && worst) rc = failed_at_output(out_rc, worst, &out_err, err);
+      if (out_rc) rc = failed_at_output(out_rc, out_rc, &out_err, err);
+    }
     phase[PH_OUTPUTS] += now_seconds() - outputs_start;
     if (step.it && step.it->type) /* not after a failed rebuild */
       step.it->type->get_stats(step.it->self, &st);
     if (show) progress(c, t, t_end, &st, now_seconds() - start);
   }
   if (show) fprintf(stderr, "\n");
+  phase[PH_OUTPUTS] += post_output_time(&guard); /* the last output time: no step after it */
   const int late = dist.size > 1 ? (int)gs_dist_max_lagged_finish(&dist) : 0;
   gs_dist_sum_finish(&dist); /* a rebalancing sum still in flight writes into guard.spent */
   /* rank 0's failure came first: rank 0 says so, the others that it failed
@@ -680,9 +735,9 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   phase[PH_FINISH] = now_seconds() - finish_start;
   phase[PH_RHS] = guard.t_rhs;
   phase[PH_EXCHANGE] = guard.t_exchange;
-  phase[PH_INTEGRATOR] = guard.t_advance - guard.t_rhs - guard.t_exchange - guard.t_agree;
+  phase[PH_INTEGRATOR] = guard.t_advance - guard.t_rhs - guard.t_exchange - guard.t_agree - guard.t_held;
   phase[PH_WAITS] = guard.t_agree - guard.t_deferred;
-  phase[PH_OUTPUTS] += guard.t_deferred;
+  phase[PH_OUTPUTS] += guard.t_deferred + guard.t_held;
   if (opt && opt->timings) print_timings(&dist, phase);
   stepper_free(&step);
   gs_deferred_output_free(guard.deferred);
