@@ -93,3 +93,27 @@ herr_t gs_chunk_write_rows(gs_chunk_writer *w, hid_t ds, hsize_t start, hsize_t 
   }
   return 0;
 }
+
+herr_t gs_chunk_write_blocks(gs_chunk_writer *w, hid_t ds, hsize_t start, hsize_t count,
+                             size_t chunk_rows, size_t values, const double *rows) {
+  hsize_t offset[H5S_MAX_RANK] = {0};
+  const size_t chunk_bytes = chunk_rows * values * sizeof(double);
+  for (hsize_t done = 0; done < count; done += chunk_rows) {
+    const double *block = rows + done * values;
+    offset[0] = start + done;
+    if (count - done < chunk_rows) { /* the last, partly filled: padded in the buffer */
+      if (chunk_bytes > w->cap) {
+        unsigned char *b = realloc(w->buf, chunk_bytes);
+        if (!b) return -1;
+        w->buf = b;
+        w->cap = chunk_bytes;
+      }
+      const size_t have = (size_t)(count - done) * values * sizeof(double);
+      memcpy(w->buf, block, have);
+      memset(w->buf + have, 0, chunk_bytes - have);
+      block = (const double *)(const void *)w->buf;
+    }
+    if (H5Dwrite_chunk(ds, H5P_DEFAULT, 0, offset, chunk_bytes, block) < 0) return -1;
+  }
+  return 0;
+}

@@ -80,6 +80,7 @@ struct gs_output {
   /* series chunked by single rows, written chunk by chunk (chunk_writer.h),
    * and whether their chunks are deflated */
   int direct[NSERIES_MAX], deflated[NSERIES_MAX];
+  int indexed[NSERIES_MAX]; /* small series: written once (index_small_series) */
   gs_chunk_writer *chunks;
   FILE *csv;
   hsize_t ntimes; /* committed output times */
@@ -335,11 +336,16 @@ static int deflate_usable(void) {
  * ~256 KiB of state per chunk, which on small grids cost more than the
  * integration (seed-000 example: 45 % of the run for 8 KiB chunks). */
 #define COMPRESS_MIN_VALUES 8192
+/* Time rows per chunk of series i. */
+static hsize_t chunk_rows(const gs_output *o, int i) {
+  return i == S_NUMBER || i == o->s_carried ? 1 : i == S_TIME ? 4 * CHUNK_ROWS : CHUNK_ROWS;
+}
+
 static int create_series(gs_output *o, int i, gs_error *err) {
   int rank = o->rank[i];
   hsize_t dims[RANK_MAX] = {0}, maxdims[RANK_MAX] = {H5S_UNLIMITED}, chunk[RANK_MAX];
   const int big = i == S_NUMBER || i == o->s_carried;
-  chunk[0] = big ? 1 : i == S_TIME ? 4 * CHUNK_ROWS : CHUNK_ROWS;
+  chunk[0] = chunk_rows(o, i);
   hsize_t values = chunk[0];
   for (int r = 1; r < rank; r++) {
     dims[r] = maxdims[r] = chunk[r] = o->rest[i][r - 1];
@@ -402,9 +408,13 @@ static int write_rows(gs_output *o, int i, hsize_t start, hsize_t count, const d
   for (int r = 1; r < o->rank[i]; r++) dims[r] = o->rest[i][r - 1];
   hid_t fs = H5I_INVALID_HID, ms = H5I_INVALID_HID;
   herr_t st = H5Dset_extent(o->ds[i], dims);
+  const hsize_t rows = chunk_rows(o, i);
+  o->indexed[i] = 1;
   if (st >= 0 && o->direct[i])
     st = gs_chunk_write_rows(o->chunks, o->ds[i], start, count, o->rowlen[i], buf, o->deflated[i],
                              DEFLATE_LEVEL);
+  else if (st >= 0 && o->chunks && start % rows == 0 && gs_chunk_direct_ok())
+    st = gs_chunk_write_blocks(o->chunks, o->ds[i], start, count, rows, o->rowlen[i], buf);
   else if (st >= 0 && (st = select_rows(o->ds[i], start, count, &fs, &ms)) >= 0)
     st = H5Dwrite(o->ds[i], H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, buf);
   close_spaces(fs, ms);
@@ -693,8 +703,19 @@ static int row_pieces(const gs_output *o, int i) {
 
 int gs_output_parts(const gs_output *o) {
   int pieces = 0;
-  for (int i = 0; i < o->nseries; i++) pieces += row_pieces(o, i);
+  for (int i = 0; i < o->nseries; i++) pieces += row_pieces(o, i) + !o->direct[i];
   return (int)o->ncomp + pieces + 1;
+}
+
+/* A small series' first write, of the rows held so far: the first chunk of
+ * a dataset creates its chunk index (~70 µs, against ~30 for a write once
+ * it exists), so the commit at the end of a run, which comes after the
+ * last step, would pay it for every series; written in the parts of an
+ * output time, it falls in rank 0's waits under MPI.  The rows count only
+ * once committed, like those of the large series. */
+static int index_small_series(gs_output *o, int i, gs_error *err) {
+  if (o->indexed[i] || !o->npending) return GS_OK;
+  return write_rows(o, i, o->ntimes, o->npending, o->pending[i], err);
 }
 
 /* Piece p of np of the deflated row of series i for output time `index`:
@@ -746,11 +767,12 @@ int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double
    * 0.12 s) */
   int k = part - (int)o->ncomp;
   for (int i = 0; i < o->nseries; i++) {
-    const int np = row_pieces(o, i);
+    const int np = row_pieces(o, i) + !o->direct[i];
     if (k >= np) {
       k -= np;
       continue;
     }
+    if (!o->direct[i]) return index_small_series(o, i, err);
     const double *row = series_row(o, i, &t, y, ledger);
     return o->deflated[i] ? write_row_piece(o, i, o->ntimes + r, row, k, np, err)
                           : write_rows(o, i, o->ntimes + r, 1, row, err);
