@@ -557,7 +557,7 @@ static double post_output_time(guard_t *g) {
   if (!g->output_held) return 0;
   g->output_held = 0;
   const double start = now_seconds();
-  gs_dist_collect(g->dist, g->Y);
+  if (g->dist->rank == 0) gs_dist_collect(g->dist, g->Y); /* the others sent at that time */
   if (g->dist->rank == 0 && !*g->out_rc)
     *g->out_rc = output_time(g->c, g->out, g, g->held_t, g->Y, g->M1_0, g->ymax_seen, g->rep,
                              g->out_err);
@@ -695,6 +695,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
        * more).  Integrator failures are agreed already: hold only a good
        * state. */
       if (!rc) {
+        if (!root) gs_dist_collect(&dist, Y); /* sent without waiting */
         guard.output_held = 1;
         guard.held_t = t;
       }
