@@ -3,6 +3,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef __GLIBC__ /* defined by the headers above */
+#include <malloc.h>
+#endif
 
 #include "cli/commands.h"
 #include "gransim/case.h"
@@ -146,6 +149,19 @@ static int cmd_list(void) {
   return 0;
 }
 
+/* Blocks up to 32 MiB come from the heap and stay mapped once freed, so that
+ * a block of about the same size allocated later reuses pages already
+ * touched: on the project's VM a fresh page costs ~13 µs and unmapping
+ * costs too, and an MPI rebalancing move frees one rank's integrator and
+ * allocates another (3-5 ms of fresh pages and 3-4 ms of unmapping per
+ * move in the 32-compartment case).  glibc only; elsewhere a no-op. */
+static void keep_freed_memory(void) {
+#ifdef __GLIBC__
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
+#endif
+}
+
 int main(int argc, char **argv) {
   if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
     usage(stdout);
@@ -156,6 +172,7 @@ int main(int argc, char **argv) {
     return 0;
   }
   if (!strcmp(argv[1], "run")) {
+    keep_freed_memory();
     /* MPI only for runs, and only when launched by mpirun (gransim/parallel.h) */
     gs_parallel_init(&argc, &argv);
     int rc = cmd_run(argc - 2, argv + 2);

@@ -362,4 +362,4 @@ static void gs_cvode_stats(const void *vself, gs_integrator_stats *stats) {
 
 const gs_integrator_type gs_integrator_cvode = {
     "cvode", "SUNDIALS CVODE BDF for stiff cases, linear_solver dense | gmres | auto",
-    gs_cvode_create, gs_cvode_advance, gs_cvode_stats, gs_cvode_free, NULL};
+    gs_cvode_create, gs_cvode_advance, gs_cvode_stats, gs_cvode_free, NULL, NULL};

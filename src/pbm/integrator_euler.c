@@ -41,11 +41,17 @@ typedef struct {
   gs_integrator_stats stats;
 } gs_euler;
 
-static void gs_euler_free(void *vself) {
+/* The derivative vector; what gs_euler_carry reads stays. */
+static void gs_euler_release(void *vself) {
   gs_euler *self = vself;
-  if (!self) return;
   free(self->f);
-  free(self);
+  self->f = NULL;
+}
+
+static void gs_euler_free(void *vself) {
+  if (!vself) return;
+  gs_euler_release(vself);
+  free(vself);
 }
 
 static int gs_euler_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_error *err) {
@@ -187,4 +193,5 @@ static void gs_euler_carry(void *vto, const void *vfrom) {
 
 const gs_integrator_type gs_integrator_euler = {
     "euler", "adaptive explicit Euler of seed 000, dt kept below safety / max(-f_i / y_i)",
-    gs_euler_create, gs_euler_advance, gs_euler_stats, gs_euler_free, gs_euler_carry};
+    gs_euler_create, gs_euler_advance, gs_euler_stats, gs_euler_free, gs_euler_carry,
+    gs_euler_release};

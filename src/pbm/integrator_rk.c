@@ -207,14 +207,24 @@ static int gs_rk_rhs_error(const gs_rk *self, gs_error *err) {
                       self->fail_t);
 }
 
-static void gs_rk_free(void *vself) {
+/* GSL's objects and the tolerance scales; h, the counters and the interval
+ * (what gs_rk_carry reads) stay. */
+static void gs_rk_release(void *vself) {
   gs_rk *self = vself;
-  if (!self) return;
   if (self->evolve) gsl_odeiv2_evolve_free(self->evolve);
   if (self->control) gsl_odeiv2_control_free(self->control);
   if (self->step) gsl_odeiv2_step_free(self->step);
   free(self->scale);
-  free(self);
+  self->evolve = NULL;
+  self->control = NULL;
+  self->step = NULL;
+  self->scale = NULL;
+}
+
+static void gs_rk_free(void *vself) {
+  if (!vself) return;
+  gs_rk_release(vself);
+  free(vself);
 }
 
 static int gs_rk_alloc_gsl(gs_rk *self, int variant, const gs_ode *ode, gs_error *err) {
@@ -414,4 +424,4 @@ static void gs_rk_carry(void *vto, const void *vfrom) {
 
 const gs_integrator_type gs_integrator_rk = {
     "rk", "adaptive embedded Runge-Kutta from GSL, variant rkf45 | rkck | rk8pd",
-    gs_rk_create, gs_rk_advance, gs_rk_stats, gs_rk_free, gs_rk_carry};
+    gs_rk_create, gs_rk_advance, gs_rk_stats, gs_rk_free, gs_rk_carry, gs_rk_release};

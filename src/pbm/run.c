@@ -470,6 +470,12 @@ static int rebalance_move(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, doub
   gs_dist_collect(d, Y);
   gs_parallel_broadcast(Y, m->nstate + m->nledger);
   stepper_t old = *s; /* old.own is the old integrator (old.it points into *s) */
+  /* the old vectors go first, so that the new ones reuse their pages (Y
+   * holds the whole state now) */
+  free(old.yl);
+  free(old.scale);
+  old.yl = old.scale = NULL;
+  if (old.own.type->release) old.own.type->release(old.own.self);
   gs_dist_resplit(d, m, g->split_lo);
   int rc = stepper_init(s, c, d, g, err);
   if (!rc) s->it->type->carry(s->it->self, old.own.self);
