@@ -29,15 +29,32 @@ typedef struct {
   double v, w;
 } vw_t;
 
-static int by_volume(const void *a, const void *b) {
-  double x = ((const vw_t *)a)->v, y = ((const vw_t *)b)->v;
-  return (x > y) - (x < y);
+/* Stable sort of pts[0..n) by volume, tmp[0..n) scratch; returns where the
+ * sorted points are (pts or tmp).  Bottom-up merges, inline: qsort's
+ * comparator calls were most of an output time's summaries (~6 µs per
+ * compartment of 256 cells; rank 0's work alone under MPI).  Stable, like
+ * glibc's merge sort, so equal volumes merge in cell order as before. */
+static vw_t *sort_by_volume(vw_t *pts, vw_t *tmp, size_t n) {
+  vw_t *src = pts, *dst = tmp;
+  for (size_t width = 1; width < n; width *= 2) {
+    for (size_t lo = 0; lo < n; lo += 2 * width) {
+      size_t mid = lo + width < n ? lo + width : n, hi = lo + 2 * width < n ? lo + 2 * width : n;
+      size_t i = lo, j = mid, k = lo;
+      while (i < mid && j < hi) dst[k++] = src[j].v < src[i].v ? src[j++] : src[i++];
+      while (i < mid) dst[k++] = src[i++];
+      while (j < hi) dst[k++] = src[j++];
+    }
+    vw_t *swap = src;
+    src = dst;
+    dst = swap;
+  }
+  return src;
 }
 
 /* Volume-weighted percentiles p[0..np-1] (fractions) of the diameter. */
 static void percentiles(const double *vol, const double *N, size_t n, const double *p, int np,
                         double *out) {
-  vw_t *pts = malloc(n * sizeof *pts);
+  vw_t *pts = malloc(2 * n * sizeof *pts), *scratch = pts;
   size_t k = 0;
   double total = 0;
   for (size_t c = 0; pts && c < n; c++)
@@ -52,7 +69,7 @@ static void percentiles(const double *vol, const double *N, size_t n, const doub
     free(pts);
     return;
   }
-  qsort(pts, k, sizeof *pts, by_volume);
+  pts = sort_by_volume(scratch, scratch + n, k);
   /* merge equal volumes, then cumulative midpoints */
   size_t m = 0;
   for (size_t i = 0; i < k; i++) {
@@ -78,7 +95,7 @@ static void percentiles(const double *vol, const double *N, size_t n, const doub
     prev = i;
   }
   while (next < np) out[next++] = gs_diameter(pts[prev].v);
-  free(pts);
+  free(scratch);
 }
 
 void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s) {
