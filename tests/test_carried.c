@@ -194,6 +194,34 @@ static void test_spray_and_transfer(void) {
   spray_case(2, "  - {type: transfer, rate: 0.2}\n");
 }
 
+/* A switch whose time t1 GSL's last stage misses by an ulp: from t0 = 1.16,
+ * t0 + (t1 - t0) rounds to 3.39 + 1 ulp, past the spray's start, and a
+ * window deciding at that time switched the spray on in the last stage of
+ * the step ending there (7 steps, 52 evaluations instead of 4 and 28). */
+static void test_switch_rounding(void) {
+  CHECK(1.16 + (3.39 - 1.16) > 3.39); /* the rounding the case relies on */
+  char *yaml = tl_fmt("%s"
+                      "initial: {type: gamma, number: 1.0e9, mean: [1.0e-14, 2.0e-14], shape: [6, 6],"
+                      " carried_ratio: {gas: 1.0}}\n"
+                      "mechanisms:\n  - {type: spray, rate: [2.0e-6], start: 3.39, end: 6}\n"
+                      "solver: {method: rk, rtol: 1.0e-10, atol: 1.0e-3}\n"
+                      "output: {times: [1.16, 7]}\n",
+                      tl_fmt(grid16, 1));
+  gs_case c;
+  gs_run_report rep;
+  double *y = tl_build_run(yaml, &c, &rep);
+  if (y) {
+    double liquid = gs_model_held(&c.model, y, 0, 2);
+    printf("carried, spray from 3.39 after an output at 1.16: liquid %.15g, %ld steps, %ld rejected\n",
+           liquid, rep.stats.steps, rep.stats.rejected);
+    CHECK_REL(liquid, 2.0e-6 * (6 - 3.39), 1e-12);
+    CHECK(rep.stats.rejected == 0);
+    free(y);
+    gs_case_free(&c);
+  }
+  free(yaml);
+}
+
 /* Pore consolidation of one cell: with l = 0, dg/dt = -k (s + g)(1 - e)/s (g - e s/(1 - e))
  * has the closed form of a logistic-type ODE; compare g(t) with a fine RK
  * integration of the scalar law done here, and check that the porosity
@@ -243,6 +271,7 @@ int main(void) {
   test_aggregation();
   test_breakage();
   test_spray_and_transfer();
+  test_switch_rounding();
   test_pore_consolidation();
   TEST_EXIT();
 }

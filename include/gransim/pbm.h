@@ -199,7 +199,7 @@ double gs_model_next_switch(const gs_model *m, double t);
 /* Helper for mechanisms active in [start, end). */
 double gs_window_next_switch(double start, double end, double t);
 /* 1 if a mechanism active in [start, end) is on for an evaluation at t: at
- * t itself, or, inside the interval m->switch_lo..switch_hi, at its
+ * t itself, or, while an interval m->switch_lo..switch_hi is set, at its
  * midpoint. */
 int gs_window_on(const gs_model *m, double start, double end, double t);
 /* 1 if some mechanism provides a preconditioner. */

@@ -113,8 +113,10 @@ double gs_window_next_switch(double start, double end, double t) {
 }
 
 int gs_window_on(const gs_model *m, double start, double end, double t) {
-  if (m->switch_lo <= m->switch_hi && t >= m->switch_lo && t <= m->switch_hi)
-    t = 0.5 * (m->switch_lo + m->switch_hi);
+  /* every evaluation of an advance belongs to its interval, also one whose
+   * time rounded past it (GSL's last stage at t0 + (t1 - t0) can be t1 plus
+   * an ulp) */
+  if (m->switch_lo <= m->switch_hi) t = 0.5 * (m->switch_lo + m->switch_hi);
   return t >= start && t < end;
 }
 

@@ -466,7 +466,9 @@ static int rebalance_move(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, doub
   gs_model *m = &c->model;
   const double start = now_seconds();
   g->move_wanted = 0;
-  g->t_held += post_output_time(g); /* its block comes before the move's */
+  /* the advance has posted a held output time already (stepper_advance);
+   * were one left, its block would have to be received before the move's */
+  g->t_held += post_output_time(g);
   gs_dist_collect(d, Y);
   gs_parallel_broadcast(Y, m->nstate + m->nledger);
   stepper_t old = *s; /* old.own is the old integrator (old.it points into *s) */
