@@ -77,6 +77,22 @@ int gs_grid_axis_by_name(const gs_grid *g, const char *name);     /* -1 if absen
 /* Volume-equivalent diameter of a granule volume v: (6 v / pi)^(1/3). */
 double gs_diameter(double v);
 
+/* A point mass of a size distribution: granule volume v > 0 and its weight
+ * w >= 0 (for volume-weighted percentiles, number times volume). */
+typedef struct gs_size_point {
+  double v, w;
+} gs_size_point;
+
+/* Weighted percentiles p[0..np) (fractions, ascending) of the
+ * volume-equivalent diameter of pts[0..n) (src/grid/percentiles.c): the
+ * cumulative fraction taken at each distinct volume by the midpoint rule
+ * (half of a point's own weight counted below it) and interpolated linearly
+ * in the diameter in between, so a single point gives its own diameter for
+ * every percentile; NaN when there is no weight.  pts is reordered; scratch
+ * holds n points. */
+void gs_size_percentiles(gs_size_point *pts, gs_size_point *scratch, size_t n, const double *p,
+                         int np, double *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -25,77 +25,24 @@ double gs_moment(const gs_model *m, const double *y, size_t comp, const int *pow
   return s;
 }
 
-typedef struct {
-  double v, w;
-} vw_t;
-
-/* Stable sort of pts[0..n) by volume, tmp[0..n) scratch; returns where the
- * sorted points are (pts or tmp).  Bottom-up merges, inline: qsort's
- * comparator calls were most of an output time's summaries (~6 µs per
- * compartment of 256 cells; rank 0's work alone under MPI).  Stable, like
- * glibc's merge sort, so equal volumes merge in cell order as before. */
-static vw_t *sort_by_volume(vw_t *pts, vw_t *tmp, size_t n) {
-  vw_t *src = pts, *dst = tmp;
-  for (size_t width = 1; width < n; width *= 2) {
-    for (size_t lo = 0; lo < n; lo += 2 * width) {
-      size_t mid = lo + width < n ? lo + width : n, hi = lo + 2 * width < n ? lo + 2 * width : n;
-      size_t i = lo, j = mid, k = lo;
-      while (i < mid && j < hi) dst[k++] = src[j].v < src[i].v ? src[j++] : src[i++];
-      while (i < mid) dst[k++] = src[i++];
-      while (j < hi) dst[k++] = src[j++];
-    }
-    vw_t *swap = src;
-    src = dst;
-    dst = swap;
-  }
-  return src;
-}
-
-/* Volume-weighted percentiles p[0..np-1] (fractions) of the diameter. */
+/* Volume-weighted percentiles p[0..np-1] (fractions) of the diameter, a
+ * point per occupied cell. */
 static void percentiles(const double *vol, const double *N, size_t n, const double *p, int np,
                         double *out) {
-  vw_t *pts = malloc(2 * n * sizeof *pts), *scratch = pts;
+  gs_size_point *pts = malloc(2 * (n ? n : 1) * sizeof *pts);
+  if (!pts) {
+    for (int i = 0; i < np; i++) out[i] = NAN;
+    return;
+  }
   size_t k = 0;
-  double total = 0;
-  for (size_t c = 0; pts && c < n; c++)
+  for (size_t c = 0; c < n; c++)
     if (N[c] > 0 && vol[c] > 0) {
       pts[k].v = vol[c];
       pts[k].w = N[c] * vol[c];
-      total += pts[k].w;
       k++;
     }
-  if (!pts || k == 0 || !(total > 0)) {
-    for (int i = 0; i < np; i++) out[i] = NAN;
-    free(pts);
-    return;
-  }
-  pts = sort_by_volume(scratch, scratch + n, k);
-  /* merge equal volumes, then cumulative midpoints */
-  size_t m = 0;
-  for (size_t i = 0; i < k; i++) {
-    if (m && pts[m - 1].v == pts[i].v) pts[m - 1].w += pts[i].w;
-    else pts[m++] = pts[i];
-  }
-  /* diameters (cube roots) only where a percentile falls: the output
-   * summaries are rank 0's work alone under MPI */
-  double below = 0, prev_q = 0;
-  size_t prev = 0;
-  int next = 0;
-  for (size_t i = 0; i < m && next < np; i++) {
-    double q = (below + 0.5 * pts[i].w) / total;
-    if (p[next] <= q) {
-      double d = gs_diameter(pts[i].v), prev_d = gs_diameter(pts[prev].v);
-      while (next < np && p[next] <= q) {
-        out[next] = (i == 0 || q == prev_q) ? d : prev_d + (d - prev_d) * (p[next] - prev_q) / (q - prev_q);
-        next++;
-      }
-    }
-    below += pts[i].w;
-    prev_q = q;
-    prev = i;
-  }
-  while (next < np) out[next++] = gs_diameter(pts[prev].v);
-  free(scratch);
+  gs_size_percentiles(pts, pts + n, k, p, np, out);
+  free(pts);
 }
 
 void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s) {

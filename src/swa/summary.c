@@ -19,23 +19,14 @@ void gs_swa_column_name(const gs_swa_model *m, int col, char *buf, size_t n) {
   else snprintf(buf, n, "total_%s", m->coord[col - 6 - m->ncoord]);
 }
 
-typedef struct {
-  double v, w;
-} vw;
-
-static int by_v(const void *a, const void *b) {
-  double x = ((const vw *)a)->v, y = ((const vw *)b)->v;
-  return (x > y) - (x < y);
-}
-
 void gs_swa_summarize(gs_swa_sim *s, size_t z, gs_swa_summary *o) {
   const gs_swa_model *m = s->m;
   const swa_comp *c = &s->comp[z];
   size_t nc = (size_t)m->ncoord;
   memset(o, 0, sizeof *o);
-  vw *pts = malloc((c->n ? c->n : 1) * sizeof *pts);
+  /* a point per particle with a size (and scratch for the sort) */
+  gs_size_point *pts = malloc(2 * (c->n ? c->n : 1) * sizeof *pts);
   size_t np = 0;
-  double total = 0;
   for (size_t i = 0; i < c->n; i++) {
     const double *x = c->x + i * nc;
     double n = c->w[i] / c->vsamp, v = gs_swa_size(m, x);
@@ -45,30 +36,13 @@ void gs_swa_summarize(gs_swa_sim *s, size_t z, gs_swa_summary *o) {
     for (size_t k = 0; k < nc; k++) o->total[k] += n * x[k];
     if (pts && v > 0) {
       pts[np].v = v;
-      pts[np].w = n * v;
-      total += pts[np++].w;
+      pts[np++].w = n * v;
     }
   }
   for (size_t k = 0; k < nc; k++) o->mean[k] = o->m0 > 0 ? o->total[k] / o->m0 : NAN;
-  double p[3] = {0.1, 0.5, 0.9}, d[3] = {NAN, NAN, NAN};
-  if (pts && np && total > 0) {
-    qsort(pts, np, sizeof *pts, by_v);
-    double below = 0, prev_q = 0, prev_d = gs_diameter(pts[0].v);
-    int next = 0;
-    for (size_t i = 0; i < np && next < 3;) {
-      double v = pts[i].v, wsum = 0;
-      while (i < np && pts[i].v == v) wsum += pts[i++].w; /* merge equal sizes */
-      double dd = gs_diameter(v), q = (below + 0.5 * wsum) / total;
-      while (next < 3 && p[next] <= q) {
-        d[next] = (below == 0 || q == prev_q) ? dd : prev_d + (dd - prev_d) * (p[next] - prev_q) / (q - prev_q);
-        next++;
-      }
-      below += wsum;
-      prev_q = q;
-      prev_d = dd;
-    }
-    while (next < 3) d[next++] = prev_d;
-  }
+  const double p[3] = {0.1, 0.5, 0.9};
+  double d[3] = {NAN, NAN, NAN};
+  if (pts) gs_size_percentiles(pts, pts + c->n, np, p, 3, d);
   o->d10 = d[0];
   o->d50 = d[1];
   o->d90 = d[2];
