@@ -276,13 +276,16 @@ static gs_output *open_in(const char *name, char *dir, gs_model *m, int dim, siz
 /* Many output times: the small series go to the file as whole chunks (64
  * rows, /time 256) when a commit starts on a chunk boundary, the last one
  * padded beyond the extent, and through H5Dwrite otherwise; read back the
- * same either way, committed once at the end or at every output time. */
-static void test_many_times(double checkpoint) {
+ * same either way, committed once at the end or at every output time.
+ * With many compartments a row of the small series is ~10 KB, and the
+ * pending rows' block (64 KiB at first) grows six times on the way to 300
+ * uncommitted output times, moving the rows held so far each time. */
+static void test_many_times(double checkpoint, size_t ncomp) {
   char dir[256], name[64];
   gs_model m;
   gs_error err;
-  snprintf(name, sizeof name, "many-%g", checkpoint);
-  gs_output *o = open_in(name, dir, &m, 2, 3, 6);
+  snprintf(name, sizeof name, "many-%g-%zu", checkpoint, ncomp);
+  gs_output *o = open_in(name, dir, &m, 2, ncomp, 6);
   if (!o) {
     gs_model_free(&m);
     return;
@@ -556,8 +559,9 @@ int main(void) {
   }
   for (int dim = 1; dim <= 3; dim++) test_roundtrip(dim);
   test_deflated();
-  test_many_times(1e9);
-  test_many_times(0);
+  test_many_times(1e9, 3);
+  test_many_times(0, 3);
+  test_many_times(1e9, 96);
   for (int deflated = 0; deflated < 2; deflated++) {
     test_deferred(deflated ? 4096 : 6, 0);
     test_deferred(deflated ? 4096 : 6, 1e9);

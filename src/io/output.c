@@ -62,6 +62,7 @@
 #define CHUNK_ROWS 64                          /* time rows per chunk of the small series */
 #define BLOCK_VALUES 65536                     /* doubles per read when copying or rebuilding */
 #define PENDING_BYTES ((size_t)64 << 20)       /* output times held before a commit, at most */
+#define PENDING_FIRST_BYTES ((size_t)64 << 10) /* the pending block's first size */
 #define DEFLATE_LEVEL 1                        /* zlib level of the large series */
 
 enum { S_TIME, S_NUMBER, S_LEDGER, S_SUMMARY };
@@ -90,7 +91,7 @@ struct gs_output {
   /* output times written but not yet committed (see Checkpoints above) */
   double *pending[NSERIES_MAX]; /* cap rows of each series, in one block: */
   double *pending_block;        /* freeing a mapping per series cost ~40 µs each here */
-  size_t cap, npending;
+  size_t cap, cap_max, npending; /* cap grows to cap_max (PENDING_BYTES) as rows come */
   int next_part; /* of the output time being written in parts (0: none begun) */
   double checkpoint, last_commit; /* seconds of wall time */
 };
@@ -641,20 +642,32 @@ static double wall_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* The pending buffers, sized on first use: as many output times as fit in
- * PENDING_BYTES, at least one. */
-static int pending_alloc(gs_output *o, gs_error *err) {
+/* Room for one more pending output time: the block starts small and doubles
+ * up to PENDING_BYTES.  Sized for PENDING_BYTES at once it was a 64 MiB
+ * mapping whose pages each series touched in its own region: the seed-000
+ * example paid ~40 fresh pages during the run and 2 ms to unmap the block in
+ * its final commit, after the last step (a third of its serial tail). */
+static int pending_reserve(gs_output *o, gs_error *err) {
+  if (o->npending < o->cap) return GS_OK;
   size_t row = 0;
   for (int i = 0; i < o->nseries; i++)
     if (!o->direct[i]) row += o->rowlen[i] * sizeof(double);
-  o->cap = PENDING_BYTES / row ? PENDING_BYTES / row : 1;
-  double *block = o->pending_block = gs_malloc(o->cap * row, err);
+  if (!row) row = 1;
+  o->cap_max = PENDING_BYTES / row ? PENDING_BYTES / row : 1;
+  size_t cap = o->cap ? 2 * o->cap : PENDING_FIRST_BYTES / row;
+  if (cap < o->npending + 1) cap = o->npending + 1;
+  if (cap > o->cap_max) cap = o->cap_max > o->npending ? o->cap_max : o->npending + 1;
+  double *block = gs_malloc(cap * row, err), *at = block;
   if (!block) return GS_ENOMEM;
   for (int i = 0; i < o->nseries; i++)
     if (!o->direct[i]) {
-      o->pending[i] = block;
-      block += o->cap * o->rowlen[i];
+      if (o->npending) memcpy(at, o->pending[i], o->npending * o->rowlen[i] * sizeof(double));
+      o->pending[i] = at;
+      at += cap * o->rowlen[i];
     }
+  free(o->pending_block);
+  o->pending_block = block;
+  o->cap = cap;
   return GS_OK;
 }
 
@@ -754,7 +767,6 @@ int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double
   if (part != o->next_part)
     return gs_error_set(err, GS_EINPUT, "output to %s: part %d of an output time written where part %d was due",
                         o->dir, part, o->next_part);
-  if (!o->cap && pending_alloc(o, err)) return GS_ENOMEM;
   o->next_part = part + 1 < gs_output_parts(o) ? part + 1 : 0;
   if ((size_t)part < o->ncomp) { /* compartment `part`: its summary and CSV row */
     summarize(o, m, t, y, (size_t)part);
@@ -777,11 +789,12 @@ int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double
     return o->deflated[i] ? write_row_piece(o, i, o->ntimes + r, row, k, np, err)
                           : write_rows(o, i, o->ntimes + r, 1, row, err);
   }
+  if (pending_reserve(o, err)) return GS_ENOMEM;
   for (int i = 0; i < o->nseries; i++)
     if (!o->direct[i])
       memcpy(o->pending[i] + r * o->rowlen[i], series_row(o, i, &t, y, ledger), o->rowlen[i] * sizeof(double));
   o->npending++;
-  if (o->npending < o->cap && wall_seconds() - o->last_commit < o->checkpoint) return GS_OK;
+  if (o->npending < o->cap_max && wall_seconds() - o->last_commit < o->checkpoint) return GS_OK;
   return commit(o, 0, err);
 }
 
