@@ -5,6 +5,9 @@
  *    split it returns is valid (contiguous, every rank at least one
  *    compartment), its largest block costs what it reports, and that is the
  *    optimum found by trying every split;
+ *  - gs_dist_speedup_bound, the most a split over ranks can gain: exact on
+ *    hand-worked cases, never above the rank count, and its largest block
+ *    the optimum found by trying every split on 2,000 random cases;
  *  - gs_threads_for: one thread below the work threshold and inside a
  *    parallel region, OpenMP's team size otherwise. */
 #include <omp.h>
@@ -53,13 +56,20 @@ static double uniform(unsigned *s) {
   return (double)(*s >> 8) / 16777216.0;
 }
 
+/* A random case: 1-9 compartments over 1-4 ranks, at most one per compartment. */
+static void random_shape(unsigned *seed, size_t *n, int *nr) {
+  *n = 1 + (size_t)(uniform(seed) * 9);
+  *nr = 1 + (int)(uniform(seed) * 4);
+  if ((size_t)*nr > *n) *nr = (int)*n;
+}
+
 static void split_is_optimal(void) {
   unsigned seed = 12345;
   int bad = 0;
   for (int trial = 0; trial < 4000; trial++) {
-    size_t n = 1 + (size_t)(uniform(&seed) * 9);
-    int nr = 1 + (int)(uniform(&seed) * 4);
-    if ((size_t)nr > n) nr = (int)n;
+    size_t n;
+    int nr;
+    random_shape(&seed, &n, &nr);
     double cost[9], extra[4];
     for (size_t j = 0; j < n; j++) cost[j] = 0.1 + uniform(&seed);
     for (int r = 0; r < nr; r++) extra[r] = uniform(&seed) < 0.5 ? 0.0 : 2 * uniform(&seed);
@@ -87,6 +97,49 @@ static void split_is_optimal(void) {
   CHECK(lo[1] == 2);
 }
 
+static void speedup_bound(void) {
+  double largest;
+  /* rates measured whole; integrator 1 s per compartment; 1 s serial:
+   * blocks {19, 26 | 30, 30}: 60 s > (120 - 1) / 2 */
+  const double cost[4] = {18, 25, 29, 29};
+  CHECK_REL(gs_dist_speedup_bound(cost, 4, 101, 4, 1, 120, 2, &largest), 120.0 / 61.0, 1e-14);
+  CHECK_REL(largest, 60, 1e-12);
+  /* 20 s of the rates unmeasured: 5 s more for each; then the parallel
+   * rest, not the largest block, sets the bound */
+  const double even[4] = {10, 10, 10, 10};
+  CHECK_REL(gs_dist_speedup_bound(even, 4, 60, 0, 0, 70, 2, &largest), 2.0, 1e-14);
+  CHECK_REL(largest, 30, 1e-12);
+  CHECK_REL(gs_dist_speedup_bound(even, 4, 60, 0, 0, 70, 4, &largest), 4.0, 1e-14);
+  CHECK_REL(gs_dist_speedup_bound(even, 4, 60, 0, 10, 70, 4, &largest), 70.0 / 25.0, 1e-14);
+  /* no such split, or nothing measured */
+  CHECK(isnan(gs_dist_speedup_bound(even, 4, 60, 0, 0, 70, 5, &largest)) && isnan(largest));
+  CHECK(isnan(gs_dist_speedup_bound(even, 4, 60, 0, 0, 0, 2, &largest)));
+  CHECK(isnan(gs_dist_speedup_bound(even, 4, 60, 0, 0, 70, 0, &largest)));
+  unsigned seed = 777;
+  int bad = 0;
+  for (int trial = 0; trial < 2000; trial++) {
+    size_t n;
+    int nr;
+    random_shape(&seed, &n, &nr);
+    double c[9], measured = 0;
+    for (size_t j = 0; j < n; j++) measured += c[j] = uniform(&seed);
+    const double rates = measured * (1 + uniform(&seed)), integ = uniform(&seed);
+    const double serial = 0.2 * uniform(&seed), total = rates + integ + serial + uniform(&seed);
+    double b = gs_dist_speedup_bound(c, n, rates, integ, serial, total, nr, &largest);
+    double shared[9], none[4] = {0, 0, 0, 0};
+    for (size_t j = 0; j < n; j++) shared[j] = c[j] + (rates - measured + integ) / (double)n;
+    const double best = brute_force(shared, n, none, nr);
+    const double expect = total / (fmax(best, (total - serial) / nr) + serial);
+    if (!(b >= 1 - 1e-12 && b <= nr * (1 + 1e-12)) || fabs(largest - best) > 1e-12 * best ||
+        fabs(b - expect) > 1e-12 * expect) {
+      if (bad++ < 5)
+        fprintf(stderr, "trial %d: n %zu ranks %d: bound %.15g (expected %.15g), block %.15g (best %.15g)\n",
+                trial, n, nr, b, expect, largest, best);
+    }
+  }
+  CHECK(bad == 0);
+}
+
 static void threads_for(void) {
   omp_set_num_threads(2);
   CHECK(gs_threads_for(10, 100) == 1);
@@ -104,6 +157,7 @@ static void threads_for(void) {
 
 int main(void) {
   split_is_optimal();
+  speedup_bound();
   threads_for();
   TEST_EXIT();
 }

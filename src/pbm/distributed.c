@@ -133,6 +133,30 @@ double gs_dist_balanced_split(const double *cost, size_t n, const double *extra,
   return worst;
 }
 
+double gs_dist_speedup_bound(const double *cost, size_t n, double rates, double integrator,
+                             double serial, double total, int nr, double *largest) {
+  *largest = NAN;
+  if (nr < 1 || (size_t)nr > n || !(total > 0)) return NAN;
+  double measured = 0;
+  for (size_t j = 0; j < n; j++) measured += cost[j];
+  /* what the compartments' own clocks did not see (transfer, spray, the
+   * calls between mechanisms) counts as the same for each, as does the
+   * integrator's work */
+  const double even = (fmax(0.0, rates - measured) + fmax(0.0, integrator)) / (double)n;
+  double *c = malloc(n * sizeof *c), *none = calloc((size_t)nr, sizeof *none);
+  size_t *lo = malloc(((size_t)nr + 1) * sizeof *lo);
+  if (c && none && lo) {
+    for (size_t j = 0; j < n; j++) c[j] = cost[j] + even;
+    *largest = gs_dist_balanced_split(c, n, none, nr, lo);
+  }
+  free(c);
+  free(none);
+  free(lo);
+  if (!isfinite(*largest)) return NAN;
+  serial = fmax(0.0, serial);
+  return total / (fmax(*largest, (total - serial) / nr) + serial);
+}
+
 double gs_dist_best_split(gs_dist *d, const double *cost, const double *extra, size_t *lo) {
   double none[d->size];
   if (!extra) {

@@ -54,6 +54,21 @@ void gs_dist_resplit(gs_dist *d, gs_model *m, const size_t *lo);
  * largest block's cost. */
 double gs_dist_balanced_split(const double *cost, size_t n, const double *extra, int nr,
                               size_t *lo);
+/* The speed-up that nr ranks could reach at most for a run measured on one
+ * rank, when each compartment's work stays with the rank that owns it: the
+ * run took `total` seconds, `rates` of them in the compartments' rates (of
+ * which cost[j], n entries, were measured for compartment j, the rest is
+ * shared evenly), `integrator` in the integrator's own vector work (shared
+ * evenly: it grows with the block) and `serial` after the last step (the
+ * final write, which no rank can share).  The ranks own contiguous blocks,
+ * split at best for these costs (gs_dist_balanced_split); everything else
+ * (outputs, checks) is taken to fit wherever a rank has time, and messages
+ * and waits to cost nothing:
+ *   total / (max(largest block, (total - serial) / nr) + serial).
+ * *largest gets that block's seconds.  NAN (and *largest NAN) when nr < 1,
+ * nr > n or total <= 0. */
+double gs_dist_speedup_bound(const double *cost, size_t n, double rates, double integrator,
+                             double serial, double total, int nr, double *largest);
 /* The same for this distribution's ranks, with no allocation (so every
  * rank computes the same split from the same costs); extra may be NULL. */
 double gs_dist_best_split(gs_dist *d, const double *cost, const double *extra, size_t *lo);

@@ -497,6 +497,29 @@ static int rebalance_move(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, doub
  * counts as outputs). */
 enum { PH_RHS, PH_EXCHANGE, PH_INTEGRATOR, PH_WAITS, PH_OUTPUTS, PH_FINISH, PH_N };
 
+/* One rank: the rates of each compartment (aggregation's and breakage's
+ * own clocks, the rest of the rates shared evenly, as the rebalancing
+ * counts them), and what ranks owning contiguous blocks of compartments
+ * could gain at most (gs_dist_speedup_bound), for every rank count up to
+ * the compartments that doubles. */
+static void print_split_bounds(const gs_model *m, const double *mine, double total) {
+  const size_t n = m->grid.ncomp;
+  if (!m->comp_seconds || n < 2) return;
+  double measured = 0;
+  for (size_t j = 0; j < n; j++) measured += m->comp_seconds[j];
+  const double rest = fmax(0.0, mine[PH_RHS] - measured) / (double)n;
+  fprintf(stderr, "  rates per compartment (s):");
+  for (size_t j = 0; j < n; j++) fprintf(stderr, " %.4f", m->comp_seconds[j] + rest);
+  fprintf(stderr, "\n  speed-up at most, compartments split over ranks (free messages):");
+  for (int nr = 2; (size_t)nr <= n; nr *= 2) {
+    double largest;
+    double bound = gs_dist_speedup_bound(m->comp_seconds, n, mine[PH_RHS], mine[PH_INTEGRATOR],
+                                         mine[PH_FINISH], total, nr, &largest);
+    fprintf(stderr, "%s %d ranks %.2fx", nr > 2 ? "," : "", nr, bound);
+  }
+  fprintf(stderr, "\n");
+}
+
 static void print_timings(const gs_dist *d, const double *mine) {
   const size_t n = (size_t)d->size * PH_N;
   double *all = calloc(n, sizeof *all);
@@ -647,6 +670,11 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
        !(guard.spent = gs_calloc(g->ncomp + (size_t)dist.size, sizeof(double), err)) ||
        !(guard.split_lo = gs_calloc((size_t)dist.size + 1, sizeof(size_t), err))))
     rc = GS_ENOMEM;
+  /* --timings on one rank: each compartment's own rates, for the bound on
+   * what a split over ranks could gain (print_timings) */
+  if (!rc && dist.size == 1 && opt && opt->timings && g->ncomp > 1 &&
+      !(m->comp_seconds = gs_calloc(g->ncomp, sizeof(double), err)))
+    rc = GS_ENOMEM;
   guard.evals_needed = MIN_EVALS;
   if (!rc && step.it && !step.it->type->carry) { /* cvode: no rebalancing */
     free(guard.spent);
@@ -747,7 +775,10 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   phase[PH_INTEGRATOR] = guard.t_advance - guard.t_rhs - guard.t_exchange - guard.t_agree - guard.t_held;
   phase[PH_WAITS] = guard.t_agree - guard.t_deferred;
   phase[PH_OUTPUTS] += guard.t_deferred + guard.t_held;
-  if (opt && opt->timings) print_timings(&dist, phase);
+  if (opt && opt->timings) {
+    print_timings(&dist, phase);
+    if (dist.size == 1) print_split_bounds(m, phase, now_seconds() - start);
+  }
   stepper_free(&step);
   gs_deferred_output_free(guard.deferred);
   free(m->comp_seconds);
