@@ -1,7 +1,8 @@
 /* Result files: partial names until finish, HDF5 layout and contents, CSV,
  * abort, resume after a killed run (including a torn write and extra CSV
  * rows), resume refusals, output times written later in pieces
- * (deferred_output.h); 1-, 2- and 3-D grids. */
+ * (deferred_output.h), large series with several output times per chunk;
+ * 1-, 2- and 3-D grids. */
 #include <hdf5.h>
 #include <signal.h>
 #include <stdio.h>
@@ -280,6 +281,21 @@ static gs_output *open_in(const char *name, char *dir, gs_model *m, int dim, siz
  * With many compartments a row of the small series is ~10 KB, and the
  * pending rows' block (64 KiB at first) grows six times on the way to 300
  * uncommitted output times, moving the rows held so far each time. */
+/* Output times per chunk of dataset name. */
+static hsize_t chunk_times(const char *dir, const char *name) {
+  char p[512];
+  snprintf(p, sizeof p, "%s/result.h5", dir);
+  hid_t f = H5Fopen(p, H5F_ACC_RDONLY, H5P_DEFAULT);
+  hid_t d = f >= 0 ? H5Dopen2(f, name, H5P_DEFAULT) : H5I_INVALID_HID;
+  hid_t pl = d >= 0 ? H5Dget_create_plist(d) : H5I_INVALID_HID;
+  hsize_t dims[8] = {0};
+  if (pl < 0 || H5Pget_chunk(pl, 8, dims) < 1) dims[0] = 0;
+  if (pl >= 0) H5Pclose(pl);
+  if (d >= 0) H5Dclose(d);
+  if (f >= 0) H5Fclose(f);
+  return dims[0];
+}
+
 static void test_many_times(double checkpoint, size_t ncomp) {
   char dir[256], name[64];
   gs_model m;
@@ -294,6 +310,11 @@ static void test_many_times(double checkpoint, size_t ncomp) {
   write_times(o, &m, 0, 300);
   CHECK(gs_output_finish(o, 1, &err) == GS_OK);
   check_result(dir, &m, 300);
+  /* rows under 64 KiB share chunks, held until full and written partly
+   * filled at each commit (3 compartments: 113 times a chunk, so the 300
+   * end mid-chunk) */
+  const hsize_t row = ncomp * 6 * 4 * sizeof(double), k = (64 << 10) / row;
+  CHECK(k > 1 && chunk_times(dir, "/number") == k);
   gs_model_free(&m);
 }
 

@@ -2,11 +2,12 @@
  * (H5Dwrite_chunk), deflated here with zlib when the dataset has the deflate
  * filter.
  *
- * Why: the result file's large series (/number, /carried) are chunked by one
- * output time, and every commit writes whole rows.  Through H5Dwrite, HDF5
- * iterates the selections and runs its filter pipeline chunk by chunk, which
- * cost ~10 ms per MB here (seed-000 example: 16 ms of a 0.15 s run for 2 MB;
- * zlib's per-chunk set-up inside the deflate filter had cost more still).
+ * Why: the result file's large series (/number, /carried) are chunked by up
+ * to 64 KiB of output times, and every commit writes whole rows.  Through
+ * H5Dwrite, HDF5 iterates the selections and runs its filter pipeline chunk
+ * by chunk, which cost ~10 ms per MB here (seed-000 example: 16 ms of a
+ * 0.15 s run for 2 MB; zlib's per-chunk set-up inside the deflate filter had
+ * cost more still).
  * Written directly, a chunk is one pwrite plus an index entry, and one zlib
  * stream is reset between chunks instead of rebuilt.  The file is the same
  * as H5Dwrite would make it: the deflate filter's chunks are zlib streams

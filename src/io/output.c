@@ -27,8 +27,9 @@
  * 86 of them in a 0.17 s run).  A killed run loses at most the last interval,
  * which --resume recomputes.  checkpoint = 0 commits every output time.
  * The small series are kept in memory until the commit (one write of several
- * rows each); the large ones (/number, /carried), chunked by single rows,
- * are written chunk by chunk as they come and become part of the file only
+ * rows each); the large ones (/number, /carried), chunked by up to 64 KiB of
+ * output times (a row a chunk when larger), are written chunk by chunk as
+ * each fills (partly filled at a commit) and become part of the file only
  * when "ntimes" covers them.  Their raw chunks go to new file space; the
  * metadata cache does not evict (h5_open), so the chunk index and extents
  * reach the disk only at the flushes of a commit, as in rule 1. */
@@ -78,10 +79,13 @@ struct gs_output {
   int rank[NSERIES_MAX];
   hsize_t rest[NSERIES_MAX][RANK_MAX - 1]; /* dimensions after time */
   size_t rowlen[NSERIES_MAX];              /* values per time row */
-  /* series chunked by single rows, written chunk by chunk (chunk_writer.h),
-   * and whether their chunks are deflated */
+  /* the large series, written chunk by chunk (chunk_writer.h), and whether
+   * their chunks are deflated */
   int direct[NSERIES_MAX], deflated[NSERIES_MAX];
   int indexed[NSERIES_MAX]; /* small series: written once (index_small_series) */
+  /* large series whose rows are under BIG_CHUNK_BYTES: the chunk being
+   * filled, several output times long (hold_row) */
+  double *held[NSERIES_MAX];
   gs_chunk_writer *chunks;
   FILE *csv;
   hsize_t ntimes; /* committed output times */
@@ -331,15 +335,26 @@ static int deflate_usable(void) {
          (info & H5Z_FILTER_CONFIG_ENCODE_ENABLED);
 }
 
-/* Empty float64 series i, extendible along time.  /number is chunked by
- * single output times (what a reader usually wants), the rest by 64 rows.
- * Only chunks of at least COMPRESS_MIN_VALUES are deflated: zlib sets up
+/* Empty float64 series i, extendible along time.  /number and /carried are
+ * chunked by up to 64 KiB of output times (chunk_rows), the rest by 64 rows.
+ * Only rows of at least COMPRESS_MIN_VALUES are deflated: zlib sets up
  * ~256 KiB of state per chunk, which on small grids cost more than the
  * integration (seed-000 example: 45 % of the run for 8 KiB chunks). */
 #define COMPRESS_MIN_VALUES 8192
+/* A large series' chunk holds as many output times as fit in
+ * BIG_CHUNK_BYTES, at least one; only a row of COMPRESS_MIN_VALUES or more,
+ * a chunk of its own, is deflated.  With a chunk per output time, the
+ * seed-000 example's 8 and 16 KiB rows made 86 chunks per series: writing
+ * each cost ~6 µs more, and rank 0's 65th chunk of both (their index splits
+ * a node) stalled the other rank by ~250 µs, every run. */
+#define BIG_CHUNK_BYTES ((size_t)64 << 10)
 /* Time rows per chunk of series i. */
 static hsize_t chunk_rows(const gs_output *o, int i) {
-  return i == S_NUMBER || i == o->s_carried ? 1 : i == S_TIME ? 4 * CHUNK_ROWS : CHUNK_ROWS;
+  if (i == S_NUMBER || i == o->s_carried) {
+    const size_t row = o->rowlen[i] * sizeof(double);
+    return o->rowlen[i] >= COMPRESS_MIN_VALUES || row >= BIG_CHUNK_BYTES ? 1 : BIG_CHUNK_BYTES / row;
+  }
+  return i == S_TIME ? 4 * CHUNK_ROWS : CHUNK_ROWS;
 }
 
 static int create_series(gs_output *o, int i, gs_error *err) {
@@ -352,9 +367,12 @@ static int create_series(gs_output *o, int i, gs_error *err) {
     dims[r] = maxdims[r] = chunk[r] = o->rest[i][r - 1];
     values *= chunk[r];
   }
-  const int compress = big && values >= COMPRESS_MIN_VALUES && deflate_usable();
+  const int compress = big && o->rowlen[i] >= COMPRESS_MIN_VALUES && deflate_usable();
   o->direct[i] = big && o->chunks && gs_chunk_direct_ok();
   o->deflated[i] = compress;
+  if (o->direct[i] && chunk[0] > 1 && !o->held[i] &&
+      !(o->held[i] = gs_malloc((size_t)values * sizeof(double), err)))
+    return GS_ENOMEM;
   hid_t space = H5Screate_simple(rank, dims, maxdims);
   hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
   if (space >= 0 && dcpl >= 0 && H5Pset_chunk(dcpl, rank, chunk) >= 0 &&
@@ -411,7 +429,7 @@ static int write_rows(gs_output *o, int i, hsize_t start, hsize_t count, const d
   herr_t st = H5Dset_extent(o->ds[i], dims);
   const hsize_t rows = chunk_rows(o, i);
   o->indexed[i] = 1;
-  if (st >= 0 && o->direct[i])
+  if (st >= 0 && o->direct[i] && rows == 1)
     st = gs_chunk_write_rows(o->chunks, o->ds[i], start, count, o->rowlen[i], buf, o->deflated[i],
                              DEFLATE_LEVEL);
   else if (st >= 0 && o->chunks && start % rows == 0 && gs_chunk_direct_ok())
@@ -485,6 +503,7 @@ static void output_free(gs_output *o) {
   free(o->csv_final);
   free(o->sbuf);
   free(o->pending_block);
+  for (int i = 0; i < NSERIES_MAX; i++) free(o->held[i]);
   gs_chunk_writer_free(o->chunks);
   free(o);
 }
@@ -676,12 +695,51 @@ static int pending_reserve(gs_output *o, gs_error *err) {
  * the partial CSV may run ahead of the commits, and a resume rewrites it from
  * result.h5).  last: the file is closed next (which flushes), so the second
  * flush is left to the close. */
+/* The chunk of large series i that holds row end - 1: its rows up to end
+ * from the held buffer, the rest zeros (beyond the extent, where no reader
+ * looks; the full chunk replaces them later). */
+static int write_held(gs_output *o, int i, hsize_t end, gs_error *err) {
+  const hsize_t k = chunk_rows(o, i), first = (end - 1) / k * k;
+  const size_t len = o->rowlen[i];
+  if (end - first < k)
+    memset(o->held[i] + (size_t)(end - first) * len, 0, (size_t)(k - (end - first)) * len * sizeof(double));
+  hsize_t dims[RANK_MAX] = {end}, offset[RANK_MAX] = {first};
+  for (int r = 1; r < o->rank[i]; r++) dims[r] = o->rest[i][r - 1];
+  herr_t st = H5Dset_extent(o->ds[i], dims);
+  if (st >= 0)
+    st = H5Dwrite_chunk(o->ds[i], H5P_DEFAULT, 0, offset, (size_t)k * len * sizeof(double), o->held[i]);
+  return st < 0 ? h5_error(err, o->h5_path, "write dataset %s", o->sname[i]) : GS_OK;
+}
+
+/* Row `index` of a large series written chunk by chunk: a chunk of one row
+ * goes to the file at once, a longer one when its last row comes, and
+ * partly filled at each commit (write_held). */
+static int hold_row(gs_output *o, int i, hsize_t index, const double *row, gs_error *err) {
+  const hsize_t k = chunk_rows(o, i);
+  if (k == 1) return write_rows(o, i, index, 1, row, err);
+  memcpy(o->held[i] + (size_t)(index % k) * o->rowlen[i], row, o->rowlen[i] * sizeof(double));
+  return index % k == k - 1 ? write_held(o, i, index + 1, err) : GS_OK;
+}
+
+/* After a resume: the committed rows of each large series' last, partly
+ * filled chunk back into its held buffer, for the writes that complete it. */
+static int reload_held(gs_output *o, gs_error *err) {
+  int rc = GS_OK;
+  for (int i = 0; i < o->nseries && !rc; i++) {
+    const hsize_t have = o->ntimes % chunk_rows(o, i);
+    if (o->held[i] && have) rc = read_rows(o, i, o->ntimes - have, have, o->held[i], err);
+  }
+  return rc;
+}
+
 static int commit(gs_output *o, int last, gs_error *err) {
   int rc = GS_OK;
   const hsize_t n = o->npending;
   if (!n) return GS_OK;
-  for (int i = 0; i < o->nseries && !rc; i++)
+  for (int i = 0; i < o->nseries && !rc; i++) {
     if (!o->direct[i]) rc = write_rows(o, i, o->ntimes, n, o->pending[i], err);
+    else if (o->held[i] && (o->ntimes + n) % chunk_rows(o, i)) rc = write_held(o, i, o->ntimes + n, err);
+  }
   if (!rc) rc = flush_h5(o, err);
   if (!rc && put_i64_attr(o->file, "ntimes", (long long)(o->ntimes + n)) < 0)
     rc = h5_error(err, o->h5_path, "write the attribute ntimes of /");
@@ -701,8 +759,8 @@ void gs_output_set_checkpoint(gs_output *o, double seconds) {
 }
 
 /* Parts of an output time: a summary and CSV row per compartment, then a
- * write per series chunked by single rows (~15 µs each for the seed-000
- * example), a deflated row in pieces of PIECE_BYTES (a 32-compartment x 32
+ * row of each large series (into its held chunk, written when full), a
+ * deflated row in pieces of PIECE_BYTES (a 32-compartment x 32
  * x 32 row took 1-2 ms in one piece, which held up the other MPI ranks when
  * rank 0 began it just before they arrived), then the rows of the small
  * series held for the commit, and the commit when it is due. */
@@ -787,7 +845,7 @@ int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double
     if (!o->direct[i]) return index_small_series(o, i, err);
     const double *row = series_row(o, i, &t, y, ledger);
     return o->deflated[i] ? write_row_piece(o, i, o->ntimes + r, row, k, np, err)
-                          : write_rows(o, i, o->ntimes + r, 1, row, err);
+                          : hold_row(o, i, o->ntimes + r, row, err);
   }
   if (pending_reserve(o, err)) return GS_ENOMEM;
   for (int i = 0; i < o->nseries; i++)
@@ -1043,6 +1101,7 @@ gs_output *gs_output_resume(const char *dir, const gs_model *m, double *t, doubl
   gs_output *o = output_alloc(dir, m, err);
   int rc = o ? open_old(old, m, err) : GS_ENOMEM;
   if (!rc) rc = rebuild_h5(old, o, m, err);
+  if (!rc) rc = reload_held(o, err);
   if (!rc) rc = flush_h5(o, err);
   int crc = output_close(old, rc ? NULL : err); /* before its name is reused */
   if (!rc) rc = crc;
