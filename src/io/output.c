@@ -345,8 +345,9 @@ static int deflate_usable(void) {
  * BIG_CHUNK_BYTES, at least one; only a row of COMPRESS_MIN_VALUES or more,
  * a chunk of its own, is deflated.  With a chunk per output time, the
  * seed-000 example's 8 and 16 KiB rows made 86 chunks per series: writing
- * each cost ~6 µs more, and rank 0's 65th chunk of both (their index splits
- * a node) stalled the other rank by ~250 µs, every run. */
+ * each cost ~6 µs more, and rank 0's 65th chunk of both (probably where
+ * their index, a B-tree of up to 64 entries a node, splits one) stalled the
+ * other rank by ~250 µs, every run. */
 #define BIG_CHUNK_BYTES ((size_t)64 << 10)
 /* Time rows per chunk of series i. */
 static hsize_t chunk_rows(const gs_output *o, int i) {
