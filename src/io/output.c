@@ -47,6 +47,7 @@
 #include <unistd.h>
 
 #include "io/chunk_writer.h"
+#include "io/csv_number.h"
 #include "io/h5_setup.h"
 
 #ifndef GRANSIM_VERSION
@@ -465,10 +466,13 @@ static int csv_header(gs_output *o, gs_error *err) {
 /* The row of compartment j; the value of column c is sbuf[c * stride + first + j]. */
 static int csv_row(gs_output *o, const double *sbuf, size_t stride, size_t first, size_t j,
                    gs_error *err) {
-  for (int c = 0; c < o->ncol; c++)
-    if (fprintf(o->csv, "%s%.10g", c ? "," : "", sbuf[(size_t)c * stride + first + j]) < 0)
-      return csv_error(o, err);
-  return fputc('\n', o->csv) == EOF ? csv_error(o, err) : GS_OK;
+  char line[NCOL_MAX * GS_CSV_NUMBER_MAX + 1], *p = line;
+  for (int c = 0; c < o->ncol; c++) {
+    if (c) *p++ = ',';
+    p += gs_csv_number(sbuf[(size_t)c * stride + first + j], p);
+  }
+  *p++ = '\n';
+  return fwrite(line, 1, (size_t)(p - line), o->csv) == (size_t)(p - line) ? GS_OK : csv_error(o, err);
 }
 
 /* One row per compartment. */
