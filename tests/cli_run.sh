@@ -95,7 +95,7 @@ awk -v all="1-$ncomp" '/^  0 / { rows++; for (i = 2; i <= 7; i++) if ($i < 0) ba
 # 1 and 2
 awk -v n="$ncomp" '/^  0 / { rates = $2 }
   /^  rates per compartment \(s\):/ { k = NF - 4; for (i = 5; i <= NF; i++) { if ($i < 0) bad = 1; sum += $i } }
-  /^  speed-up at most, compartments split over ranks/ { x = $(NF); sub(/x$/, "", x); if ($(NF - 2) != 2 || x < 1 || x > 2) bad = 1; seen = 1 }
+  /^  speed-up at most, compartments split over ranks/ { x = $(NF); sub(/x$/, "", x); x += 0; if ($(NF - 2) != 2 || x < 1 || x > 2) bad = 1; seen = 1 }
   END { exit !(k == n && seen && !bad && sum > rates - n * 1e-4 && sum < rates + n * 1e-4) }' "$WORK/stderr" ||
   { show_output; fail "--timings: expected the rates of each of the $ncomp compartments, adding up to the rates, and a bound in [1, 2] for 2 ranks"; }
 

@@ -51,7 +51,8 @@ static int cmd_run(int argc, char **argv) {
              "exchange between ranks, the integrator's own work, waiting for the other ranks at\n"
              "step agreements, the outputs and the final write, and the compartments it held\n"
              "at the end (they move to balance the ranks); on one rank also the rates of each\n"
-             "compartment and the most a split of them over 2, 4, ... ranks could gain.\n");
+             "compartment and the most a split of them over 2, 3, ... ranks could gain\n"
+             "(with --threads 1).\n");
       return 0;
     } else if (!strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
     else if (!strcmp(argv[i], "--resume")) opt.resume = 1;

@@ -30,9 +30,12 @@
  * rows each); the large ones (/number, /carried), chunked by up to 64 KiB of
  * output times (a row a chunk when larger), are written chunk by chunk as
  * each fills (partly filled at a commit) and become part of the file only
- * when "ntimes" covers them.  Their raw chunks go to new file space; the
- * metadata cache does not evict (h5_open), so the chunk index and extents
- * reach the disk only at the flushes of a commit, as in rule 1. */
+ * when "ntimes" covers them.  A chunk goes to new file space when first
+ * written; one written partly filled at a commit is rewritten in place as
+ * it fills, with the same bytes for its committed rows, so a kill in the
+ * middle leaves those rows as they were.  The metadata cache does not evict
+ * (h5_open), so the chunk index and extents reach the disk only at the
+ * flushes of a commit, as in rule 1. */
 #include "gransim/output.h"
 
 #include <errno.h>
@@ -1041,6 +1044,9 @@ static int copy_rows(gs_output *old, gs_output *o, gs_error *err) {
   int rc = GS_OK;
   for (int i = 0; i < o->nseries && !rc; i++) {
     hsize_t block = BLOCK_VALUES / o->rowlen[i] ? BLOCK_VALUES / o->rowlen[i] : 1;
+    /* whole chunks per block: each then goes straight to the file */
+    const hsize_t k = chunk_rows(o, i);
+    if (block > k) block -= block % k;
     if (block > old->ntimes) block = old->ntimes;
     double *buf = gs_malloc((size_t)block * o->rowlen[i] * sizeof(double), err);
     if (!buf) return GS_ENOMEM;

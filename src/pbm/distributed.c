@@ -152,7 +152,10 @@ double gs_dist_speedup_bound(const double *cost, size_t n, double rates, double 
   free(c);
   free(none);
   free(lo);
-  if (!isfinite(*largest)) return NAN;
+  if (!isfinite(*largest)) {
+    *largest = NAN;
+    return NAN;
+  }
   serial = fmax(0.0, serial);
   return total / (fmax(*largest, (total - serial) / nr) + serial);
 }

@@ -1,6 +1,7 @@
 /* The run driver: integrate a case over its output times, check the state
  * after each output interval, write outputs, report progress. */
 #include <math.h>
+#include <omp.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -500,18 +501,24 @@ enum { PH_RHS, PH_EXCHANGE, PH_INTEGRATOR, PH_WAITS, PH_OUTPUTS, PH_FINISH, PH_N
 /* One rank: the rates of each compartment (aggregation's and breakage's
  * own clocks, the rest of the rates shared evenly, as the rebalancing
  * counts them), and what ranks owning contiguous blocks of compartments
- * could gain at most (gs_dist_speedup_bound), for every rank count up to
- * the compartments that doubles. */
+ * could gain at most (gs_dist_speedup_bound), for 2-8 ranks and the powers
+ * of two above, up to the compartments.  On several threads the clocks of
+ * compartments run side by side and add up to more than the wall time:
+ * nothing is printed then. */
 static void print_split_bounds(const gs_model *m, const double *mine, double total) {
   const size_t n = m->grid.ncomp;
   if (!m->comp_seconds || n < 2) return;
+  if (omp_get_max_threads() > 1) {
+    fprintf(stderr, "  (the rates per compartment and what ranks could gain: with --threads 1)\n");
+    return;
+  }
   double measured = 0;
   for (size_t j = 0; j < n; j++) measured += m->comp_seconds[j];
   const double rest = fmax(0.0, mine[PH_RHS] - measured) / (double)n;
   fprintf(stderr, "  rates per compartment (s):");
   for (size_t j = 0; j < n; j++) fprintf(stderr, " %.4f", m->comp_seconds[j] + rest);
   fprintf(stderr, "\n  speed-up at most, compartments split over ranks (free messages):");
-  for (int nr = 2; (size_t)nr <= n; nr *= 2) {
+  for (int nr = 2; (size_t)nr <= n; nr = nr < 8 ? nr + 1 : 2 * nr) {
     double largest;
     double bound = gs_dist_speedup_bound(m->comp_seconds, n, mine[PH_RHS], mine[PH_INTEGRATOR],
                                          mine[PH_FINISH], total, nr, &largest);
