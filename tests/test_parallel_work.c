@@ -56,37 +56,46 @@ static double uniform(unsigned *s) {
   return (double)(*s >> 8) / 16777216.0;
 }
 
-/* A random case: 1-9 compartments over 1-4 ranks, at most one per compartment. */
-static void random_shape(unsigned *seed, size_t *n, int *nr) {
-  *n = 1 + (size_t)(uniform(seed) * 9);
-  *nr = 1 + (int)(uniform(seed) * 4);
-  if ((size_t)*nr > *n) *nr = (int)*n;
+/* One random case of n compartments over nr ranks, drawing the rest from
+ * seed; 1 when it fails (said on stderr when report is set). */
+typedef int (*trial_fn)(unsigned *seed, int trial, size_t n, int nr, int report);
+
+/* `trials` random cases of 1-9 compartments over 1-4 ranks (at most one
+ * rank per compartment); every one must pass. */
+static void random_trials(unsigned seed, int trials, trial_fn one) {
+  int bad = 0;
+  for (int trial = 0; trial < trials; trial++) {
+    const size_t n = 1 + (size_t)(uniform(&seed) * 9);
+    int nr = 1 + (int)(uniform(&seed) * 4);
+    if ((size_t)nr > n) nr = (int)n;
+    bad += one(&seed, trial, n, nr, bad < 5);
+  }
+  CHECK(bad == 0);
+}
+
+/* The split is valid, costs what it reports, and no split does better. */
+static int split_trial(unsigned *seed, int trial, size_t n, int nr, int report) {
+  double cost[9] = {0}, extra[4] = {0};
+  for (size_t j = 0; j < n; j++) cost[j] = 0.1 + uniform(seed);
+  for (int r = 0; r < nr; r++) extra[r] = uniform(seed) < 0.5 ? 0.0 : 2 * uniform(seed);
+  size_t lo[5];
+  double got = gs_dist_balanced_split(cost, n, extra, nr, lo);
+  int valid = lo[0] == 0 && lo[nr] == n;
+  for (int r = 0; r < nr; r++) valid = valid && lo[r] < lo[r + 1];
+  if (!valid) {
+    if (report) fprintf(stderr, "trial %d: n %zu ranks %d: invalid split\n", trial, n, nr);
+    return 1;
+  }
+  double actual = largest_block(cost, n, extra, nr, lo), best = brute_force(cost, n, extra, nr);
+  if (fabs(got - actual) <= 1e-12 * actual && actual <= best * (1 + 1e-9)) return 0;
+  if (report)
+    fprintf(stderr, "trial %d: n %zu ranks %d: split gives %.15g (reported %.15g), best %.15g\n",
+            trial, n, nr, actual, got, best);
+  return 1;
 }
 
 static void split_is_optimal(void) {
-  unsigned seed = 12345;
-  int bad = 0;
-  for (int trial = 0; trial < 4000; trial++) {
-    size_t n;
-    int nr;
-    random_shape(&seed, &n, &nr);
-    double cost[9], extra[4];
-    for (size_t j = 0; j < n; j++) cost[j] = 0.1 + uniform(&seed);
-    for (int r = 0; r < nr; r++) extra[r] = uniform(&seed) < 0.5 ? 0.0 : 2 * uniform(&seed);
-    size_t lo[5];
-    double got = gs_dist_balanced_split(cost, n, extra, nr, lo);
-    int valid = lo[0] == 0 && lo[nr] == n;
-    for (int r = 0; r < nr; r++) valid = valid && lo[r] < lo[r + 1];
-    CHECK(valid);
-    if (!valid) continue;
-    double actual = largest_block(cost, n, extra, nr, lo), best = brute_force(cost, n, extra, nr);
-    if (fabs(got - actual) > 1e-12 * actual || actual > best * (1 + 1e-9)) {
-      if (bad++ < 5)
-        fprintf(stderr, "trial %d: n %zu ranks %d: split gives %.15g (reported %.15g), best %.15g\n",
-                trial, n, nr, actual, got, best);
-    }
-  }
-  CHECK(bad == 0);
+  random_trials(12345, 4000, split_trial);
   /* the seed-000 example's shape: costs growing downstream, rank 0 writing */
   const double cost[4] = {16, 20.5, 21.2, 21.3}, extra[2] = {10, 0};
   size_t lo[3];
@@ -95,6 +104,27 @@ static void split_is_optimal(void) {
   const double none[2] = {0, 0};
   CHECK_REL(gs_dist_balanced_split(cost, 4, none, 2, lo), 42.5, 1e-12);
   CHECK(lo[1] == 2);
+}
+
+/* The bound lies in [1, nr], its largest block is the best split of the
+ * costs with the unmeasured rates and the integrator shared evenly. */
+static int bound_trial(unsigned *seed, int trial, size_t n, int nr, int report) {
+  double c[9], measured = 0, largest;
+  for (size_t j = 0; j < n; j++) measured += c[j] = uniform(seed);
+  const double rates = measured * (1 + uniform(seed)), integ = uniform(seed);
+  const double serial = 0.2 * uniform(seed), total = rates + integ + serial + uniform(seed);
+  double b = gs_dist_speedup_bound(c, n, rates, integ, serial, total, nr, &largest);
+  double shared[9], none[4] = {0, 0, 0, 0};
+  for (size_t j = 0; j < n; j++) shared[j] = c[j] + (rates - measured + integ) / (double)n;
+  const double best = brute_force(shared, n, none, nr);
+  const double expect = total / (fmax(best, (total - serial) / nr) + serial);
+  if (b >= 1 - 1e-12 && b <= nr * (1 + 1e-12) && fabs(largest - best) <= 1e-12 * best &&
+      fabs(b - expect) <= 1e-12 * expect)
+    return 0;
+  if (report)
+    fprintf(stderr, "trial %d: n %zu ranks %d: bound %.15g (expected %.15g), block %.15g (best %.15g)\n",
+            trial, n, nr, b, expect, largest, best);
+  return 1;
 }
 
 static void speedup_bound(void) {
@@ -115,29 +145,7 @@ static void speedup_bound(void) {
   CHECK(isnan(gs_dist_speedup_bound(even, 4, 60, 0, 0, 70, 5, &largest)) && isnan(largest));
   CHECK(isnan(gs_dist_speedup_bound(even, 4, 60, 0, 0, 0, 2, &largest)));
   CHECK(isnan(gs_dist_speedup_bound(even, 4, 60, 0, 0, 70, 0, &largest)));
-  unsigned seed = 777;
-  int bad = 0;
-  for (int trial = 0; trial < 2000; trial++) {
-    size_t n;
-    int nr;
-    random_shape(&seed, &n, &nr);
-    double c[9], measured = 0;
-    for (size_t j = 0; j < n; j++) measured += c[j] = uniform(&seed);
-    const double rates = measured * (1 + uniform(&seed)), integ = uniform(&seed);
-    const double serial = 0.2 * uniform(&seed), total = rates + integ + serial + uniform(&seed);
-    double b = gs_dist_speedup_bound(c, n, rates, integ, serial, total, nr, &largest);
-    double shared[9], none[4] = {0, 0, 0, 0};
-    for (size_t j = 0; j < n; j++) shared[j] = c[j] + (rates - measured + integ) / (double)n;
-    const double best = brute_force(shared, n, none, nr);
-    const double expect = total / (fmax(best, (total - serial) / nr) + serial);
-    if (!(b >= 1 - 1e-12 && b <= nr * (1 + 1e-12)) || fabs(largest - best) > 1e-12 * best ||
-        fabs(b - expect) > 1e-12 * expect) {
-      if (bad++ < 5)
-        fprintf(stderr, "trial %d: n %zu ranks %d: bound %.15g (expected %.15g), block %.15g (best %.15g)\n",
-                trial, n, nr, b, expect, largest, best);
-    }
-  }
-  CHECK(bad == 0);
+  random_trials(777, 2000, bound_trial);
 }
 
 static void threads_for(void) {
