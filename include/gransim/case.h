@@ -40,6 +40,9 @@ typedef struct gs_case {
    * times when the measured costs promise a largest block this fraction
    * cheaper (0: whenever the best split differs; none: never) */
   double rebalance;
+  /* solver.steps: 1 = per_compartment (each compartment its own steps,
+   * src/pbm/compartment_steps.h), 0 = shared (one step for all) */
+  int per_compartment;
 } gs_case;
 
 /* Read, validate and build a case from a file, or from an already loaded
@@ -69,6 +72,12 @@ typedef struct gs_run_report {
   double max_balance_error; /* largest relative volume-balance error seen */
   double max_loss;          /* largest fraction of volume lost through boundaries */
   long rebalanced;          /* under MPI: times the compartments moved between ranks */
+  /* solver.steps: per_compartment (stats then sum the compartments' own
+   * steps and evaluations, an evaluation being one compartment's rates), and
+   * the largest relative mismatch between what a compartment discharged and
+   * the next received in a stretch */
+  int per_compartment;
+  double worst_coupling;
 } gs_run_report;
 
 /* Integrate the case over its output times, checking after every output time

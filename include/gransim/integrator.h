@@ -61,6 +61,13 @@ typedef struct gs_ode {
    * (the last step's end-of-step derivative, a multistep history) do not
    * hold there and are evaluated afresh.  The caller sets it per advance. */
   int jumped;
+  /* Optional (rk calls it): the step about to be tried, from t0 over h,
+   * before f is evaluated for it (also before a retry with a smaller h, and
+   * with the span to t_out before the first step's size is estimated).  A
+   * forcing that f interpolates per step, with an integral over [t0, t0 + h]
+   * that the Runge-Kutta weights reproduce exactly, needs it (per-compartment
+   * steps, src/pbm/compartment_steps.c).  NULL: f does not depend on it. */
+  void (*trying)(void *ctx, double t0, double h);
 } gs_ode;
 
 typedef struct gs_integrator_stats {

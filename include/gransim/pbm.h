@@ -177,6 +177,10 @@ static inline double *gs_model_ledger(const gs_model *m, double *ledger, size_t 
 const char *gs_model_vol_name(const gs_model *m, int k);
 /* Held volume of coordinate k in compartment comp. */
 double gs_model_held(const gs_model *m, const double *y, size_t comp, int k);
+/* The rate k (1/s) at which compartment comp's particles flow into the next
+ * one (the sum over the model's transfer mechanisms; 0 without any).  The
+ * inflow of comp + 1 is k times comp's numbers and carried totals. */
+double gs_model_transfer_rate(const gs_model *m, size_t comp);
 /* Add a mechanism by type name, reading its parameters from node. */
 int gs_model_add_mechanism(gs_model *m, const char *type, gs_cfg_node *node, const char *label,
                            gs_error *err);

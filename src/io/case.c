@@ -309,15 +309,25 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
                       : i < m->nstate   ? vtyp
                                         : scale[(i - m->nstate) % (size_t)m->nvol];
   c->ode = (gs_ode){n, model_ode, m, c->abs_scale, m->nstate,
-                    gs_model_has_preconditioner(m) ? model_psolve : NULL, model_hold, NULL, 0, NULL, 0};
+                    gs_model_has_preconditioner(m) ? model_psolve : NULL, model_hold, NULL, 0, NULL, 0, NULL};
   gs_cfg_node *solver = gs_cfg_get(root, "solver");
   if (solver && gs_cfg_require_kind(solver, GS_CFG_MAP, err)) return GS_EINPUT;
+  static const char *const steps[] = {"shared", "per_compartment", NULL};
+  int which = 0;
+  if (solver && gs_cfg_enum_opt(solver, "steps", steps, 0, &which, err)) return GS_EINPUT;
+  c->per_compartment = which == 1;
   c->rebalance = 0.05;
   gs_cfg_node *rb = solver ? gs_cfg_get(solver, "rebalance") : NULL;
   if (rb && gs_cfg_scalar(rb) && !strcmp(gs_cfg_scalar(rb), "none")) c->rebalance = -1;
   else if (rb && (gs_cfg_node_double(rb, &c->rebalance, err) || !(c->rebalance >= 0 && c->rebalance < 1)))
     return gs_cfg_fail(rb, err, "expected a fraction in [0, 1) or 'none'");
-  return gs_integrator_create(solver, &c->ode, &c->integrator, err);
+  int rc = gs_integrator_create(solver, &c->ode, &c->integrator, err);
+  if (!rc && c->per_compartment && strcmp(c->integrator.type->name, "rk"))
+    return gs_cfg_fail(gs_cfg_get(solver, "steps"), err,
+                       "per_compartment steps need method rk (the coupling of the compartments "
+                       "relies on the exact quadrature of its Runge-Kutta steps), not %s",
+                       c->integrator.type->name);
+  return rc;
 }
 
 /* An implicit (BDF) integrator solves its Newton systems only to a tolerance

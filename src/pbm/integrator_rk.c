@@ -50,6 +50,8 @@ typedef struct {
   /* under MPI, the step's one agreement (in the controller) was reached,
    * and it found a non-finite state on some rank */
   int agreed, agreed_nonfinite;
+  /* the start of the step being tried (gs_ode.trying) */
+  double try_t0;
   /* the last try rejected, its size and scaled error (0: none since the
    * last accepted step) */
   double rejected_h, rejected_error;
@@ -161,6 +163,10 @@ static int gs_rk_control_hadjust(void *state, size_t dim, unsigned int ord, cons
     *h = h_old * fmax(0.2, S / pow(rmax, 1.0 / ord));
     rk->rejected_h = h_old;
     rk->rejected_error = rmax;
+    /* GSL's evolve retries from the same start with this h, unless it would
+     * not move t by an ulp (then it keeps the step as it is) */
+    if (ode->trying && *h < h_old && rk->try_t0 + *h != rk->try_t0)
+      ode->trying(ode->ctx, rk->try_t0, *h);
     return GSL_ODEIV_HADJ_DEC;
   }
   /* A step that needed a retry is not followed by a larger one when the
@@ -386,6 +392,7 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
    * h shrank to ~1e-3 s */
   if (ode->jumped) gsl_odeiv2_evolve_reset(self->evolve);
   if (self->h <= 0) {
+    if (ode->trying) ode->trying(ode->ctx, *t, t_out - *t);
     int rc = gs_rk_initial_step(self, *t, t_out - *t, y, err);
     if (rc) return rc;
   }
@@ -397,6 +404,8 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
     self->agreed = 0;
     /* evolve shortens the step that would pass t_out and then sets t = t_out
      * exactly; it leaves h at the controller's proposal for later calls. */
+    self->try_t0 = t0;
+    if (ode->trying) ode->trying(ode->ctx, t0, fmin(h, t_out - t0));
     int status = gsl_odeiv2_evolve_apply(self->evolve, self->control, self->step, &sys, t, t_out,
                                          &h, y);
     self->stats.rejected += (long)self->evolve->failed_steps;

@@ -13,6 +13,8 @@
 #include "gransim/output.h"
 #include "gransim/parallel.h"
 #include "io/deferred_output.h"
+#include "pbm/compartment_steps.h"
+#include "pbm/all_finite.h"
 #include "pbm/distributed.h"
 
 /* Describe cell `cell` of compartment `comp`: "compartment 2, cell (3, 5) [solid = ..., ...]". */
@@ -91,21 +93,10 @@ static double now_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* 1 if every value is finite: an OR of "exponent all ones" over the bits,
- * which the compiler vectorises (an early-exit isfinite loop it does not). */
-static int all_finite(const double *f, size_t n) {
-  uint64_t bad = 0;
-  for (size_t i = 0; i < n; i++) {
-    uint64_t b;
-    memcpy(&b, f + i, sizeof b);
-    bad |= (uint64_t)((b & 0x7ff0000000000000ull) == 0x7ff0000000000000ull);
-  }
-  return !bad;
-}
 
 /* Flag the first non-finite rate (index i of f is entry full(i) of the state). */
 static int check_rates(guard_t *gd, double t, const double *f, size_t n, const gs_dist *local) {
-  if (all_finite(f, n)) return 0;
+  if (gs_all_finite(f, n)) return 0;
   for (size_t i = 0; i < n; i++)
     if (!isfinite(f[i])) {
       gd->bad = 1;
@@ -192,8 +183,10 @@ static double guarded_max(void *ctx, double v) {
 static int between_steps(void *ctx);
 
 /* What advances the state: the case's integrator on the full vector, or,
- * under MPI, an integrator of this rank's own on its packed part. */
+ * under MPI, an integrator of this rank's own on its packed part, or with
+ * solver.steps: per_compartment one integrator per compartment. */
 typedef struct {
+  gs_comp_steps *cs; /* per-compartment steps only */
   gs_integrator own; /* MPI only */
   gs_integrator *it;
   gs_ode ode;
@@ -206,6 +199,15 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
   s->ode = c->ode;
   s->ode.ctx = guard;
   s->ode.rates_checked = 1; /* guarded_rhs and local_rhs check every rate */
+  if (c->per_compartment) {
+    if (d->size > 1)
+      return gs_error_set(err, GS_EINPUT,
+                          "solver.steps: per_compartment runs in one process (its compartments "
+                          "take their own steps one after the other); run it without mpirun, or "
+                          "use steps: shared on %d MPI ranks",
+                          d->size);
+    return gs_comp_steps_create(c, gs_cfg_get(gs_cfg_root(c->cfg), "solver"), &s->cs, err);
+  }
   if (d->size < 2) {
     s->it = &c->integrator;
     s->ode.f = guarded_rhs;
@@ -219,12 +221,20 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
   if (!s->yl || !s->scale) return GS_ENOMEM;
   gs_dist_pack(d, c->abs_scale, s->scale);
   /* numbers and carried volumes come first in the packed vector too */
-  s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max, 1, between_steps, 0};
+  s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max, 1, between_steps, 0, NULL};
   s->it = &s->own;
   return gs_integrator_create(gs_cfg_get(gs_cfg_root(c->cfg), "solver"), &s->ode, &s->own, err);
 }
 
 static int stepper_advance(stepper_t *s, double *t, double t_out, double *Y, gs_error *err) {
+  if (s->cs) {
+    guard_t *g = s->ode.ctx;
+    const double before = gs_comp_steps_rhs_seconds(s->cs);
+    int rc = gs_comp_steps_advance(s->cs, t, t_out, Y, s->ode.jumped, err);
+    g->t_rhs += gs_comp_steps_rhs_seconds(s->cs) - before;
+    if (rc && gs_comp_steps_bad_rate(s->cs, &g->bad_t, &g->bad_index)) g->bad = 1;
+    return rc;
+  }
   if (!s->local) return s->it->type->advance(s->it->self, &s->ode, t, t_out, Y, err);
   gs_dist_pack(s->local, Y, s->yl);
   int rc = s->it->type->advance(s->it->self, &s->ode, t, t_out, s->yl, err);
@@ -235,6 +245,7 @@ static int stepper_advance(stepper_t *s, double *t, double t_out, double *Y, gs_
 }
 
 static void stepper_free(stepper_t *s) {
+  gs_comp_steps_free(s->cs);
   if (s->local) gs_integrator_free(&s->own);
   free(s->yl);
   free(s->scale);
@@ -258,7 +269,7 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
   /* the vectorised test, and the search for the culprit only when it fails
    * (isfinite and a libm fmax call per value: ~2-3 µs more per output time
    * of the seed-000 example, rank 0's work under MPI) */
-  const int finite = all_finite(Y, m->nstate);
+  const int finite = gs_all_finite(Y, m->nstate);
   for (size_t i = 0; !finite && i < m->nstate; i++)
     if (!isfinite(Y[i])) {
       size_t j = i < m->nnum ? i : (i - m->nnum) % m->nnum;
@@ -536,6 +547,17 @@ static void print_split_bounds(const gs_model *m, const double *mine, double tot
   fprintf(stderr, "\n");
 }
 
+/* --timings with per-compartment steps: each compartment's own steps. */
+static void print_compartment_steps(const gs_comp_steps *cs, size_t ncomp) {
+  fprintf(stderr, "  per-compartment steps (steps / rejected / evaluations):");
+  for (size_t comp = 0; comp < ncomp; comp++) {
+    gs_integrator_stats st;
+    gs_comp_steps_comp_stats(cs, comp, &st);
+    fprintf(stderr, "%s %ld/%ld/%ld", comp ? "," : "", st.steps, st.rejected, st.rhs_evals);
+  }
+  fprintf(stderr, "; largest coupling mismatch %.2g\n", gs_comp_steps_worst_coupling(cs));
+}
+
 static void print_timings(const gs_dist *d, const double *mine) {
   const size_t n = (size_t)d->size * PH_N;
   double *all = calloc(n, sizeof *all);
@@ -756,7 +778,8 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
       if (out_rc) rc = failed_at_output(out_rc, out_rc, &out_err, err);
     }
     phase[PH_OUTPUTS] += now_seconds() - outputs_start;
-    if (step.it && step.it->type) /* not after a failed rebuild */
+    if (step.cs) gs_comp_steps_stats(step.cs, &st);
+    else if (step.it && step.it->type) /* not after a failed rebuild */
       step.it->type->get_stats(step.it->self, &st);
     if (show) progress(c, t, t_end, &st, now_seconds() - start);
   }
@@ -793,7 +816,8 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   phase[PH_OUTPUTS] += guard.t_deferred + guard.t_held;
   if (opt && opt->timings) {
     print_timings(&dist, phase);
-    if (dist.size == 1) print_split_bounds(m, phase, now_seconds() - start);
+    if (dist.size == 1 && !step.cs) print_split_bounds(m, phase, now_seconds() - start);
+    if (step.cs) print_compartment_steps(step.cs, g->ncomp);
   }
   stepper_free(&step);
   gs_deferred_output_free(guard.deferred);
@@ -807,6 +831,8 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   rep.t_end = t;
   rep.stats = st;
   rep.rebalanced = guard.rebalanced;
+  rep.per_compartment = step.cs != NULL;
+  if (step.cs) rep.worst_coupling = gs_comp_steps_worst_coupling(step.cs);
   rep.wall_seconds = now_seconds() - start;
   if (yout && dist.size > 1 && !rc) gs_parallel_broadcast(Y, n); /* only rank 0's is whole */
   if (yout) memcpy(yout, Y, n * sizeof(double));

@@ -203,3 +203,10 @@ const gs_mech_type gs_mech_feed = {"feed", "particles fed into a compartment at 
 const gs_mech_type gs_mech_transfer = {
     "transfer", "flow to the next compartment at rate k N; out of the last as product",
     transfer_create, transfer_rhs, NULL, transfer_free, NULL, NULL};
+
+double gs_model_transfer_rate(const gs_model *m, size_t comp) {
+  double k = 0;
+  for (size_t i = 0; i < m->nmech; i++)
+    if (m->mech[i].type == &gs_mech_transfer) k += ((const transfer_t *)m->mech[i].self)->k[comp];
+  return k;
+}

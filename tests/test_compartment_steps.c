@@ -1,0 +1,252 @@
+/* Per-compartment time steps (solver.steps: per_compartment,
+ * src/pbm/compartment_steps.c).
+ *  1. The seed-000 example with its own steps in each compartment, checked
+ *     at every output time against the closed forms of test_seed000.c
+ *     (solids: tanks in series, V_n = F/k P(n, k t); sprayed liquid), scaled
+ *     by the steady state F/k (a compartment that still holds almost nothing
+ *     is resolved to atol, not to rtol of its own contents); the ledger of
+ *     every compartment; what each compartment discharged against what the
+ *     next received (exact but for round-off); no negative numbers; and
+ *     fewer compartment evaluations than with shared steps.
+ *  2. A nonlinear chain with rates that differ per compartment and a feed
+ *     that stops inside the run (a rate switch): per-compartment steps at
+ *     rtol 1e-9 against shared steps at rtol 1e-12, final states.
+ *  3. Case errors: a method other than rk, an unknown value. */
+#include <limits.h>
+#include <unistd.h>
+
+#include <gsl/gsl_sf_gamma.h>
+
+#include "pbm/compartment_steps.h"
+#include "pbm_testlib.h"
+
+#define K_TRANSFER (7.7551e-3 / 0.095)
+#define SPRAY_RATE 3.645833e-7
+#define SPRAY_START 10.0
+#define SHARED_SOLVER "solver: {method: rk, rtol: 1.0e-6, atol: 1.0}"
+
+static char *read_text(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  char *s = malloc((size_t)n + 1);
+  size_t got = fread(s, 1, (size_t)n, f);
+  s[got] = '\0';
+  fclose(f);
+  return s;
+}
+
+/* The example's text with its solver line replaced. */
+static char *example_with(const char *path, const char *solver) {
+  char *text = read_text(path);
+  CHECK(text != NULL);
+  if (!text) return NULL;
+  char *at = strstr(text, SHARED_SOLVER);
+  CHECK(at != NULL);
+  if (!at) {
+    free(text);
+    return NULL;
+  }
+  *at = '\0';
+  char *out = tl_fmt("%s%s%s", text, solver, at + strlen(SHARED_SOLVER));
+  free(text);
+  return out;
+}
+
+static double fed_rate(gs_case *c, int k) {
+  double *d = calloc(c->model.nstate, sizeof(double)), dl[64] = {0};
+  c->model.in_integrator = 0;
+  double r = 0;
+  for (size_t i = 0; i < c->model.nmech; i++)
+    if (!strcmp(c->model.mech[i].type->name, "feed")) {
+      c->model.mech[i].type->rhs(c->model.mech[i].self, &c->model, 1.0, c->y0, d, dl);
+      r = tl_ext(&c->model, dl, 0, k);
+    }
+  free(d);
+  return r;
+}
+
+static void test_example(void) {
+  const char *src = getenv("GRANSIM_SOURCE_DIR");
+  char path[1024];
+  snprintf(path, sizeof path, "%s/examples/corimix-continuous.yaml", src ? src : "..");
+  char *yaml = example_with(path, "solver: {method: rk, rtol: 1.0e-6, atol: 1.0, steps: per_compartment}");
+  if (!yaml) return;
+  /* the case file in a scratch folder, next to a link to the example's data */
+  char dir[] = "/tmp/gransim-csteps-XXXXXX", file[1100], data[1100], link[1100];
+  CHECK(mkdtemp(dir) != NULL);
+  snprintf(file, sizeof file, "%s/case.yaml", dir);
+  snprintf(link, sizeof link, "%s/data", dir);
+  snprintf(data, sizeof data, "%s/examples/data", src ? src : "..");
+  char abs[PATH_MAX];
+  CHECK(realpath(data, abs) != NULL && symlink(abs, link) == 0);
+  FILE *f = fopen(file, "w");
+  CHECK(f != NULL);
+  if (f) {
+    fputs(yaml, f);
+    fclose(f);
+  }
+  free(yaml);
+  gs_case c;
+  gs_error err = {0};
+  int loaded = gs_case_load(file, &c, &err);
+  unlink(file);
+  unlink(link);
+  rmdir(dir);
+  if (loaded) {
+    fprintf(stderr, "%s\n", err.msg);
+    check_failures++;
+    return;
+  }
+  CHECK(c.per_compartment == 1);
+  gs_model *m = &c.model;
+  const size_t ncomp = m->grid.ncomp, n = m->nstate + m->nledger;
+  const double F[2] = {fed_rate(&c, 0), fed_rate(&c, 1)};
+  gs_comp_steps *cs = NULL;
+  CHECK(gs_comp_steps_create(&c, gs_cfg_get(gs_cfg_root(c.cfg), "solver"), &cs, &err) == GS_OK);
+  double *y = malloc(n * sizeof(double)), t = c.t0, switched = NAN;
+  memcpy(y, c.y0, n * sizeof(double));
+  double worst_solid = 0, worst_liquid = 0, worst_ledger = 0, most_negative = 0;
+  for (size_t i = 1; cs && i < c.ntimes; i++) {
+    while (t < c.times[i]) {
+      const double sw = gs_model_next_switch(m, t), stop = fmin(c.times[i], sw);
+      const int jumped = t == switched;
+      m->switch_lo = t;
+      m->switch_hi = stop;
+      int rc = gs_comp_steps_advance(cs, &t, stop, y, jumped, &err);
+      m->switch_lo = 1;
+      m->switch_hi = 0;
+      if (t == sw) switched = t;
+      CHECK(rc == GS_OK);
+      if (rc) {
+        fprintf(stderr, "%s\n", err.msg);
+        goto done;
+      }
+    }
+    double ymax = 0;
+    for (size_t j = 0; j < m->nstate; j++) ymax = fmax(ymax, fabs(y[j]));
+    for (size_t j = 0; j < m->nstate; j++) most_negative = fmin(most_negative, y[j] / ymax);
+    const double *L = y + m->nstate;
+    for (int k = 0; k < m->nvol; k++) {
+      double scale = 0;
+      for (size_t comp = 0; comp < ncomp; comp++)
+        scale += fabs(gs_model_held(m, y, comp, k)) + fabs(tl_ext(m, L, comp, k));
+      for (size_t comp = 0; scale > 0 && comp < ncomp; comp++) {
+        double held = gs_model_held(m, y, comp, k);
+        double want = gs_model_held(m, c.y0, comp, k) + tl_ext(m, L, comp, k) - tl_lost(m, L, comp, k);
+        worst_ledger = fmax(worst_ledger, fabs(held - want) / scale);
+      }
+    }
+    for (size_t comp = 0; comp < ncomp; comp++) {
+      for (int k = 0; k < 2; k++) {
+        double want = F[k] / K_TRANSFER * gsl_sf_gamma_inc_P((double)comp + 1, K_TRANSFER * t);
+        worst_solid = fmax(worst_solid, fabs(gs_model_held(m, y, comp, k) - want) / (F[k] / K_TRANSFER));
+      }
+      if (t > SPRAY_START) {
+        double want = 0;
+        for (size_t j = 1; j <= comp + 1; j++)
+          want += SPRAY_RATE / K_TRANSFER * gsl_sf_gamma_inc_P((double)j, K_TRANSFER * (t - SPRAY_START));
+        worst_liquid = fmax(worst_liquid, fabs(gs_model_held(m, y, comp, 2) - want) / (SPRAY_RATE / K_TRANSFER));
+      }
+    }
+  }
+done:;
+  gs_integrator_stats st = {0}, one;
+  if (cs) gs_comp_steps_stats(cs, &st);
+  printf("example, per-compartment steps: %ld steps, %ld compartment evaluations (", st.steps, st.rhs_evals);
+  for (size_t comp = 0; cs && comp < ncomp; comp++) {
+    gs_comp_steps_comp_stats(cs, comp, &one);
+    printf("%s%ld", comp ? " " : "", one.rhs_evals);
+  }
+  printf(")\n  worst solid vs tanks in series %.3g, liquid %.3g (of F/k); ledger %.3g; coupling %.3g; "
+         "most negative %.3g\n",
+         worst_solid, worst_liquid, worst_ledger, cs ? gs_comp_steps_worst_coupling(cs) : -1.0,
+         most_negative);
+  CHECK(t == c.times[c.ntimes - 1]);
+  CHECK(worst_solid < 2e-8); /* measured 4.9e-10 */
+  CHECK(worst_liquid < 2e-8); /* measured 2.6e-10 */
+  CHECK(worst_ledger < 1e-10);
+  CHECK(cs && gs_comp_steps_worst_coupling(cs) < 1e-12);
+  CHECK(most_negative > -1e-9);
+  /* shared steps need 1 239 evaluations of all four compartments here */
+  CHECK(st.rhs_evals > 0 && st.rhs_evals < 0.8 * 4 * 1239);
+  gs_comp_steps_free(cs);
+  free(y);
+  gs_case_free(&c);
+}
+
+/* Three compartments, a feed into the first that stops at t = 2, constant
+ * kernel aggregation (nonlinear), transfer rates that differ per compartment. */
+static const char *chain_yaml =
+    "grid: {compartments: 3, axes: [{name: solid, type: geometric, min: 0.01, ratio: 1.5, cells: 16, zero_first: true}]}\n"
+    "initial: {type: gamma, number: 0.5, mean: [0.1], shape: [4]}\n"
+    "mechanisms:\n"
+    "  - {type: feed, compartment: 1, end: 2, distribution: {type: gamma, number: 3, mean: [0.05], shape: [6]}}\n"
+    "  - {type: aggregation, kernel: {type: constant, beta0: 0.8}}\n"
+    "  - {type: transfer, rate: [0.7, 1.9, 0.4]}\n"
+    "solver: {method: rk, %s}\n"
+    "output: {end: 5, count: 6}\n";
+
+static void test_chain(void) {
+  char *fine = tl_fmt(chain_yaml, "rtol: 1.0e-9, atol: 1.0e-14, steps: per_compartment");
+  char *ref = tl_fmt(chain_yaml, "rtol: 1.0e-12, atol: 1.0e-17");
+  gs_case a, b;
+  gs_run_report ra, rb;
+  double *ya = tl_build_run(fine, &a, &ra), *yb = tl_build_run(ref, &b, &rb);
+  if (ya && yb) {
+    const gs_model *m = &a.model;
+    double worst = 0;
+    for (size_t comp = 0; comp < 3; comp++) {
+      double big = 0;
+      for (size_t i = 0; i < m->grid.ncells; i++) big = fmax(big, fabs(yb[comp * m->grid.ncells + i]));
+      for (size_t i = 0; i < m->grid.ncells; i++)
+        worst = fmax(worst, fabs(ya[comp * m->grid.ncells + i] - yb[comp * m->grid.ncells + i]) / big);
+    }
+    printf("chain: per-compartment steps (rtol 1e-9) against shared (rtol 1e-12): worst %.3g of "
+           "each compartment's largest number; %ld compartment evaluations (the reference: %ld of "
+           "all 3); coupling %.3g, balance %.3g\n",
+           worst, ra.stats.rhs_evals, rb.stats.rhs_evals, ra.worst_coupling, ra.max_balance_error);
+    CHECK(ra.per_compartment == 1 && rb.per_compartment == 0);
+    CHECK(worst < 2e-8); /* measured 7.0e-9 (shared steps at rtol 1e-9: 2.9e-9) */
+    CHECK(ra.worst_coupling < 1e-12);
+    CHECK(ra.max_balance_error < 1e-12);
+    CHECK(ra.t_end == 5.0);
+  }
+  free(ya);
+  free(yb);
+  gs_case_free(&a);
+  gs_case_free(&b);
+  free(fine);
+  free(ref);
+}
+
+static void test_errors(void) {
+  const char *bad[][2] = {
+      {"method: euler, steps: per_compartment", "per_compartment steps need method rk"},
+      {"method: cvode, steps: per_compartment", "per_compartment steps need method rk"},
+      {"method: rk, steps: each", "steps"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+    char *yaml = tl_fmt("grid: {compartments: 2, axes: [{name: solid, type: linear, min: 0, max: 1, cells: 4}]}\n"
+                        "mechanisms:\n  - {type: transfer, rate: 1}\n"
+                        "solver: {%s}\noutput: {end: 1}\n",
+                        bad[i][0]);
+    gs_case c;
+    gs_error err;
+    int rc = tl_case_try(yaml, "t.yaml", &c, &err);
+    CHECK(rc == GS_EINPUT);
+    CHECK(strstr(err.msg, bad[i][1]) != NULL);
+    CHECK(strstr(err.msg, "t.yaml:4") != NULL);
+    if (!strstr(err.msg, bad[i][1])) fprintf(stderr, "message: %s\n", err.msg);
+    free(yaml);
+  }
+}
+
+int main(void) {
+  test_example();
+  test_chain();
+  test_errors();
+  TEST_EXIT();
+}
