@@ -134,6 +134,13 @@ struct gs_model {
    * add with gs_model_clock/gs_model_charge; the MPI rebalancing reads it to
    * follow the costs as the granulation front moves downstream. */
   double *comp_seconds;
+  /* Threads that evaluate different compartments at the same time
+   * (per-compartment steps, src/pbm/compartment_steps.c) each pass their own
+   * copy of the model, with its own view and slot in [0, nslots): mechanisms
+   * keep one set of scratch per slot (nslots = OpenMP's maximum threads when
+   * the model was built) and, given a slot, evaluate serially in it.  -1:
+   * no slot (one caller; a mechanism may split a compartment over a team). */
+  int slot, nslots;
 };
 
 /* Allocate an empty model around a grid (grid is moved in). */

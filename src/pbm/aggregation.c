@@ -44,6 +44,22 @@
 enum { CELL_AVERAGE = 0, FIXED_PIVOT = 1 };
 enum { WET_OFF = 0, WET_BOTH = 1, WET_EITHER = 2 };
 
+/* Per compartment, the choices made once per time value; one cache line
+ * each, as threads evaluating neighbouring compartments at once write them
+ * at every evaluation (per-compartment steps). */
+typedef struct {
+  _Alignas(64) double span_t; /* time of the state the spans were computed from */
+  double wet_t;               /* time of the wetness choice (NAN: none yet) */
+  size_t prange[2];           /* [lo, hi) of the cells in the spans */
+  int span_valid;             /* spans computed at least once */
+} comp_choice;
+
+/* Per slot, the cells of its summed arrays its last use wrote (one cache
+ * line each, for the same reason). */
+typedef struct {
+  _Alignas(64) size_t lo, hi;
+} dirty_range;
+
 typedef struct {
   gs_kernel kernel;
   int scheme;
@@ -60,21 +76,18 @@ typedef struct {
   double negligible;     /* cells holding less than this share of number and volume are skipped */
   size_t nrows;          /* rows along the last padded axis: n[0] * n[1] */
   size_t *span;          /* per compartment and row: [lo, hi) of the cells taking part */
-  int *span_valid;       /* per compartment: spans computed at least once */
-  double *span_t;        /* per compartment: time of the state they were computed from */
-  size_t *prange;        /* per compartment: [lo, hi) of the cells in the spans */
+  comp_choice *cs;       /* per compartment: when its spans and wetness were chosen */
   int nc;                /* carried quantities */
   double *pcar;          /* nc * ncells: load per particle in the compartment being evaluated */
   int wet, wet_liquid;   /* WET_*; carried index of the liquid */
   double wet_min;        /* liquid / solid volume ratio that makes a particle wet */
   double wet_ramp;       /* relative width of the switch (0: a step, as in seed 000) */
   double *wet_ok;        /* ncomp * ncells: wetness psi in [0, 1], chosen once per time value */
-  double *wet_t;         /* per compartment: time of that choice */
   double *masked;        /* ncells: numbers of the wet (or dry) cells for a pass */
   int nthreads;
   size_t work_len;
   double *work;          /* per thread: death, B, V[3], fp birth, row  */
-  size_t *dirty;         /* per thread: [lo, hi) of the cells its summed arrays may hold non-zero */
+  dirty_range *dirty;    /* per thread: [lo, hi) of the cells its summed arrays may hold non-zero */
 } agg_t;
 
 static size_t packed_offset(size_t a, size_t n) { return a * n - a * (a - 1) / 2; }
@@ -92,12 +105,9 @@ static void agg_free(void *self) {
   }
   free(A->table);
   free(A->span);
-  free(A->span_valid);
-  free(A->span_t);
-  free(A->prange);
+  free(A->cs);
   free(A->pcar);
   free(A->wet_ok);
-  free(A->wet_t);
   free(A->masked);
   free(A->work);
   free(A->dirty);
@@ -217,31 +227,29 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   if (!rc) rc = build_axis_maps(A, g, err);
   if (!rc) rc = build_kernel_table(A, limit_mb, err);
   if (!rc) {
-    A->nthreads = omp_get_max_threads();
+    A->nthreads = m->nslots > 0 ? m->nslots : 1;
     A->nc = m->ncarried;
-    const size_t nslot = (size_t)omp_get_max_threads();
+    const size_t nslot = (size_t)A->nthreads;
     A->pcar = gs_calloc(nslot * ((size_t)A->nc * A->ncells + 1), sizeof(double), err);
     A->wet_ok = gs_calloc(A->ncomp * A->ncells, sizeof(double), err);
-    A->wet_t = gs_calloc(A->ncomp, sizeof(double), err);
     A->masked = gs_calloc(nslot * A->ncells, sizeof(double), err);
-    if (!A->pcar || !A->wet_ok || !A->wet_t || !A->masked) rc = GS_ENOMEM;
-    for (size_t c = 0; !rc && c < A->ncomp; c++) A->wet_t[c] = NAN; /* not chosen yet */
+    A->cs = aligned_alloc(64, A->ncomp * sizeof(comp_choice));
+    if (!A->pcar || !A->wet_ok || !A->cs || !A->masked) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+    for (size_t c = 0; !rc && c < A->ncomp; c++)
+      A->cs[c] = (comp_choice){0.0, NAN, {0, 0}, 0}; /* nothing chosen yet */
     /* loads are computed only where pairs read them (carried_loads): a read
      * elsewhere would show as NaN, not as a load of another compartment */
     for (size_t i = 0; !rc && i < nslot * ((size_t)A->nc * A->ncells + 1); i++) A->pcar[i] = NAN;
     A->nrows = A->n[0] * A->n[1];
     A->span = gs_malloc(2 * A->nrows * A->ncomp * sizeof(size_t), err);
-    A->span_valid = gs_calloc(A->ncomp, sizeof(int), err);
-    A->span_t = gs_calloc(A->ncomp, sizeof(double), err);
-    A->prange = gs_calloc(2 * A->ncomp, sizeof(size_t), err);
-    if (!A->span || !A->span_valid || !A->span_t || !A->prange) rc = GS_ENOMEM;
+    if (!A->span) rc = GS_ENOMEM;
     A->work_len = (size_t)(7 + A->nc) * A->ncells + A->n[2];
     A->work = gs_malloc((size_t)A->nthreads * A->work_len * sizeof(double), err);
-    A->dirty = gs_malloc(2 * (size_t)A->nthreads * sizeof(size_t), err);
-    if (!A->work || !A->dirty) rc = GS_ENOMEM;
+    A->dirty = aligned_alloc(64, (size_t)A->nthreads * sizeof(dirty_range));
+    if (!A->work || !A->dirty) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
     for (int t = 0; !rc && t < A->nthreads; t++) { /* all of it, the first time */
-      A->dirty[2 * t] = 0;
-      A->dirty[2 * t + 1] = A->ncells;
+      A->dirty[t].lo = 0;
+      A->dirty[t].hi = A->ncells;
     }
   }
   if (rc) {
@@ -273,17 +281,17 @@ static size_t summed_len(const agg_t *A) { return summed_arrays(A) * A->ncells; 
 /* Zero the cells of thread tid's summed arrays that its last use wrote. */
 static void clear_dirty(const agg_t *A, int tid) {
   double *w = A->work + (size_t)tid * A->work_len;
-  const size_t lo = A->dirty[2 * tid], hi = A->dirty[2 * tid + 1];
+  const size_t lo = A->dirty[tid].lo, hi = A->dirty[tid].hi;
   if (lo < hi)
     for (size_t k = 0; k < summed_arrays(A); k++) memset(w + k * A->ncells + lo, 0, (hi - lo) * sizeof(double));
-  A->dirty[2 * tid] = A->ncells;
-  A->dirty[2 * tid + 1] = 0;
+  A->dirty[tid].lo = A->ncells;
+  A->dirty[tid].hi = 0;
 }
 
 /* Thread tid's summed arrays are written in [lo, hi) now. */
 static void mark_dirty(const agg_t *A, int tid, size_t lo, size_t hi) {
-  if (lo < A->dirty[2 * tid]) A->dirty[2 * tid] = lo;
-  if (hi > A->dirty[2 * tid + 1]) A->dirty[2 * tid + 1] = hi;
+  if (lo < A->dirty[tid].lo) A->dirty[tid].lo = lo;
+  if (hi > A->dirty[tid].hi) A->dirty[tid].hi = hi;
 }
 
 static acc_t thread_acc(const agg_t *A, int tid) {
@@ -522,9 +530,9 @@ static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
       last = r * n2 + hi;
     }
   }
-  A->prange[2 * comp] = first;
-  A->prange[2 * comp + 1] = last;
-  A->span_valid[comp] = 1;
+  A->cs[comp].prange[0] = first;
+  A->cs[comp].prange[1] = last;
+  A->cs[comp].span_valid = 1;
 }
 
 /* Choose the cells taking part in compartment comp's pair loop for the
@@ -533,10 +541,10 @@ static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
  * difference quotients, whose perturbed state has tolerance-sized noise in
  * every cell), so that Newton iterations see one smooth right-hand side. */
 static void choose_cells(agg_t *A, size_t comp, double t, const double *N, const gs_model *m) {
-  int keep = A->span_valid[comp] && (m->hold || (m->in_integrator && t == A->span_t[comp]));
+  int keep = A->cs[comp].span_valid && (m->hold || (m->in_integrator && t == A->cs[comp].span_t));
   if (!keep) {
     find_spans(A, comp, N, A->negligible > 0 ? m->noise_floor : 0.0);
-    A->span_t[comp] = t;
+    A->cs[comp].span_t = t;
   }
 }
 
@@ -630,7 +638,7 @@ static evaluator evaluator_for(const agg_t *A, int slot) {
  * grid's population sits in a band. */
 static void carried_loads(const agg_t *A, const gs_model *m, size_t comp, const double *y,
                           double *pcar) {
-  const size_t lo = A->prange[2 * comp], hi = A->prange[2 * comp + 1];
+  const size_t lo = A->cs[comp].prange[0], hi = A->cs[comp].prange[1];
   const double *N = gs_model_numbers_c(m, y, comp);
   for (int q = 0; q < A->nc; q++) {
     const double *Q = gs_model_carried_c(m, y, comp, q);
@@ -648,14 +656,14 @@ static void carried_loads(const agg_t *A, const gs_model *m, size_t comp, const 
 static const double *wet_cells(agg_t *A, const gs_model *m, size_t comp, double t,
                                const double *y) {
   double *psi = A->wet_ok + comp * A->ncells;
-  if (m->hold || (m->in_integrator && t == A->wet_t[comp])) return psi;
+  if (m->hold || (m->in_integrator && t == A->cs[comp].wet_t)) return psi;
   const double *N = gs_model_numbers_c(m, y, comp), *L = gs_model_carried_c(m, y, comp, A->wet_liquid);
   const double lo = A->wet_min * (1 - 0.5 * A->wet_ramp), hi = A->wet_min * (1 + 0.5 * A->wet_ramp);
   for (size_t c = 0; c < A->ncells; c++) {
     double content = N[c] > 0 ? L[c] / (N[c] * m->grid.volume[c]) : 0.0;
     psi[c] = content >= hi ? 1.0 : content < lo ? 0.0 : (content - lo) / (hi - lo);
   }
-  A->wet_t[comp] = t;
+  A->cs[comp].wet_t = t;
   return psi;
 }
 
@@ -741,7 +749,10 @@ static void agg_rates(agg_t *A, const gs_model *m, double t, const double *y, do
    * block, so that moving compartments between ranks never switches a
    * compartment between this path (its sums in one thread, as in one
    * process) and the shared pair loop (sums added in another order). */
-  if (A->ncomp > 1 && A->nthreads > 1 && gs_threads_for(A->ncells * A->ncomp, 4096) > 1) {
+  if (m->slot >= 0) { /* one of several callers, each on its own compartments */
+    for (size_t comp = lo; comp < hi; comp++)
+      compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, m->slot);
+  } else if (A->ncomp > 1 && A->nthreads > 1 && gs_threads_for(A->ncells * A->ncomp, 4096) > 1) {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(A->nthreads)
     for (size_t comp = lo; comp < hi; comp++)
       compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, omp_get_thread_num());

@@ -47,9 +47,9 @@ typedef struct {
   size_t *first;        /* ncells+1: packets of parent k are [first[k], first[k+1]) */
   packet_t *pk;
   double *excess;       /* FP: volume removed by clamping (lever.h), per parent and axis */
-  double *births, *vol; /* CA workspace: ncells and dim*ncells */
+  double *births, *vol; /* CA workspace per slot (gs_model.slot): ncells and dim*ncells */
   int nc;               /* carried quantities */
-  double *cbirth;       /* CA workspace: nc*ncells pooled loads */
+  double *cbirth;       /* CA workspace per slot: nc*ncells pooled loads */
 } brk_t;
 
 static void brk_free(void *self) {
@@ -188,10 +188,11 @@ static int brk_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   B->ncomp = g->ncomp;
   if (!rc) {
     B->rate = gs_malloc(g->ncells * sizeof(double), err);
-    B->births = gs_malloc(g->ncells * sizeof(double), err);
-    B->vol = gs_malloc(g->ncells * (size_t)g->dim * sizeof(double), err);
+    const size_t nslot = m->nslots > 0 ? (size_t)m->nslots : 1;
+    B->births = gs_malloc(nslot * g->ncells * sizeof(double), err);
+    B->vol = gs_malloc(nslot * g->ncells * (size_t)g->dim * sizeof(double), err);
     B->nc = m->ncarried;
-    B->cbirth = gs_calloc((size_t)B->nc * g->ncells + 1, sizeof(double), err);
+    B->cbirth = gs_calloc(nslot * ((size_t)B->nc * g->ncells + 1), sizeof(double), err);
     if (!B->rate || !B->births || !B->vol || !B->cbirth) rc = GS_ENOMEM;
   }
   for (size_t k = 0; !rc && k < g->ncells; k++) {
@@ -213,6 +214,10 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
                       double *birth, double *death) {
   const gs_grid *g = &m->grid;
   const int dim = B->dim;
+  /* this caller's workspace (several may evaluate compartments at once) */
+  const size_t slot = m->slot > 0 ? (size_t)m->slot : 0;
+  double *births = B->births + slot * B->ncells, *vol = B->vol + slot * B->ncells * (size_t)dim;
+  double *cbirth = B->cbirth + slot * ((size_t)B->nc * B->ncells + 1);
   for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
     const double start = gs_model_clock(m);
     const double *N = gs_model_numbers_c(m, y, comp);
@@ -220,9 +225,9 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
     double *lost = dledger ? gs_model_ledger(m, dledger, comp) + m->nvol : NULL;
     double born = 0, dead = 0, excess[GS_MAX_DIM] = {0};
     if (B->scheme == CELL_AVERAGE) {
-      memset(B->births, 0, B->ncells * sizeof(double));
-      memset(B->vol, 0, B->ncells * (size_t)dim * sizeof(double));
-      memset(B->cbirth, 0, (size_t)B->nc * B->ncells * sizeof(double));
+      memset(births, 0, B->ncells * sizeof(double));
+      memset(vol, 0, B->ncells * (size_t)dim * sizeof(double));
+      memset(cbirth, 0, (size_t)B->nc * B->ncells * sizeof(double));
     }
     double *qdst[GS_MAX_CARRIED] = {NULL, NULL};
     for (int q = 0; d && q < B->nc; q++) qdst[q] = gs_model_carried(m, dydt, comp, q);
@@ -243,19 +248,19 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
           born += r * pk->count;
           continue;
         }
-        B->births[pk->cell] += r * pk->count;
-        for (int q = 0; q < dim; q++) B->vol[pk->cell * (size_t)dim + (size_t)q] += r * pk->vol[q];
-        for (int q = 0; q < B->nc; q++) B->cbirth[(size_t)q * B->ncells + pk->cell] += r * pk->share * load[q];
+        births[pk->cell] += r * pk->count;
+        for (int q = 0; q < dim; q++) vol[pk->cell * (size_t)dim + (size_t)q] += r * pk->vol[q];
+        for (int q = 0; q < B->nc; q++) cbirth[(size_t)q * B->ncells + pk->cell] += r * pk->share * load[q];
       }
       if (B->scheme == FIXED_PIVOT)
         for (int q = 0; q < dim; q++) excess[q] += r * B->excess[k * (size_t)dim + (size_t)q];
     }
     for (size_t t = 0; B->scheme == CELL_AVERAGE && t < B->ncells; t++) {
-      double b = B->births[t];
+      double b = births[t];
       if (b == 0.0) continue;
       double vbar[GS_MAX_DIM], qtot[GS_MAX_CARRIED];
-      for (int q = 0; q < dim; q++) vbar[q] = B->vol[t * (size_t)dim + (size_t)q] / b;
-      for (int q = 0; q < B->nc; q++) qtot[q] = B->cbirth[(size_t)q * B->ncells + t];
+      for (int q = 0; q < dim; q++) vbar[q] = vol[t * (size_t)dim + (size_t)q] / b;
+      for (int q = 0; q < B->nc; q++) qtot[q] = cbirth[(size_t)q * B->ncells + t];
       if (d) gs_lever_place_carried(g, t, vbar, b, d, excess, B->nc, qtot, qdst);
       born += b;
     }

@@ -105,7 +105,10 @@ static void consolidation_compartment(const carried_t *C, const gs_model *m, con
   const double *G = gs_model_carried_c(m, y, comp, C->gas);
   double *dG = gs_model_carried(m, dydt, comp, C->gas), lost = 0;
   for (size_t c = 0; c < g->ncells; c++) {
-    if (!(N[c] > 0) || !(G[c] > 0)) continue;
+    /* cells at the solver's noise floor hold no particles to speak of, and
+     * their loads per particle (G / N, with N noise) are meaningless: the
+     * rate, quadratic in the gas per particle, would be too */
+    if (!(N[c] > m->noise_floor) || !(G[c] > 0)) continue;
     double s = g->volume[c], l = L[c] / N[c], gas = G[c] / N[c];
     double excess = gas + l - target * s;
     if (!(excess > 0) || !(s > 0)) continue;

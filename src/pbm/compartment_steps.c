@@ -1,37 +1,100 @@
-/* Per-compartment time steps: see compartment_steps.h for the scheme and why
- * it conserves exactly. */
+/* Per-compartment time steps: see compartment_steps.h for the scheme, why it
+ * conserves exactly, and how threads share the compartments. */
 #include "pbm/compartment_steps.h"
 
+#include <float.h>
 #include <math.h>
+#include <omp.h>
+#include <sched.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdio.h>
 #include <time.h>
 
 #include "gransim/pbm.h"
 #include "pbm/all_finite.h"
+#include "pbm/distributed.h"
 
 /* A stretch's accepted step ends of one compartment: times, the integral Z
  * of its numbers and carried totals since the stretch began, those numbers
- * and totals N (Z's slope) and their rates f (Z's second derivative). */
+ * and totals N (Z's slope) and their rates f (Z's second derivative).  Kept
+ * in blocks that never move, so that the next compartment reads the nodes
+ * published so far while this one appends. */
+#define NODE_MAX 32768          /* steps one compartment may take in one stretch */
+#define NODE_BLOCK_BYTES 131072 /* nodes per block: as many as fit, 1 to 16 */
+#define DIR_SIZE 512 /* block pointers per directory page */
+#define DIR_PAGES (NODE_MAX / DIR_SIZE)
 typedef struct {
-  size_t count, cap;
-  double *t, *z, *n, *f; /* cap, then cap * nflow each */
+  size_t count;  /* nodes written */
+  size_t per;    /* nodes per block */
+  /* blocks of per * (1 + 3 nflow) doubles, through pages of DIR_SIZE
+   * pointers made as needed (a reader only looks up published nodes, whose
+   * pages and blocks exist) */
+  double **dir[DIR_PAGES];
+  /* nodes the next compartment may read, and whether the stretch is over
+   * (or failed): on a cache line of their own, which the next compartment's
+   * thread reads while this one works */
+  _Alignas(64) atomic_size_t published;
+  atomic_int done;
+  _Alignas(64) int start_f_known; /* the first node has its rates */
 } node_list;
+
+/* Stretches a compartment may run ahead of the next one, at most (its
+ * records, and the full states waiting for their output, are kept in rings
+ * this deep; shallower when the records of many large compartments would
+ * take too much memory, gs_comp_steps.depth). */
+#define RING 4
+#define RING_BYTES ((size_t)64 << 20)
+
+static double *node_at(const node_list *L, size_t nflow, size_t j) {
+  const size_t b = j / L->per;
+  return L->dir[b / DIR_SIZE][b % DIR_SIZE] + (j % L->per) * (1 + 3 * nflow);
+}
+/* a node: t, then z, n, f (nflow each) */
+static double node_t(const node_list *L, size_t nflow, size_t j) { return *node_at(L, nflow, j); }
+
+struct worker;
 
 typedef struct {
   struct gs_comp_steps *s;
+  struct worker *w; /* the thread advancing it */
   size_t comp;
   int has_next; /* feeds the next compartment: integrates Z and keeps a record */
   size_t n;     /* local length */
   double *y, *scale;
-  double t; /* the integrator's time during an advance */
+  double t;            /* the integrator's time during an advance */
   double try_s, try_h; /* the step it tries */
   double *end_f;       /* rates at the end of the last stretch (has_next) */
   int end_f_valid;
   gs_integrator it;
   gs_ode ode;
+  node_list rec[RING];  /* per stretch k, in rec[k % s->depth] */
+  node_list *cur;       /* the record of the stretch being advanced */
+  double sent[RING][GS_MAX_VOL]; /* what it discharged in a stretch */
 } comp_t;
+
+/* One thread's model view and scratch. */
+typedef struct worker {
+  _Alignas(64) struct gs_comp_steps *s; /* threads write their own: a cache line apart */
+  gs_model m; /* a copy: its own view of one compartment, and slot */
+  /* the step being tried by its compartment: Z_H and its first two
+   * derivatives at both ends, and the inflow state P' */
+  double try_s, try_h;
+  double *p0, *p1, *d0, *d1, *s0, *s1, *halo;
+  const node_list *up; /* the record of the compartment before, or NULL */
+  size_t up_count;  /* nodes of up's record read for the step tried */
+  const double *last_f; /* the last evaluation's rates (the integrator's buffer) */
+  double last_t, stretch_t0; /* its time; the start of the stretch advanced */
+  double *scratch, *ytmp; /* rates and a state outside the integrator */
+  /* seconds: in the rates, waiting for the compartment before, with no
+   * task to take, in tasks (all of it), passing stretches to done_fn */
+  double t_rhs, t_wait, t_idle, t_busy, t_done;
+  int bad, off_stretch;
+  double bad_t;
+  size_t bad_index;
+} worker_t;
 
 struct gs_comp_steps {
   gs_model *m;
@@ -40,25 +103,42 @@ struct gs_comp_steps {
   size_t off_ledger, off_recv, off_z; /* in a compartment's local vector */
   double *k;                          /* transfer rate out of each compartment */
   comp_t *comp;
-  node_list nodes[2];  /* compartment c records into nodes[c % 2] */
-  const node_list *up; /* the record the compartment being advanced reads */
-  node_list *rec;      /* the record it writes (NULL for the last) */
-  /* the step being tried by the compartment being advanced: [try_s, try_s +
-   * try_h], Z_H and its first two derivatives at both ends, and the inflow
-   * state P' */
-  double try_s, try_h;
-  double *p0, *p1, *d0, *d1, *s0, *s1, *halo;
-  /* the rates of the last evaluation (numbers and totals) and its time; the
-   * stretch's start, and whether its first node has its rates yet */
-  double *last_f, last_t, stretch_t0;
-  double *scratch, *ytmp; /* rates and a state outside the integrator (longest local length) */
-  int start_f_known;
-  double sent[GS_MAX_VOL]; /* what the last compartment advanced discharged in the stretch */
-  double worst_coupling;
-  double t_rhs;
-  int bad, off_stretch;
+  worker_t *workers;
+  int nworkers;
+  /* the run of gs_comp_steps_run in progress: its stretches and the full
+   * states at their ends (RING of them, until written) */
+  const gs_stretch *st;
+  size_t nst;
+  double *ring[RING];
+  size_t depth; /* of the rings in use, 2 to RING */
+  gs_stretch_done_fn done_fn;
+  void *done_ctx;
+  /* the schedule, under `lock`: per compartment the first stretch it has
+   * not finished and whether a thread advances it; per ring slot the
+   * compartments done with its stretch; the stretches passed to done_fn */
+  omp_lock_t lock, out_lock;
+  atomic_int outputs_ready; /* a stretch is complete and not yet passed to done_fn */
+  size_t *next_k, outputs_done;
+  int *running;
+  /* each thread's block of compartments [home[w], home[w + 1]), split
+   * (gs_dist_balanced_split) by the seconds each compartment's tasks took,
+   * the thread that writes the outputs carrying their seconds too: a thread
+   * keeps its compartments' data in its own cache, and a compartment is
+   * followed, not waited for, by the next block's thread */
+  size_t *home;
+  double *cost, t_out;
+  size_t complete[RING];
+  atomic_int abort; /* something failed: the others stop */
+  int locks;        /* lock and out_lock initialised */
+  int bad_rate;     /* the failure was a rate that was not finite, at: */
   double bad_t;
   size_t bad_index;
+  /* the first failure (earliest stretch, then compartment; ncomp for
+   * done_fn) */
+  int fail_rc;
+  size_t fail_k, fail_c;
+  gs_error fail_err;
+  double worst_coupling;
 };
 
 static double now_seconds(void) {
@@ -67,7 +147,6 @@ static double now_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* Append a node (z NULL: zero; f NULL: filled in later). */
 /* The quintic Hermite basis on [0, 1] (b[0]) and its first (b[1]) and
  * second (b[2]) derivatives at u, in the order: value at 0, slope at 0,
  * second derivative at 0, second derivative at 1, slope at 1, value at 1. */
@@ -93,60 +172,54 @@ static void quintic_basis(double u, double b[3][6]) {
   b[2][5] = 60 * u - 180 * u2 + 120 * u3;
 }
 
+/* Append a node (z NULL: zero; f NULL: filled in later). */
 static int nodes_push(node_list *L, size_t nflow, double t, const double *z, const double *n,
                       const double *f) {
-  if (L->count == L->cap) {
-    size_t cap = L->cap ? 2 * L->cap : 64;
-    double *tt = realloc(L->t, cap * sizeof(double));
-    if (!tt) return GS_ENOMEM;
-    L->t = tt;
-    double **arrays[] = {&L->z, &L->n, &L->f};
-    for (int i = 0; i < 3; i++) {
-      double *grown = realloc(*arrays[i], cap * nflow * sizeof(double));
-      if (!grown) return GS_ENOMEM;
-      *arrays[i] = grown;
-    }
-    L->cap = cap;
-  }
-  const size_t at = L->count * nflow;
-  L->t[L->count] = t;
-  if (z) memcpy(L->z + at, z, nflow * sizeof(double));
-  else memset(L->z + at, 0, nflow * sizeof(double));
-  memcpy(L->n + at, n, nflow * sizeof(double));
-  if (f) memcpy(L->f + at, f, nflow * sizeof(double));
+  const size_t b = L->count / L->per;
+  if (L->count >= NODE_MAX) return GS_ENUMERIC;
+  double ***page = &L->dir[b / DIR_SIZE];
+  if (!*page && !(*page = calloc(DIR_SIZE, sizeof(double *)))) return GS_ENOMEM;
+  double **block = &(*page)[b % DIR_SIZE];
+  if (!*block && !(*block = malloc(L->per * (1 + 3 * nflow) * sizeof(double)))) return GS_ENOMEM;
+  double *at = node_at(L, nflow, L->count);
+  at[0] = t;
+  if (z) memcpy(at + 1, z, nflow * sizeof(double));
+  else memset(at + 1, 0, nflow * sizeof(double));
+  memcpy(at + 1 + nflow, n, nflow * sizeof(double));
+  if (f) memcpy(at + 1 + 2 * nflow, f, nflow * sizeof(double));
   L->count++;
   return GS_OK;
 }
 
-/* Z_H and its first two derivatives at t: node values where t is a node (or
- * outside the record), else the quintic Hermite piece through the two nodes
- * around t (values, slopes and second derivatives at both: as accurate as a
- * fifth-order step). */
-static void nodes_eval(const node_list *L, size_t nflow, double t, double *z, double *dz,
-                       double *d2z) {
-  const size_t last = L->count - 1;
+/* Z_H and its first two derivatives at t, from the first count nodes: node
+ * values where t is a node (or outside them), else the quintic Hermite piece
+ * through the two nodes around t (values, slopes and second derivatives at
+ * both: as accurate as a fifth-order step). */
+static void nodes_eval(const node_list *L, size_t count, size_t nflow, double t, double *z,
+                       double *dz, double *d2z) {
+  const size_t last = count - 1;
   size_t j = 0;
-  if (t >= L->t[last]) j = last;
-  else if (t > L->t[0]) {
+  if (t >= node_t(L, nflow, last)) j = last;
+  else if (t > node_t(L, nflow, 0)) {
     size_t lo = 0, hi = last; /* t[lo] <= t < t[hi] */
     while (hi - lo > 1) {
       size_t mid = lo + (hi - lo) / 2;
-      if (L->t[mid] <= t) lo = mid;
+      if (node_t(L, nflow, mid) <= t) lo = mid;
       else hi = mid;
     }
     j = lo;
-    if (t != L->t[lo]) {
-      const double H = L->t[lo + 1] - L->t[lo], u = (t - L->t[lo]) / H;
-      double b[3][6]; /* the basis and its first two derivatives in u */
-      quintic_basis(u, b);
-      const double *za = L->z + lo * nflow, *zb = za + nflow;
-      const double *na = L->n + lo * nflow, *nb = na + nflow;
-      const double *fa = L->f + lo * nflow, *fb = fa + nflow;
+    const double *a = node_at(L, nflow, lo), *b = node_at(L, nflow, lo + 1);
+    if (t != a[0]) {
+      const double H = b[0] - a[0], u = (t - a[0]) / H;
+      double bs[3][6]; /* the basis and its first two derivatives in u */
+      quintic_basis(u, bs);
+      const double *za = a + 1, *na = za + nflow, *fa = na + nflow;
+      const double *zb = b + 1, *nb = zb + nflow, *fb = nb + nflow;
       for (int k = 0; k < 3; k++) {
         /* d^k/dt^k = H^-k d^k/du^k; slopes carry H, second derivatives H^2 */
         const double sc = k == 0 ? 1.0 : k == 1 ? 1.0 / H : 1.0 / (H * H);
-        const double c0 = sc * b[k][0], c1 = sc * H * b[k][1], c2 = sc * H * H * b[k][2];
-        const double c3 = sc * H * H * b[k][3], c4 = sc * H * b[k][4], c5 = sc * b[k][5];
+        const double c0 = sc * bs[k][0], c1 = sc * H * bs[k][1], c2 = sc * H * H * bs[k][2];
+        const double c3 = sc * H * H * bs[k][3], c4 = sc * H * bs[k][4], c5 = sc * bs[k][5];
         double *out = k == 0 ? z : k == 1 ? dz : d2z;
         for (size_t i = 0; i < nflow; i++)
           out[i] = c0 * za[i] + c1 * na[i] + c2 * fa[i] + c3 * fb[i] + c4 * nb[i] + c5 * zb[i];
@@ -154,42 +227,76 @@ static void nodes_eval(const node_list *L, size_t nflow, double t, double *z, do
       return;
     }
   }
-  memcpy(z, L->z + j * nflow, nflow * sizeof(double));
-  memcpy(dz, L->n + j * nflow, nflow * sizeof(double));
-  memcpy(d2z, L->f + j * nflow, nflow * sizeof(double));
+  const double *at = node_at(L, nflow, j);
+  memcpy(z, at + 1, nflow * sizeof(double));
+  memcpy(dz, at + 1 + nflow, nflow * sizeof(double));
+  memcpy(d2z, at + 1 + 2 * nflow, nflow * sizeof(double));
+}
+
+/* Wait until the compartment before has published nodes up to t (or is
+ * done); returns how many may be read, 0 when the run is aborted. */
+static void outputs(struct gs_comp_steps *s);
+
+static size_t wait_for(struct gs_comp_steps *s, const node_list *up, double t) {
+  for (unsigned spins = 0;; spins++) {
+    if (atomic_load_explicit(&s->abort, memory_order_acquire)) return 0;
+    const size_t count = atomic_load_explicit(&up->published, memory_order_acquire);
+    if (count && node_t(up, s->nflow, count - 1) >= t) return count;
+    if (atomic_load_explicit(&up->done, memory_order_acquire))
+      return atomic_load_explicit(&up->published, memory_order_acquire);
+    /* rather than wait, write the stretches every compartment is done with */
+    if (spins % 64 == 63 && s->nworkers > 1 && s->outputs_ready && omp_test_lock(&s->out_lock)) {
+      omp_unset_lock(&s->out_lock);
+      outputs(s);
+    }
+    if (spins > 1000) sched_yield(); /* more threads than free cores */
+#if defined(__x86_64__) || defined(__i386__)
+    else __builtin_ia32_pause();
+#endif
+  }
 }
 
 /* gs_ode.trying: the step about to be tried; for a compartment fed by
- * another, Z_H and its derivatives at the step's ends. */
+ * another, Z_H and its derivatives at the step's ends (once the compartment
+ * before has got that far). */
 static void comp_trying(void *ctx, double t0, double h) {
   comp_t *cp = ctx;
-  struct gs_comp_steps *s = cp->s;
+  worker_t *w = cp->w;
+  const size_t nflow = cp->s->nflow;
   cp->try_s = t0;
   cp->try_h = h;
   if (!cp->comp) return;
-  s->try_s = t0;
-  s->try_h = h;
-  nodes_eval(s->up, s->nflow, t0, s->p0, s->d0, s->s0);
-  nodes_eval(s->up, s->nflow, t0 + h, s->p1, s->d1, s->s1);
+  w->try_s = t0;
+  w->try_h = h;
+  const double wait_start = now_seconds();
+  w->up_count = wait_for(cp->s, w->up, t0 + h);
+  w->t_wait += now_seconds() - wait_start;
+  if (!w->up_count) return; /* aborted: comp_rhs fails */
+  nodes_eval(w->up, w->up_count, nflow, t0, w->p0, w->d0, w->s0);
+  nodes_eval(w->up, w->up_count, nflow, t0 + h, w->p1, w->d1, w->s1);
 }
 
 /* The upstream numbers and totals whose flow k P'(t) enters at t: P' of the
  * quintic Hermite P through Z_H's values and first two derivatives at the
  * ends of the step tried.  P' is a quartic: the weights of a Runge-Kutta
- * step of order >= 5 (rkf45, rkck, rk8pd) integrate it exactly.  0 when t
- * lies outside the step tried (an integrator that does not say which step
- * it tries). */
-static int inflow_state(struct gs_comp_steps *s, double t) {
-  const double h = s->try_h, th = h > 0 ? (t - s->try_s) / h : 0.0;
-  if (!(th >= -1e-9 && th <= 1 + 1e-9)) return 0;
+ * step of order >= 5 (rkf45, rkck, rk8pd) integrate it exactly, and only
+ * its first term has a non-zero integral, (P1 - P0) / h.  0 when t lies
+ * outside the step tried (an integrator that does not say which step it
+ * tries). */
+static int inflow_state(worker_t *w, double t) {
+  const double h = w->try_h, th = h > 0 ? (t - w->try_s) / h : 0.0;
+  /* stage times carry the round-off of t + c h: a few ulps of t, which a
+   * short step late in a run makes a sizeable fraction of h */
+  const double slack = 1e-9 + (h > 0 ? 8 * DBL_EPSILON * fabs(t) / h : 0.0);
+  if (!(th >= -slack && th <= 1 + slack)) return 0;
   double b[3][6];
   quintic_basis(th, b);
   /* P' = (P1 - P0) b5' / h + D0 b1' + D1 b4' + h (S0 b2' + S1 b3'), b0' = -b5' */
   const double a = h > 0 ? b[1][5] / h : 0.0, c1 = b[1][1], c4 = b[1][4], c2 = h * b[1][2],
                c3 = h * b[1][3];
-  const double *p0 = s->p0, *p1 = s->p1, *d0 = s->d0, *d1 = s->d1, *s0 = s->s0, *s1 = s->s1;
-  double *q = s->halo;
-  for (size_t i = 0; i < s->nflow; i++)
+  const double *p0 = w->p0, *p1 = w->p1, *d0 = w->d0, *d1 = w->d1, *s0 = w->s0, *s1 = w->s1;
+  double *q = w->halo;
+  for (size_t i = 0; i < w->s->nflow; i++)
     q[i] = a * (p1[i] - p0[i]) + c1 * d0[i] + c4 * d1[i] + c2 * s0[i] + c3 * s1[i];
   return 1;
 }
@@ -210,7 +317,6 @@ static void volumes_of(const struct gs_comp_steps *s, const double *v, double *v
   }
 }
 
-
 /* Index in the full state of entry i of compartment comp's local vector
  * (the received volumes and Z map to its ledger). */
 static size_t full_index(const struct gs_comp_steps *s, size_t comp, size_t i) {
@@ -221,14 +327,21 @@ static size_t full_index(const struct gs_comp_steps *s, size_t comp, size_t i) {
   return m->nstate + comp * 2 * (size_t)s->nvol + (j < 2 * (size_t)s->nvol ? j : 0);
 }
 
+/* Publish the nodes written so far to the next compartment (the first only
+ * once its rates are known). */
+static void publish(node_list *L) {
+  if (L->start_f_known) atomic_store_explicit(&L->published, L->count, memory_order_release);
+}
+
 static int comp_rhs(void *ctx, double t, const double *y, double *f) {
   comp_t *cp = ctx;
+  worker_t *w = cp->w;
   struct gs_comp_steps *s = cp->s;
-  gs_model *m = s->m;
+  gs_model *m = &w->m;
   const double start = now_seconds();
-  if (cp->comp && !inflow_state(s, t)) {
-    s->off_stretch = 1;
-    s->bad_t = t;
+  if (cp->comp && (!w->up_count || !inflow_state(w, t))) {
+    w->off_stretch = w->up_count != 0; /* else aborted: another compartment failed */
+    w->bad_t = t;
     return 1;
   }
   m->in_integrator = 1;
@@ -236,61 +349,61 @@ static int comp_rhs(void *ctx, double t, const double *y, double *f) {
   m->in_integrator = 0;
   double *recv = f + s->off_recv;
   if (cp->comp) {
-    volumes_of(s, s->halo, recv);
+    volumes_of(s, w->halo, recv);
     for (int a = 0; a < s->nvol; a++) recv[a] *= s->k[cp->comp - 1];
   } else {
     memset(recv, 0, (size_t)s->nvol * sizeof(double));
   }
   if (cp->has_next) {
     memcpy(f + s->off_z, y, s->nflow * sizeof(double));
-    memcpy(s->last_f, f, s->nflow * sizeof(double));
-    s->last_t = t;
+    w->last_f = f; /* read at the step's end, before the integrator writes it again */
+    w->last_t = t;
     /* the first node's rates: the integrator's own evaluation at the start */
-    if (!s->start_f_known && t == s->stretch_t0 && s->rec->count == 1) {
-      memcpy(s->rec->f, f, s->nflow * sizeof(double));
-      s->start_f_known = 1;
+    node_list *L = cp->cur;
+    if (!L->start_f_known && t == w->stretch_t0 && L->count == 1) {
+      memcpy(node_at(L, s->nflow, 0) + 1 + 2 * s->nflow, f, s->nflow * sizeof(double));
+      L->start_f_known = 1;
+      publish(L);
     }
   }
-  s->t_rhs += now_seconds() - start;
+  w->t_rhs += now_seconds() - start;
   if (gs_all_finite(f, cp->n)) return 0;
   for (size_t i = 0; i < cp->n; i++)
     if (!isfinite(f[i])) {
-      s->bad = 1;
-      s->bad_t = t;
-      s->bad_index = full_index(s, cp->comp, i);
+      w->bad = 1;
+      w->bad_t = t;
+      w->bad_index = full_index(s, cp->comp, i);
       break;
     }
   return 1;
 }
 
-/* The rates of compartment cp at (t, y) into s->last_f, outside the
- * integrator's own evaluations (rarely needed: see comp_step_done). */
+/* The rates of compartment cp at (t, y) into its worker's last_f, outside
+ * the integrator's own evaluations (rarely needed: see comp_step_done). */
 static int extra_rates(comp_t *cp, double t, const double *y) {
-  struct gs_comp_steps *s = cp->s;
-  double *f = s->scratch;
-  int rc = comp_rhs(cp, t, y, f);
-  if (!rc) memcpy(s->last_f, f, s->nflow * sizeof(double));
-  return rc;
+  return comp_rhs(cp, t, y, cp->w->scratch);
 }
 
 /* The first node's rates, when the integrator did not evaluate them at the
  * stretch's start (GSL's evolve does after a reset and on its first step;
  * otherwise it reuses the last stretch's, end_f): evaluated here from the
  * node's numbers and totals, with the inflow at t0. */
-static int start_rates(comp_t *cp, double t0, gs_error *err) {
+static int start_rates(comp_t *cp, double t0) {
   struct gs_comp_steps *s = cp->s;
-  double *y = s->ytmp;
+  worker_t *w = cp->w;
+  double *y = w->ytmp, *node0 = node_at(cp->cur, s->nflow, 0);
   memset(y, 0, cp->n * sizeof(double));
-  memcpy(y, s->rec->n, s->nflow * sizeof(double));
+  memcpy(y, node0 + 1 + s->nflow, s->nflow * sizeof(double));
   if (cp->comp) {
-    s->try_s = t0;
-    s->try_h = 0; /* the inflow is then Z_H'(t0) */
-    nodes_eval(s->up, s->nflow, t0, s->p0, s->d0, s->s0);
+    w->try_s = t0;
+    w->try_h = 0; /* the inflow is then Z_H'(t0) */
+    w->up_count = wait_for(s, w->up, t0);
+    if (!w->up_count) return GS_ENUMERIC;
+    nodes_eval(w->up, w->up_count, s->nflow, t0, w->p0, w->d0, w->s0);
   }
-  if (extra_rates(cp, t0, y))
-    return gs_error_set(err, GS_ENUMERIC, "per-compartment steps: compartment %zu: rates not finite at t = %.9g", cp->comp + 1, t0);
-  memcpy(s->rec->f, s->last_f, s->nflow * sizeof(double));
-  s->start_f_known = 1;
+  if (extra_rates(cp, t0, y)) return GS_ENUMERIC;
+  memcpy(node0 + 1 + 2 * s->nflow, w->last_f, s->nflow * sizeof(double));
+  cp->cur->start_f_known = 1;
   return GS_OK;
 }
 
@@ -300,16 +413,18 @@ static int start_rates(comp_t *cp, double t0, gs_error *err) {
  * the next step reuses); otherwise they are evaluated here. */
 static int comp_step_done(void *ctx) {
   comp_t *cp = ctx;
-  struct gs_comp_steps *s = cp->s;
+  worker_t *w = cp->w;
   if (!cp->has_next) return 0;
-  if (s->last_t != cp->try_s + cp->try_h && extra_rates(cp, cp->t, cp->y)) {
-    s->bad = s->bad ? s->bad : 3;
+  if (w->last_t != cp->try_s + cp->try_h && extra_rates(cp, cp->t, cp->y)) {
+    w->bad = w->bad ? w->bad : 3;
     return 1;
   }
-  if (nodes_push(s->rec, s->nflow, cp->t, cp->y + s->off_z, cp->y, s->last_f)) {
-    s->bad = 2;
+  int rc = nodes_push(cp->cur, cp->s->nflow, cp->t, cp->y + cp->s->off_z, cp->y, w->last_f);
+  if (rc) {
+    w->bad = rc == GS_ENOMEM ? 2 : 4;
     return 1;
   }
+  publish(cp->cur);
   return 0;
 }
 
@@ -329,6 +444,17 @@ static void unpack(const struct gs_comp_steps *s, size_t comp, const double *y, 
   memcpy(Y + m->nstate + comp * nl, y + s->off_ledger, nl * sizeof(double));
 }
 
+static int worker_init(struct gs_comp_steps *s, worker_t *w, gs_error *err) {
+  w->s = s;
+  double **bufs[] = {&w->p0, &w->p1, &w->d0, &w->d1, &w->s0, &w->s1, &w->halo};
+  for (size_t i = 0; i < sizeof bufs / sizeof *bufs; i++)
+    if (!(*bufs[i] = gs_calloc(s->nflow, sizeof(double), err))) return GS_ENOMEM;
+  if (!(w->scratch = gs_calloc(s->off_z + s->nflow, sizeof(double), err)) ||
+      !(w->ytmp = gs_calloc(s->off_z + s->nflow, sizeof(double), err)))
+    return GS_ENOMEM;
+  return GS_OK;
+}
+
 int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, gs_error *err) {
   gs_model *m = &c->model;
   *out = NULL;
@@ -345,16 +471,37 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   s->off_recv = s->off_ledger + 2 * (size_t)s->nvol;
   s->off_z = s->off_recv + (size_t)s->nvol;
   *out = s;
+  /* threads: OpenMP's, at most one per compartment and per slot the
+   * mechanisms keep scratch for */
+  int nw = omp_get_max_threads();
+  if (nw > m->nslots) nw = m->nslots;
+  if ((size_t)nw > s->ncomp) nw = (int)s->ncomp;
+  s->nworkers = nw < 1 ? 1 : nw;
   s->k = gs_calloc(s->ncomp, sizeof(double), err);
   s->comp = gs_calloc(s->ncomp, sizeof(comp_t), err);
-  if (!s->k || !s->comp) return GS_ENOMEM;
-  double **bufs[] = {&s->p0, &s->p1, &s->d0, &s->d1, &s->s0, &s->s1, &s->halo, &s->last_f};
-  for (size_t i = 0; i < sizeof bufs / sizeof *bufs; i++)
-    if (!(*bufs[i] = gs_calloc(s->nflow, sizeof(double), err))) return GS_ENOMEM;
-  for (size_t comp = 0; comp < s->ncomp; comp++) s->k[comp] = gs_model_transfer_rate(m, comp);
-  if (!(s->scratch = gs_calloc(s->off_z + s->nflow, sizeof(double), err)) ||
-      !(s->ytmp = gs_calloc(s->off_z + s->nflow, sizeof(double), err)))
+  s->workers = gs_calloc((size_t)s->nworkers, sizeof(worker_t), err);
+  s->next_k = gs_calloc(s->ncomp, sizeof(size_t), err);
+  s->running = gs_calloc(s->ncomp, sizeof(int), err);
+  s->home = gs_calloc((size_t)s->nworkers + 1, sizeof(size_t), err);
+  s->cost = gs_calloc(s->ncomp + (size_t)s->nworkers, sizeof(double), err);
+  if (!s->k || !s->comp || !s->workers || !s->next_k || !s->running || !s->home || !s->cost)
     return GS_ENOMEM;
+  for (int r = 0; r <= s->nworkers; r++) s->home[r] = s->ncomp * (size_t)r / (size_t)s->nworkers;
+  for (int r = 0; r < RING; r++)
+    if (!(s->ring[r] = gs_calloc(c->ode.n, sizeof(double), err))) return GS_ENOMEM;
+  omp_init_lock(&s->lock);
+  omp_init_lock(&s->out_lock);
+  s->locks = 1;
+  for (int i = 0; i < s->nworkers; i++)
+    if (worker_init(s, &s->workers[i], err)) return GS_ENOMEM;
+  for (size_t comp = 0; comp < s->ncomp; comp++) s->k[comp] = gs_model_transfer_rate(m, comp);
+  const size_t node_bytes = (1 + 3 * s->nflow) * sizeof(double);
+  size_t per = NODE_BLOCK_BYTES / node_bytes;
+  per = per < 1 ? 1 : per > 16 ? 16 : per;
+  /* rings as deep as RING while a block of records per compartment and
+   * ring slot stays within RING_BYTES, else 2 */
+  s->depth = RING;
+  while (s->depth > 2 && s->depth * (s->ncomp - 1) * per * node_bytes > RING_BYTES) s->depth--;
   for (size_t comp = 0; comp < s->ncomp; comp++) {
     comp_t *cp = &s->comp[comp];
     cp->s = s;
@@ -365,12 +512,18 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
     cp->scale = gs_calloc(cp->n, sizeof(double), err); /* received and Z: no error control */
     cp->end_f = cp->has_next ? gs_calloc(s->nflow, sizeof(double), err) : NULL;
     if (!cp->y || !cp->scale || (cp->has_next && !cp->end_f)) return GS_ENOMEM;
+    for (int r = 0; r < RING; r++) {
+      node_list *L = &cp->rec[r];
+      L->per = per;
+      atomic_init(&L->published, 0);
+      atomic_init(&L->done, 0);
+    }
     pack(s, comp, c->abs_scale, cp->scale);
     cp->ode = (gs_ode){cp->n, comp_rhs, cp, cp->scale, s->nflow, NULL, NULL, NULL, 1,
                        comp_step_done, 0, comp_trying};
     int rc = gs_integrator_create(solver, &cp->ode, &cp->it, err);
     if (rc) return rc;
-    if (!cp->it.type->carry || strcmp(cp->it.type->name, "rk"))
+    if (strcmp(cp->it.type->name, "rk"))
       return gs_error_set(err, GS_EINPUT,
                           "solver.steps: per_compartment needs method rk (its coupling uses the "
                           "Runge-Kutta steps' exact quadrature), not %s",
@@ -379,101 +532,314 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   return GS_OK;
 }
 
-/* The model evaluates compartment comp alone, on its local vector. */
-static void view_one(gs_model *m, const struct gs_comp_steps *s, size_t comp) {
+/* Worker w's model evaluates compartment comp alone, on its local vector. */
+static void view_one(worker_t *w, size_t comp, const gs_stretch *st) {
+  gs_model *m = &w->m;
+  *m = *w->s->m;
+  m->switch_lo = st->t0; /* windows decide once for the stretch (gs_window_on) */
+  m->switch_hi = st->t1;
   m->comp_lo = comp;
   m->comp_hi = comp + 1;
   m->view_lo = comp;
-  m->view_carried = s->ncells;
-  m->halo = comp ? s->halo : NULL;
+  m->view_carried = w->s->ncells;
+  m->halo = comp ? w->halo : NULL;
+  m->slot = (int)(w - w->s->workers);
 }
 
-static void view_all(gs_model *m, const struct gs_comp_steps *s) {
-  m->comp_lo = 0;
-  m->comp_hi = s->ncomp;
-  m->view_lo = 0;
-  m->view_carried = m->nnum;
-  m->halo = NULL;
+static int check_coupling(struct gs_comp_steps *s, const comp_t *cp, size_t k, gs_error *err);
+
+/* Record a failure at stretch k, compartment c (c = ncomp: done_fn); the
+ * earliest one is the run's. */
+static void fail(struct gs_comp_steps *s, size_t k, size_t c, int rc, const gs_error *err) {
+  omp_set_lock(&s->lock);
+  if (!s->fail_rc || k < s->fail_k || (k == s->fail_k && c < s->fail_c)) {
+    s->fail_rc = rc;
+    s->fail_k = k;
+    s->fail_c = c;
+    s->fail_err = *err;
+  }
+  atomic_store(&s->abort, 1);
+  omp_unset_lock(&s->lock);
 }
 
-/* What compartment comp received in the stretch against what the one before
- * discharged (s->sent); the run stops when they differ beyond round-off. */
-static int check_coupling(struct gs_comp_steps *s, const comp_t *cp, double t0, double t1,
-                          gs_error *err) {
-  const double *recv = cp->y + s->off_recv;
+/* Advance compartment comp over stretch k on worker w: from its state at
+ * the end of stretch k - 1 (Y for the first), into the ring's full state of
+ * stretch k.  Returns 0, or 1 when it failed because another did. */
+static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, size_t k, const double *Y) {
+  comp_t *cp = &s->comp[comp];
+  const gs_stretch *st = &s->st[k];
+  const double t0 = st->t0, stop = st->t1;
+  gs_error errbuf, *err = &errbuf;
+  node_list *L = &cp->rec[k % s->depth];
+  cp->w = w;
+  cp->cur = L;
+  w->up = comp ? &s->comp[comp - 1].rec[k % s->depth] : NULL;
+  w->up_count = 0;
+  w->bad = 0;
+  w->off_stretch = 0;
+  w->stretch_t0 = t0;
+  w->last_t = NAN;
+  if (k == 0) pack(s, comp, Y, cp->y);
+  memset(cp->y + s->off_recv, 0, (cp->n - s->off_recv) * sizeof(double)); /* received, Z */
+  cp->t = t0;
+  /* a slot keeps its first block; those a busy stretch added go back (each
+   * compartment's slots would otherwise all keep the largest record) */
+  for (size_t b = 1; L->dir[b / DIR_SIZE] && L->dir[b / DIR_SIZE][b % DIR_SIZE]; b++) {
+    free(L->dir[b / DIR_SIZE][b % DIR_SIZE]);
+    L->dir[b / DIR_SIZE][b % DIR_SIZE] = NULL;
+  }
+  L->count = 0;
+  L->start_f_known = 0; /* published and done were reset when the task was taken */
+  int rc = GS_OK;
+  if (cp->has_next) {
+    rc = nodes_push(L, s->nflow, t0, NULL, cp->y, NULL);
+    if (rc) rc = gs_error_set(err, GS_ENOMEM, "out of memory for the per-compartment step record");
+    /* without a jump the integrator starts from the rates it ended the last
+     * stretch with, and evaluates none at t0 */
+    if (!rc && !st->jumped && cp->end_f_valid) {
+      memcpy(node_at(L, s->nflow, 0) + 1 + 2 * s->nflow, cp->end_f, s->nflow * sizeof(double));
+      L->start_f_known = 1;
+      publish(L);
+    }
+  }
+  cp->ode.jumped = st->jumped;
+  view_one(w, comp, st);
+  if (!rc) rc = cp->it.type->advance(cp->it.self, &cp->ode, &cp->t, stop, cp->y, err);
+  if (!rc && cp->has_next && !L->start_f_known && start_rates(cp, t0))
+    rc = gs_error_set(err, GS_ENUMERIC, "per-compartment steps: compartment %zu: rates at t = %.9g failed", comp + 1, t0);
+  if (!rc && w->bad == 2) rc = gs_error_set(err, GS_ENOMEM, "out of memory for the per-compartment step record");
+  if (!rc && w->bad == 4)
+    rc = gs_error_set(err, GS_ENUMERIC, "per-compartment steps: compartment %zu took more than %d steps between t = %.9g and %.9g", comp + 1, NODE_MAX, t0, stop);
+  if (!rc && w->bad) /* 1 or 3: rates evaluated at a step's end were not finite */
+    rc = gs_error_set(err, GS_ENUMERIC, "integrator rk: right-hand side failed at t = %.9g", w->bad_t);
+  if (!rc && cp->t != stop)
+    rc = gs_error_set(err, GS_ENUMERIC, "per-compartment steps: compartment %zu stopped at t = %.17g short of %.17g", comp + 1, cp->t, stop);
+  if (rc && w->off_stretch)
+    rc = gs_error_set(err, GS_ENUMERIC,
+                      "per-compartment steps: compartment %zu evaluated at t = %.17g outside "
+                      "the step its integrator announced [%.17g, %.17g]",
+                      comp + 1, w->bad_t, w->try_s, w->try_s + w->try_h);
+  int aborted = 0;
+  if (rc) {
+    /* a compartment whose upstream failed fails too: not its own failure */
+    aborted = comp && w->up_count == 0 && atomic_load(&s->abort);
+    if (!aborted) {
+      if (w->bad == 1) { /* where: the run's message names the cell */
+        s->bad_t = w->bad_t;
+        s->bad_index = w->bad_index;
+        s->bad_rate = 1;
+      }
+      fail(s, k, comp, rc, err);
+    }
+    atomic_store(&s->abort, 1);
+  } else {
+    unpack(s, comp, cp->y, s->ring[k % s->depth]);
+    if (cp->has_next) {
+      memcpy(cp->end_f, node_at(L, s->nflow, L->count - 1) + 1 + 2 * s->nflow, s->nflow * sizeof(double));
+      cp->end_f_valid = 1;
+      double *sent = cp->sent[k % s->depth];
+      volumes_of(s, cp->y + s->off_z, sent);
+      for (int a = 0; a < s->nvol; a++) sent[a] *= s->k[comp];
+      atomic_store_explicit(&L->published, L->count, memory_order_release);
+    }
+    if (comp) { /* once the one before has booked what it discharged */
+      const node_list *up = w->up;
+      while (!atomic_load_explicit(&up->done, memory_order_acquire) && !atomic_load(&s->abort)) {
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+      }
+      if (atomic_load(&s->abort)) aborted = 1;
+      else if ((rc = check_coupling(s, cp, k, err))) fail(s, k, comp, rc, err);
+    }
+  }
+  atomic_store_explicit(&L->done, 1, memory_order_release);
+  return aborted;
+}
+
+/* What compartment cp received in stretch k against what the one before
+ * discharged; the run stops when they differ beyond round-off. */
+static int check_coupling(struct gs_comp_steps *s, const comp_t *cp, size_t k, gs_error *err) {
+  const double *recv = cp->y + s->off_recv, *sent = s->comp[cp->comp - 1].sent[k % s->depth];
+  double worst = 0;
   for (int a = 0; a < s->nvol; a++) {
-    const double big = fmax(fabs(recv[a]), fabs(s->sent[a]));
-    const double rel = big > 0 ? fabs(recv[a] - s->sent[a]) / big : 0.0;
-    if (rel > s->worst_coupling) s->worst_coupling = rel;
+    const double big = fmax(fabs(recv[a]), fabs(sent[a]));
+    const double rel = big > 0 ? fabs(recv[a] - sent[a]) / big : 0.0;
+    if (rel > worst) worst = rel;
     if (!(rel <= 1e-10))
       return gs_error_set(err, GS_ENUMERIC,
                           "per-compartment steps: from t = %.9g to %.9g compartment %zu received "
                           "%.17g of %s where compartment %zu discharged %.17g (relative %.3g); the "
                           "coupling lost volume",
-                          t0, t1, cp->comp + 1, recv[a], gs_model_vol_name(s->m, a), cp->comp,
-                          s->sent[a], rel);
+                          s->st[k].t0, s->st[k].t1, cp->comp + 1, recv[a],
+                          gs_model_vol_name(s->m, a), cp->comp, sent[a], rel);
   }
+  omp_set_lock(&s->lock);
+  if (worst > s->worst_coupling) s->worst_coupling = worst;
+  omp_unset_lock(&s->lock);
+  return GS_OK;
+}
+
+/* Under s->lock: the task thread wi takes, as a compartment whose next
+ * stretch may start now, or -1; *finished: nothing is left to take.  In
+ * order of preference, the oldest stretch first within each: a task of its
+ * own block whose compartment before is done with that stretch (it will not
+ * wait); such a task of another block (its thread is behind: the spray's
+ * onset makes the first compartments costly for a while); a task of its own
+ * block that follows the compartment before through a stretch it is still
+ * advancing. */
+static long pick_task(struct gs_comp_steps *s, int wi, int *finished) {
+  long best = -1;
+  int best_rank = 4;
+  *finished = 1;
+  for (size_t c = 0; c < s->ncomp; c++) {
+    const size_t k = s->next_k[c];
+    if (k < s->nst) *finished = 0;
+    if (k >= s->nst || s->running[c]) continue;
+    /* the one before has started this stretch (its record is being written) */
+    const int up_done = !c || s->next_k[c - 1] > k;
+    if (!up_done && !(s->running[c - 1] && s->next_k[c - 1] == k)) continue;
+    /* the next one has read this ring slot's record, and its full state was written */
+    if (c + 1 < s->ncomp && k >= s->next_k[c + 1] + s->depth) continue;
+    if (k >= s->outputs_done + s->depth) continue;
+    const int own = c >= s->home[wi] && c < s->home[wi + 1];
+    const int rank = up_done ? (own ? 1 : 2) : own ? 3 : 4;
+    if (rank == 4) continue;
+    if (rank < best_rank || (rank == best_rank && k < s->next_k[best])) {
+      best = (long)c;
+      best_rank = rank;
+    }
+  }
+  return best;
+}
+
+/* Stretches every compartment is done with go to done_fn, in order, one
+ * thread at a time. */
+static void outputs(struct gs_comp_steps *s) {
+  omp_set_lock(&s->out_lock);
+  for (;;) {
+    omp_set_lock(&s->lock);
+    const size_t k = s->outputs_done;
+    const int ready = k < s->nst && s->complete[k % s->depth] == s->ncomp && !atomic_load(&s->abort);
+    if (!ready) atomic_store(&s->outputs_ready, 0);
+    omp_unset_lock(&s->lock);
+    if (!ready) break;
+    gs_error err = {0};
+    const double start = now_seconds();
+    worker_t *me = &s->workers[omp_get_thread_num() < s->nworkers ? omp_get_thread_num() : 0];
+    int rc = s->done_fn ? s->done_fn(s->done_ctx, k, s->st[k].t1, s->ring[k % s->depth], &err) : GS_OK;
+    if (rc) {
+      fail(s, k, s->ncomp, rc, &err);
+      break;
+    }
+    omp_set_lock(&s->lock);
+    s->complete[k % s->depth] = 0;
+    s->outputs_done++;
+    s->t_out += now_seconds() - start;
+    me->t_done += now_seconds() - start;
+    if (s->nworkers > 1) { /* the outputs go to whichever thread is free */
+      double *extra = s->cost + s->ncomp;
+      memset(extra, 0, (size_t)s->nworkers * sizeof(double));
+      gs_dist_balanced_split(s->cost, s->ncomp, extra, s->nworkers, s->home);
+    }
+    omp_unset_lock(&s->lock);
+  }
+  omp_unset_lock(&s->out_lock);
+}
+
+/* One thread: take tasks until none is left (or the run failed). */
+static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
+  for (unsigned idle = 0;;) {
+    int finished = 0;
+    omp_set_lock(&s->lock);
+    const long c = atomic_load(&s->abort) ? -1 : pick_task(s, (int)(w - s->workers), &finished);
+    const size_t k = c >= 0 ? s->next_k[c] : 0;
+    if (c >= 0) {
+      s->running[c] = 1;
+      /* before another thread may follow it: nothing of this stretch's
+       * record is published yet (the slot held stretch k - depth's) */
+      node_list *L = &s->comp[c].rec[k % s->depth];
+      atomic_store_explicit(&L->published, 0, memory_order_relaxed);
+      atomic_store_explicit(&L->done, 0, memory_order_relaxed);
+    }
+    omp_unset_lock(&s->lock);
+    if (c < 0) {
+      if (atomic_load(&s->abort)) break;
+      if (finished) { /* the last stretches' outputs */
+        outputs(s);
+        break;
+      }
+      /* a free thread writes the stretches every compartment is done with */
+      if (omp_test_lock(&s->out_lock)) {
+        omp_unset_lock(&s->out_lock);
+        outputs(s);
+      }
+      const double t_idle0 = now_seconds();
+      for (int i = 0; i < 50; i++) __builtin_ia32_pause();
+      w->t_idle += now_seconds() - t_idle0;
+      if (++idle > 100) sched_yield(); /* waiting for another thread's task */
+      continue;
+    }
+    idle = 0;
+    const double start = now_seconds(), waited = w->t_wait;
+    run_compartment(s, w, (size_t)c, k, Y);
+    const double spent = now_seconds() - start - (w->t_wait - waited);
+    w->t_busy += now_seconds() - start;
+    omp_set_lock(&s->lock);
+    s->cost[c] += spent;
+    s->running[c] = 0;
+    s->next_k[c]++;
+    const int all = ++s->complete[k % s->depth] == s->ncomp;
+    if (all) atomic_store(&s->outputs_ready, 1);
+    omp_unset_lock(&s->lock);
+    if (all && s->nworkers == 1) outputs(s); /* several: whichever is free (above) */
+  }
+}
+
+int gs_comp_steps_run(gs_comp_steps *s, const gs_stretch *st, size_t nst, double *Y,
+                      gs_stretch_done_fn done, void *ctx, gs_error *err) {
+  if (!nst) return GS_OK;
+  s->st = st;
+  s->nst = nst;
+  s->done_fn = done;
+  s->done_ctx = ctx;
+  memset(s->next_k, 0, s->ncomp * sizeof(size_t));
+  memset(s->running, 0, s->ncomp * sizeof(int));
+  memset(s->complete, 0, sizeof s->complete);
+  s->outputs_done = 0;
+  atomic_store(&s->outputs_ready, 0);
+  s->fail_rc = 0;
+  s->bad_rate = 0;
+  atomic_store(&s->abort, 0);
+  /* Threads take (compartment, stretch) tasks: a compartment runs ahead of
+   * the next one by up to RING stretches, and follows the one before through
+   * a stretch they share, waiting only when it would step past the last
+   * step end published (wait_for).  A task starts only once the one before
+   * has started that stretch, so the furthest upstream of the running tasks
+   * never waits, and the waits end. */
+  const size_t tasks = nst * s->ncomp;
+  const int nw = (size_t)s->nworkers < tasks ? s->nworkers : (int)tasks;
+  if (nw > 1) {
+#pragma omp parallel num_threads(nw)
+    work(s, &s->workers[omp_get_thread_num()], Y);
+  } else {
+    work(s, &s->workers[0], Y);
+  }
+  if (s->fail_rc) {
+    *err = s->fail_err;
+    return s->fail_rc;
+  }
+  memcpy(Y, s->ring[(nst - 1) % s->depth], (s->m->nstate + s->m->nledger) * sizeof(double));
   return GS_OK;
 }
 
 int gs_comp_steps_advance(gs_comp_steps *s, double *t, double stop, double *Y, int jumped,
                           gs_error *err) {
-  gs_model *m = s->m;
-  const double t0 = *t;
-  if (!(stop > t0)) return GS_OK;
-  s->bad = 0;
-  s->off_stretch = 0;
-  for (size_t comp = 0; comp < s->ncomp; comp++) {
-    comp_t *cp = &s->comp[comp];
-    pack(s, comp, Y, cp->y);
-    memset(cp->y + s->off_recv, 0, (cp->n - s->off_recv) * sizeof(double)); /* received, Z */
-    cp->t = t0;
-    s->up = comp ? &s->nodes[(comp - 1) % 2] : NULL;
-    s->rec = cp->has_next ? &s->nodes[comp % 2] : NULL;
-    s->stretch_t0 = t0;
-    s->last_t = NAN;
-    s->start_f_known = 0;
-    if (s->rec) {
-      s->rec->count = 0;
-      if (nodes_push(s->rec, s->nflow, t0, NULL, cp->y, NULL))
-        return gs_error_set(err, GS_ENOMEM, "out of memory for the per-compartment step record");
-      /* without a jump the integrator starts from the rates it ended the
-       * last stretch with, and evaluates none at t0 */
-      if (!jumped && cp->end_f_valid) {
-        memcpy(s->rec->f, cp->end_f, s->nflow * sizeof(double));
-        s->start_f_known = 1;
-      }
-    }
-    cp->ode.jumped = jumped;
-    view_one(m, s, comp);
-    int rc = cp->it.type->advance(cp->it.self, &cp->ode, &cp->t, stop, cp->y, err);
-    if (!rc && s->rec && !s->start_f_known) rc = start_rates(cp, t0, err);
-    view_all(m, s);
-    if (!rc && s->bad == 2) rc = gs_error_set(err, GS_ENOMEM, "out of memory for the per-compartment step record");
-    if (!rc && s->bad) /* 1 or 3: rates evaluated at a step's end were not finite */
-      rc = gs_error_set(err, GS_ENUMERIC, "integrator rk: right-hand side failed at t = %.9g", s->bad_t);
-    if (!rc && cp->t != stop)
-      rc = gs_error_set(err, GS_ENUMERIC, "per-compartment steps: compartment %zu stopped at t = %.17g short of %.17g", comp + 1, cp->t, stop);
-    if (rc && s->off_stretch)
-      rc = gs_error_set(err, GS_ENUMERIC,
-                        "per-compartment steps: compartment %zu evaluated at t = %.17g outside "
-                        "the step its integrator announced [%.17g, %.17g]",
-                        comp + 1, s->bad_t, s->try_s, s->try_s + s->try_h);
-    if (rc) return rc;
-    unpack(s, comp, cp->y, Y);
-    if (comp) {
-      rc = check_coupling(s, cp, t0, stop, err);
-      if (rc) return rc;
-    }
-    if (cp->has_next) {
-      memcpy(cp->end_f, s->rec->f + (s->rec->count - 1) * s->nflow, s->nflow * sizeof(double));
-      cp->end_f_valid = 1;
-      volumes_of(s, cp->y + s->off_z, s->sent);
-      for (int a = 0; a < s->nvol; a++) s->sent[a] *= s->k[comp];
-    }
-  }
-  *t = stop;
-  return GS_OK;
+  if (!(stop > *t)) return GS_OK;
+  const gs_stretch one = {*t, stop, jumped};
+  int rc = gs_comp_steps_run(s, &one, 1, Y, NULL, NULL, err);
+  if (!rc) *t = stop;
+  return rc;
 }
 
 void gs_comp_steps_comp_stats(const gs_comp_steps *s, size_t comp, gs_integrator_stats *st) {
@@ -493,10 +859,16 @@ void gs_comp_steps_stats(const gs_comp_steps *s, gs_integrator_stats *st) {
   }
 }
 
-double gs_comp_steps_rhs_seconds(const gs_comp_steps *s) { return s->t_rhs; }
+int gs_comp_steps_threads(const gs_comp_steps *s) { return s->nworkers; }
+
+double gs_comp_steps_rhs_seconds(const gs_comp_steps *s) {
+  double sum = 0;
+  for (int i = 0; i < s->nworkers; i++) sum += s->workers[i].t_rhs;
+  return sum / s->nworkers;
+}
 
 int gs_comp_steps_bad_rate(const gs_comp_steps *s, double *t, size_t *full) {
-  if (s->bad != 1) return 0;
+  if (!s->bad_rate) return 0;
   *t = s->bad_t;
   *full = s->bad_index;
   return 1;
@@ -507,20 +879,50 @@ double gs_comp_steps_worst_coupling(const gs_comp_steps *s) { return s->worst_co
 void gs_comp_steps_free(gs_comp_steps *s) {
   if (!s) return;
   for (size_t comp = 0; s->comp && comp < s->ncomp; comp++) {
-    gs_integrator_free(&s->comp[comp].it);
-    free(s->comp[comp].y);
-    free(s->comp[comp].scale);
-    free(s->comp[comp].end_f);
+    comp_t *cp = &s->comp[comp];
+    if (cp->it.type) gs_integrator_free(&cp->it);
+    free(cp->y);
+    free(cp->scale);
+    free(cp->end_f);
+    for (int r = 0; r < RING; r++) {
+      node_list *L = &cp->rec[r];
+      for (size_t p = 0; p < DIR_PAGES && L->dir[p]; p++) {
+        for (size_t b = 0; b < DIR_SIZE; b++) free(L->dir[p][b]);
+        free(L->dir[p]);
+      }
+    }
   }
-  for (int i = 0; i < 2; i++) {
-    free(s->nodes[i].t);
-    free(s->nodes[i].z);
-    free(s->nodes[i].n);
+  for (int i = 0; s->workers && i < s->nworkers; i++) {
+    worker_t *w = &s->workers[i];
+    double *bufs[] = {w->p0, w->p1, w->d0, w->d1, w->s0, w->s1, w->halo, w->scratch, w->ytmp};
+    for (size_t j = 0; j < sizeof bufs / sizeof *bufs; j++) free(bufs[j]);
   }
-  double *bufs[] = {s->p0, s->p1, s->d0, s->d1, s->s0, s->s1, s->halo, s->last_f, s->scratch, s->ytmp};
-  for (size_t i = 0; i < sizeof bufs / sizeof *bufs; i++) free(bufs[i]);
-  for (int i = 0; i < 2; i++) free(s->nodes[i].f);
+  free(s->workers);
+  for (int r = 0; r < RING; r++) free(s->ring[r]);
+  free(s->next_k);
+  free(s->running);
+  free(s->home);
+  free(s->cost);
+  if (s->locks) {
+    omp_destroy_lock(&s->lock);
+    omp_destroy_lock(&s->out_lock);
+  }
   free(s->k);
   free(s->comp);
   free(s);
+}
+
+double gs_comp_steps_wait_seconds(const gs_comp_steps *s) {
+  double sum = 0;
+  for (int i = 0; i < s->nworkers; i++) sum += s->workers[i].t_wait;
+  return sum;
+}
+
+void gs_comp_steps_print_threads(const gs_comp_steps *s, FILE *f) {
+  for (int i = 0; i < s->nworkers; i++) {
+    const worker_t *w = &s->workers[i];
+    fprintf(f, "  thread %d: compartments %.4f s (rates %.4f, waiting for the one before %.4f), "
+               "outputs %.4f, without a task %.4f\n",
+            i, w->t_busy, w->t_rhs, w->t_wait, w->t_done, w->t_idle);
+  }
 }

@@ -23,9 +23,19 @@
  *
  * The stretches are those of the run driver (between output times and rate
  * switches); each compartment restarts its integral there, so the record of
- * step ends kept for the next compartment is one stretch long. */
+ * step ends kept for the next compartment is one stretch long.
+ *
+ * Threads (OpenMP's, at most one per compartment) take the compartments of
+ * a stretch in order, each the next free one when it is done with one, and
+ * follow the compartment before through the stretch: a step waits only
+ * until that one has published a step end at or past its own end.  Every
+ * compartment's steps and rates are those of one thread (mechanisms keep
+ * scratch per slot, gs_model.slot), so results are identical bit for bit
+ * whatever the number of threads. */
 #ifndef GRANSIM_PBM_COMPARTMENT_STEPS_H
 #define GRANSIM_PBM_COMPARTMENT_STEPS_H
+
+#include <stdio.h>
 
 #include "gransim/case.h"
 #include "gransim/error.h"
@@ -36,8 +46,25 @@ typedef struct gs_comp_steps gs_comp_steps;
 /* One integrator per compartment of the case (solver map `solver`, method
  * rk), each on its own packed vector. */
 int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, gs_error *err);
-/* Advance every compartment of the full state Y from *t to stop (no rate
- * switch inside), one after the other; jumped: f jumps at *t
+/* A stretch of time without a rate switch inside: [t0, t1]; jumped: f
+ * jumps at t0 (gs_ode.jumped). */
+typedef struct {
+  double t0, t1;
+  int jumped;
+} gs_stretch;
+/* Called once per stretch k, in order, when every compartment is done with
+ * it: t = st[k].t1, Y the full state then (read only).  Non-zero (with err
+ * filled) stops the run. */
+typedef int (*gs_stretch_done_fn)(void *ctx, size_t k, double t, const double *Y, gs_error *err);
+/* Advance the full state Y through the stretches st[0..nst) (consecutive:
+ * st[k].t1 = st[k + 1].t0; Y holds the state at st[0].t0), every
+ * compartment on its own, the threads sharing the (compartment, stretch)
+ * tasks; done (may be NULL) sees each stretch's end.  On success Y is the
+ * state at st[nst - 1].t1; on failure the error of the earliest stretch
+ * (then compartment) that failed. */
+int gs_comp_steps_run(gs_comp_steps *s, const gs_stretch *st, size_t nst, double *Y,
+                      gs_stretch_done_fn done, void *ctx, gs_error *err);
+/* One stretch from *t to stop (no rate switch inside); jumped: f jumps at *t
  * (gs_ode.jumped).  On success *t = stop. */
 int gs_comp_steps_advance(gs_comp_steps *s, double *t, double stop, double *Y, int jumped,
                           gs_error *err);
@@ -46,7 +73,11 @@ int gs_comp_steps_advance(gs_comp_steps *s, double *t, double stop, double *Y, i
 void gs_comp_steps_stats(const gs_comp_steps *s, gs_integrator_stats *st);
 /* Compartment comp's own counts. */
 void gs_comp_steps_comp_stats(const gs_comp_steps *s, size_t comp, gs_integrator_stats *st);
-/* Seconds spent in the model's rates so far. */
+/* Seconds threads waited for the compartment before (summed). */
+double gs_comp_steps_wait_seconds(const gs_comp_steps *s);
+/* Threads that share the compartments. */
+int gs_comp_steps_threads(const gs_comp_steps *s);
+/* Seconds spent in the model's rates so far (per thread, on average). */
 double gs_comp_steps_rhs_seconds(const gs_comp_steps *s);
 /* After a failed advance: 1 when a rate was not finite, with its time and
  * index in the full state vector. */
@@ -55,5 +86,7 @@ int gs_comp_steps_bad_rate(const gs_comp_steps *s, double *t, size_t *full_index
  * compartment discharged and what the next one received (round-off). */
 double gs_comp_steps_worst_coupling(const gs_comp_steps *s);
 void gs_comp_steps_free(gs_comp_steps *s);
+/* --timings: where each thread's time went. */
+void gs_comp_steps_print_threads(const gs_comp_steps *s, FILE *f);
 
 #endif

@@ -87,7 +87,10 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
   if (!G) return GS_ENOMEM;
   G->kind = kind;
   G->liquid = G->gas = -1;
-  G->G = gs_calloc(g->ncells, sizeof(double), err);
+  /* liquid_addition recomputes the rates per compartment: one row per slot
+   * (gs_model.slot); the others' stay in the first */
+  G->G = gs_calloc((kind == KIND_LIQUID && m->nslots > 1 ? (size_t)m->nslots : 1) * g->ncells,
+                   sizeof(double), err);
   int rc = G->G ? GS_OK : GS_ENOMEM;
   if (!rc && m->ncarried > 0) /* particles moving between cells would leave their load behind */
     rc = gs_cfg_fail(node, err, "growth along an axis cannot be combined with carried quantities "
@@ -147,16 +150,19 @@ static int active(const grow_t *G, const gs_model *m, double t) {
   return G->kind == KIND_CONSOLIDATION || gs_window_on(m, G->start, G->end, t);
 }
 
-/* Rates of compartment comp into G->G; 0 when nothing grows there. */
-static int compartment_rates(grow_t *G, const gs_grid *g, size_t comp, const double *N) {
-  if (G->kind != KIND_LIQUID) return 1; /* precomputed */
+/* Rates of compartment comp (in this caller's row of G->G), or NULL when
+ * nothing grows there. */
+static const double *compartment_rates(grow_t *G, const gs_model *m, size_t comp, const double *N) {
+  const gs_grid *g = &m->grid;
+  if (G->kind != KIND_LIQUID) return G->G; /* precomputed */
+  double *rates = G->G + (m->slot > 0 ? (size_t)m->slot : 0) * g->ncells;
   /* share the spray in proportion to solid volume */
   double solid = 0;
   for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
-  if (!(solid > 0) || G->q[comp] == 0.0) return 0;
+  if (!(solid > 0) || G->q[comp] == 0.0) return NULL;
   double per = G->q[comp] / solid;
-  for (size_t c = 0; c < g->ncells; c++) G->G[c] = per * G->solid_vol[c];
-  return 1;
+  for (size_t c = 0; c < g->ncells; c++) rates[c] = per * G->solid_vol[c];
+  return rates;
 }
 
 static void grow_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
@@ -166,8 +172,9 @@ static void grow_rhs(void *self, const gs_model *m, double t, const double *y, d
   if (!active(G, m, t)) return;
   for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
     const double *N = gs_model_numbers_c(m, y, comp);
-    if (compartment_rates(G, g, comp, N))
-      gs_growth_apply(g, G->axis, G->G, N, gs_model_numbers(m, dydt, comp),
+    const double *rates = compartment_rates(G, m, comp, N);
+    if (rates)
+      gs_growth_apply(g, G->axis, rates, N, gs_model_numbers(m, dydt, comp),
                       gs_model_ledger(m, dledger, comp), gs_model_ledger(m, dledger, comp) + m->nvol);
   }
 }
@@ -180,9 +187,10 @@ static void grow_precondition(void *self, const gs_model *m, double t, const dou
   grow_t *G = self;
   const gs_grid *g = &m->grid;
   if (!active(G, m, t)) return;
-  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++)
-    if (compartment_rates(G, g, comp, gs_model_numbers_c(m, y, comp)))
-      gs_growth_solve(g, G->axis, G->G, gamma, gs_model_numbers(m, z, comp), G->work);
+  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
+    const double *rates = compartment_rates(G, m, comp, gs_model_numbers_c(m, y, comp));
+    if (rates) gs_growth_solve(g, G->axis, rates, gamma, gs_model_numbers(m, z, comp), G->work);
+  }
 }
 
 static double grow_switch(void *self, double t) {

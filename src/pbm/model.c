@@ -1,4 +1,5 @@
 /* The sectional model: grid + registered mechanisms; full right-hand side. */
+#include <omp.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,6 +30,8 @@ const gs_mech_type *gs_mech_lookup(const char *name) {
 int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err) {
   memset(m, 0, sizeof *m);
   m->switch_lo = 1; /* no interval: windows decide at t */
+  m->slot = -1;
+  m->nslots = omp_get_max_threads();
   m->switch_hi = 0;
   m->grid = *grid;
   memset(grid, 0, sizeof *grid);

@@ -93,7 +93,6 @@ static double now_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-
 /* Flag the first non-finite rate (index i of f is entry full(i) of the state). */
 static int check_rates(guard_t *gd, double t, const double *f, size_t n, const gs_dist *local) {
   if (gs_all_finite(f, n)) return 0;
@@ -227,14 +226,6 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
 }
 
 static int stepper_advance(stepper_t *s, double *t, double t_out, double *Y, gs_error *err) {
-  if (s->cs) {
-    guard_t *g = s->ode.ctx;
-    const double before = gs_comp_steps_rhs_seconds(s->cs);
-    int rc = gs_comp_steps_advance(s->cs, t, t_out, Y, s->ode.jumped, err);
-    g->t_rhs += gs_comp_steps_rhs_seconds(s->cs) - before;
-    if (rc && gs_comp_steps_bad_rate(s->cs, &g->bad_t, &g->bad_index)) g->bad = 1;
-    return rc;
-  }
   if (!s->local) return s->it->type->advance(s->it->self, &s->ode, t, t_out, Y, err);
   gs_dist_pack(s->local, Y, s->yl);
   int rc = s->it->type->advance(s->it->self, &s->ode, t, t_out, s->yl, err);
@@ -555,7 +546,9 @@ static void print_compartment_steps(const gs_comp_steps *cs, size_t ncomp) {
     gs_comp_steps_comp_stats(cs, comp, &st);
     fprintf(stderr, "%s %ld/%ld/%ld", comp ? "," : "", st.steps, st.rejected, st.rhs_evals);
   }
-  fprintf(stderr, "; largest coupling mismatch %.2g\n", gs_comp_steps_worst_coupling(cs));
+  fprintf(stderr, "; largest coupling mismatch %.2g; %d thread%s, waiting %.4f s in all\n",
+          gs_comp_steps_worst_coupling(cs), gs_comp_steps_threads(cs),
+          gs_comp_steps_threads(cs) == 1 ? "" : "s", gs_comp_steps_wait_seconds(cs));
 }
 
 static void print_timings(const gs_dist *d, const double *mine) {
@@ -642,6 +635,84 @@ static double post_output_time(guard_t *g) {
 static int failed_at_output(int rc, int agreed, const gs_error *own, gs_error *err) {
   if (!rc) return gs_error_set(err, agreed, "the run failed on another MPI rank");
   *err = *own;
+  return rc;
+}
+
+/* The message for a rate that was not finite (guard.bad), naming where. */
+static int rate_failure(const gs_model *m, const guard_t *gd, gs_error *err) {
+  const gs_grid *g = &m->grid;
+  char where[512];
+  size_t idx = gd->bad_index;
+  if (idx < m->nnum) describe_cell(m, idx / g->ncells, idx % g->ncells, where, sizeof where);
+  else if (idx < m->nstate) snprintf(where, sizeof where, "carried volume entry %zu", idx - m->nnum);
+  else snprintf(where, sizeof where, "volume ledger entry %zu", idx - m->nstate);
+  return gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: the rate of change is not finite (NaN or infinity); check kernel and mechanism parameters", gd->bad_t, where);
+}
+
+/* Per-compartment steps: the run's stretches (between output times and
+ * rate switches), and at each output time, which the threads reach one
+ * after the other while others advance later stretches, the checks and the
+ * write (stretch_done). */
+typedef struct {
+  gs_case *c;
+  gs_output *out;
+  guard_t *guard;
+  const double *M1_0;
+  double *ymax_seen;
+  gs_run_report *rep;
+  const int *is_output; /* per stretch: its end is an output time */
+  int show;
+  double start, t_end, t_outputs;
+} stretch_run;
+
+static int stretch_done(void *ctx, size_t k, double t, const double *Y, gs_error *err) {
+  stretch_run *x = ctx;
+  if (!x->is_output[k]) return GS_OK;
+  const double start = now_seconds();
+  int rc = output_time(x->c, x->out, x->guard, t, (double *)Y, x->M1_0, x->ymax_seen, x->rep, err);
+  if (x->show) {
+    double span = x->t_end - x->c->t0;
+    fprintf(stderr, "\rgransim: t = %-10.4g of %-10.4g (%3.0f%%)  %.1f s   ", t, x->t_end,
+            span > 0 ? 100.0 * (t - x->c->t0) / span : 100.0, now_seconds() - x->start);
+    fflush(stderr);
+  }
+  x->t_outputs += now_seconds() - start;
+  return rc;
+}
+
+static int run_stretches(gs_case *c, gs_comp_steps *cs, stretch_run *x, double *t, double *Y,
+                         gs_error *err) {
+  gs_model *m = &c->model;
+  size_t cap = 64, n = 0;
+  gs_stretch *st = gs_malloc(cap * sizeof *st, err);
+  int *is_output = gs_malloc(cap * sizeof *is_output, err);
+  int rc = st && is_output ? GS_OK : GS_ENOMEM;
+  double at = *t, switch_reached = NAN;
+  for (size_t i = 0; !rc && i < c->ntimes; i++) {
+    if (c->times[i] <= at) continue;
+    while (!rc && at < c->times[i]) {
+      const double next_switch = gs_model_next_switch(m, at);
+      const double stop = fmin(c->times[i], next_switch);
+      if (n == cap) {
+        cap *= 2;
+        gs_stretch *s2 = realloc(st, cap * sizeof *st);
+        if (s2) st = s2;
+        int *o2 = s2 ? realloc(is_output, cap * sizeof *is_output) : NULL;
+        if (o2) is_output = o2;
+        if (!o2) rc = gs_error_set(err, GS_ENOMEM, "out of memory for the run's stretches");
+        if (rc) break;
+      }
+      st[n] = (gs_stretch){at, stop, at == switch_reached};
+      is_output[n++] = stop == c->times[i];
+      if (stop == next_switch) switch_reached = stop;
+      at = stop;
+    }
+  }
+  x->is_output = is_output;
+  if (!rc) rc = gs_comp_steps_run(cs, st, n, Y, stretch_done, x, err);
+  if (!rc && n) *t = st[n - 1].t1;
+  free(st);
+  free(is_output);
   return rc;
 }
 
@@ -733,7 +804,20 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   double start = now_seconds(), t_end = c->times[c->ntimes - 1];
   gs_integrator_stats st = {0};
   double switch_reached = NAN; /* the switch time the last advance ended at */
-  for (size_t i = 0; !rc && i < c->ntimes; i++) {
+  if (!rc && step.cs) {
+    stretch_run x = {c, out, &guard, M1_0, &ymax_seen, &rep, NULL, show, start, t_end, 0};
+    const double before = gs_comp_steps_rhs_seconds(step.cs), run_start = now_seconds();
+    rc = run_stretches(c, step.cs, &x, &t, Y, err);
+    guard.t_rhs += gs_comp_steps_rhs_seconds(step.cs) - before;
+    guard.t_advance += now_seconds() - run_start - x.t_outputs;
+    phase[PH_OUTPUTS] += x.t_outputs;
+    if (rc && gs_comp_steps_bad_rate(step.cs, &guard.bad_t, &guard.bad_index)) {
+      guard.bad = 1;
+      rc = rate_failure(m, &guard, err);
+    }
+    gs_comp_steps_stats(step.cs, &st);
+  }
+  for (size_t i = 0; !rc && !step.cs && i < c->ntimes; i++) {
     if (c->times[i] <= t) continue;
     /* stop at every time where a rate switches on or off (spray windows,
      * feeds): an integrator cannot step over a jump in f to tolerance */
@@ -753,14 +837,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     }
     const double outputs_start = now_seconds();
     guard.t_advance += outputs_start - advance_start;
-    if (rc && guard.bad) {
-      char where[512];
-      size_t idx = guard.bad_index;
-      if (idx < m->nnum) describe_cell(m, idx / g->ncells, idx % g->ncells, where, sizeof where);
-      else if (idx < m->nstate) snprintf(where, sizeof where, "carried volume entry %zu", idx - m->nnum);
-      else snprintf(where, sizeof where, "volume ledger entry %zu", idx - m->nstate);
-      rc = gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s: the rate of change is not finite (NaN or infinity); check kernel and mechanism parameters", guard.bad_t, where);
-    }
+    if (rc && guard.bad) rc = rate_failure(m, &guard, err);
     if (dist.size > 1) {
       /* the checks and the failure agreement wait for the next step's
        * agreement (post_output_time); rank 0's failure then reaches the
@@ -778,8 +855,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
       if (out_rc) rc = failed_at_output(out_rc, out_rc, &out_err, err);
     }
     phase[PH_OUTPUTS] += now_seconds() - outputs_start;
-    if (step.cs) gs_comp_steps_stats(step.cs, &st);
-    else if (step.it && step.it->type) /* not after a failed rebuild */
+    if (step.it && step.it->type) /* not after a failed rebuild */
       step.it->type->get_stats(step.it->self, &st);
     if (show) progress(c, t, t_end, &st, now_seconds() - start);
   }
@@ -818,7 +894,10 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     print_timings(&dist, phase);
     if (dist.size == 1 && !step.cs) print_split_bounds(m, phase, now_seconds() - start);
     if (step.cs) print_compartment_steps(step.cs, g->ncomp);
+    if (step.cs) gs_comp_steps_print_threads(step.cs, stderr);
   }
+  rep.per_compartment = step.cs != NULL;
+  if (step.cs) rep.worst_coupling = gs_comp_steps_worst_coupling(step.cs);
   stepper_free(&step);
   gs_deferred_output_free(guard.deferred);
   free(m->comp_seconds);
@@ -831,8 +910,6 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   rep.t_end = t;
   rep.stats = st;
   rep.rebalanced = guard.rebalanced;
-  rep.per_compartment = step.cs != NULL;
-  if (step.cs) rep.worst_coupling = gs_comp_steps_worst_coupling(step.cs);
   rep.wall_seconds = now_seconds() - start;
   if (yout && dist.size > 1 && !rc) gs_parallel_broadcast(Y, n); /* only rank 0's is whole */
   if (yout) memcpy(yout, Y, n * sizeof(double));
