@@ -56,7 +56,16 @@ same_on_two_ranks() {
   same_results "$WORK/${2}1" "$WORK/${2}2m"
 }
 
-ex="$SRC/examples/corimix-continuous.yaml"
+# the example takes its own steps per compartment, which runs in one process:
+# under mpirun it says so and stops; with steps: shared it runs on ranks
+run_rc 1 "${MPI[@]}" -np 2 "$BIN" run "$SRC/examples/corimix-continuous.yaml" --out "$WORK/pc2" --quiet
+stderr_has "solver.steps: per_compartment runs in one process"
+no_result_files "$WORK/pc2"
+mkdir -p "$WORK/data"
+cp "$SRC/examples/data/"*.csv "$WORK/data/"
+ex="$WORK/corimix-shared.yaml"
+sed 's/steps: per_compartment/steps: shared/' "$SRC/examples/corimix-continuous.yaml" >"$ex"
+grep -q "steps: shared" "$ex" || fail "could not give the example shared steps"
 run_rc 0 "$BIN" run "$ex" --out "$WORK/serial" --quiet --threads 1
 run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$ex" --out "$WORK/np2" --quiet --threads 1 --timings
 stderr_has "done to t = 85"
