@@ -83,6 +83,7 @@ typedef struct worker {
    * derivatives at both ends, and the inflow state P' */
   double try_s, try_h;
   double *p0, *p1, *d0, *d1, *s0, *s1, *halo;
+  double at0, at1; /* the times p0, d0, s0 and p1, d1, s1 hold (NAN: none) */
   const node_list *up; /* the record of the compartment before, or NULL */
   size_t up_count;  /* nodes of up's record read for the step tried */
   const double *last_f; /* the last evaluation's rates (the integrator's buffer) */
@@ -272,8 +273,21 @@ static void comp_trying(void *ctx, double t0, double h) {
   w->up_count = wait_for(cp->s, w->up, t0 + h);
   w->t_wait += now_seconds() - wait_start;
   if (!w->up_count) return; /* aborted: comp_rhs fails */
-  nodes_eval(w->up, w->up_count, nflow, t0, w->p0, w->d0, w->s0);
+  /* Z_H at a time, once the record reaches past it, never changes: a retry
+   * keeps the start's values, and a step after an accepted one starts where
+   * that one ended */
+  if (t0 != w->at0 && t0 == w->at1) {
+    double *tmp;
+    tmp = w->p0, w->p0 = w->p1, w->p1 = tmp;
+    tmp = w->d0, w->d0 = w->d1, w->d1 = tmp;
+    tmp = w->s0, w->s0 = w->s1, w->s1 = tmp;
+    w->at0 = t0;
+    w->at1 = NAN;
+  }
+  if (t0 != w->at0) nodes_eval(w->up, w->up_count, nflow, t0, w->p0, w->d0, w->s0);
   nodes_eval(w->up, w->up_count, nflow, t0 + h, w->p1, w->d1, w->s1);
+  w->at0 = t0;
+  w->at1 = t0 + h;
 }
 
 /* The upstream numbers and totals whose flow k P'(t) enters at t: P' of the
@@ -400,6 +414,8 @@ static int start_rates(comp_t *cp, double t0) {
     w->up_count = wait_for(s, w->up, t0);
     if (!w->up_count) return GS_ENUMERIC;
     nodes_eval(w->up, w->up_count, s->nflow, t0, w->p0, w->d0, w->s0);
+    w->at0 = t0;
+    w->at1 = NAN;
   }
   if (extra_rates(cp, t0, y)) return GS_ENUMERIC;
   memcpy(node0 + 1 + 2 * s->nflow, w->last_f, s->nflow * sizeof(double));
@@ -575,6 +591,7 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
   cp->cur = L;
   w->up = comp ? &s->comp[comp - 1].rec[k % s->depth] : NULL;
   w->up_count = 0;
+  w->at0 = w->at1 = NAN; /* a new record */
   w->bad = 0;
   w->off_stretch = 0;
   w->stretch_t0 = t0;
