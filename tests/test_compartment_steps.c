@@ -13,7 +13,8 @@
  *     rtol 1e-9 against shared steps at rtol 1e-12, final states.
  *  3. Threads: six compartments (more than threads, so threads take several
  *     and run ahead of each other) with a rate switch, on 1, 2 and 3
- *     threads: the same numbers bit for bit.
+ *     threads: the same numbers bit for bit; and a run that fails in the
+ *     fourth compartment: the same failure on 1, 2 and 3 threads.
  *  4. Case errors: a method other than rk, an unknown value. */
 #include <gsl/gsl_sf_gamma.h>
 #include <omp.h>
@@ -202,8 +203,34 @@ static void test_threads(void) {
     }
     gs_case_free(&c);
   }
-  omp_set_num_threads(max);
   free(first);
+  /* the fourth compartment (fast transfer) runs out of steps: the same
+   * failure, whatever the threads (the one a single thread meets first) */
+  char *failing = tl_fmt("%.*ssteps: per_compartment, max_steps_per_output: 40}\n%s", (int)(strstr(yaml, "steps: per_compartment}") - yaml),
+                         yaml, strstr(yaml, "output:"));
+  char *p = strstr(failing, "0.4, 2.5");
+  CHECK(p != NULL);
+  if (p) memcpy(p, "0.4, 25 ", 8);
+  char first_msg[sizeof(gs_error){0}.msg] = "";
+  for (int nt = 1; nt <= 3; nt++) {
+    omp_set_num_threads(nt);
+    gs_case c;
+    gs_error err;
+    int rc = -1;
+    double *y = NULL;
+    if (tl_case(failing, &c) == 0) {
+      y = tl_run(&c, NULL, &rc, &err);
+      CHECK(rc == GS_ENUMERIC);
+      CHECK(strstr(err.msg, "compartment 4: integrator rk: max_steps_per_output = 40") != NULL);
+      if (nt == 1) snprintf(first_msg, sizeof first_msg, "%s", err.msg);
+      else CHECK(strcmp(first_msg, err.msg) == 0);
+      if (nt == 3) printf("failure on 1-3 threads: %s\n", err.msg);
+      gs_case_free(&c);
+    }
+    free(y);
+  }
+  free(failing);
+  omp_set_num_threads(max);
 }
 
 static void test_errors(void) {

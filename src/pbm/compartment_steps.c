@@ -84,6 +84,8 @@ typedef struct worker {
   double try_s, try_h;
   double *p0, *p1, *d0, *d1, *s0, *s1, *halo;
   double at0, at1; /* the times p0, d0, s0 and p1, d1, s1 hold (NAN: none) */
+  size_t key;       /* task_key of its task */
+  int stop;         /* its task comes after a failure: it stops */
   const node_list *up; /* the record of the compartment before, or NULL */
   size_t up_count;  /* nodes of up's record read for the step tried */
   const double *last_f; /* the last evaluation's rates (the integrator's buffer) */
@@ -129,7 +131,11 @@ struct gs_comp_steps {
   size_t *home;
   double *cost, t_out;
   size_t complete[RING];
-  atomic_int abort; /* something failed: the others stop */
+  /* the earliest failure so far, as task_key(stretch, compartment) (ncomp
+   * for done_fn), SIZE_MAX while none: tasks after it stop, tasks before it
+   * go on (one of them may fail earlier), so the failure reported is the one
+   * a single thread meets first, whatever the number of threads */
+  atomic_size_t fail_key;
   int locks;        /* lock and out_lock initialised */
   int bad_rate;     /* the failure was a rate that was not finite, at: */
   double bad_t;
@@ -234,26 +240,42 @@ static void nodes_eval(const node_list *L, size_t count, size_t nflow, double t,
   memcpy(d2z, at + 1 + 2 * nflow, nflow * sizeof(double));
 }
 
+static size_t task_key(const struct gs_comp_steps *s, size_t k, size_t c) {
+  return k * (s->ncomp + 1) + c;
+}
+
+/* A task after the earliest failure: it stops. */
+static int stopped(const struct gs_comp_steps *s, size_t key) {
+  return key > atomic_load_explicit(&s->fail_key, memory_order_acquire);
+}
+
+static void relax(unsigned spins) {
+  if (spins > 1000) sched_yield(); /* more threads than free cores */
+#if defined(__x86_64__) || defined(__i386__)
+  else __builtin_ia32_pause();
+#endif
+}
+
 /* Wait until the compartment before has published nodes up to t (or is
- * done); returns how many may be read, 0 when the run is aborted. */
+ * done); returns how many may be read, 0 when the task must stop (it comes
+ * after a failure, or the compartment before ended short of t: it failed). */
 static void outputs(struct gs_comp_steps *s);
 
-static size_t wait_for(struct gs_comp_steps *s, const node_list *up, double t) {
+static size_t wait_for(struct gs_comp_steps *s, const node_list *up, double t, size_t key) {
   for (unsigned spins = 0;; spins++) {
-    if (atomic_load_explicit(&s->abort, memory_order_acquire)) return 0;
+    if (stopped(s, key)) return 0;
     const size_t count = atomic_load_explicit(&up->published, memory_order_acquire);
     if (count && node_t(up, s->nflow, count - 1) >= t) return count;
-    if (atomic_load_explicit(&up->done, memory_order_acquire))
-      return atomic_load_explicit(&up->published, memory_order_acquire);
+    if (atomic_load_explicit(&up->done, memory_order_acquire)) {
+      const size_t all = atomic_load_explicit(&up->published, memory_order_acquire);
+      return all && node_t(up, s->nflow, all - 1) >= t ? all : 0;
+    }
     /* rather than wait, write the stretches every compartment is done with */
     if (spins % 64 == 63 && s->nworkers > 1 && s->outputs_ready && omp_test_lock(&s->out_lock)) {
       omp_unset_lock(&s->out_lock);
       outputs(s);
     }
-    if (spins > 1000) sched_yield(); /* more threads than free cores */
-#if defined(__x86_64__) || defined(__i386__)
-    else __builtin_ia32_pause();
-#endif
+    relax(spins);
   }
 }
 
@@ -266,13 +288,17 @@ static void comp_trying(void *ctx, double t0, double h) {
   const size_t nflow = cp->s->nflow;
   cp->try_s = t0;
   cp->try_h = h;
-  if (!cp->comp) return;
+  if (stopped(cp->s, w->key)) w->stop = 1; /* comp_rhs fails */
+  if (!cp->comp || w->stop) return;
   w->try_s = t0;
   w->try_h = h;
   const double wait_start = now_seconds();
-  w->up_count = wait_for(cp->s, w->up, t0 + h);
+  w->up_count = wait_for(cp->s, w->up, t0 + h, w->key);
   w->t_wait += now_seconds() - wait_start;
-  if (!w->up_count) return; /* aborted: comp_rhs fails */
+  if (!w->up_count) {
+    w->stop = 1;
+    return;
+  }
   /* Z_H at a time, once the record reaches past it, never changes: a retry
    * keeps the start's values, and a step after an accepted one starts where
    * that one ended */
@@ -353,8 +379,9 @@ static int comp_rhs(void *ctx, double t, const double *y, double *f) {
   struct gs_comp_steps *s = cp->s;
   gs_model *m = &w->m;
   const double start = now_seconds();
-  if (cp->comp && (!w->up_count || !inflow_state(w, t))) {
-    w->off_stretch = w->up_count != 0; /* else aborted: another compartment failed */
+  if (w->stop) return 1; /* after a failure elsewhere */
+  if (cp->comp && !inflow_state(w, t)) {
+    w->off_stretch = 1;
     w->bad_t = t;
     return 1;
   }
@@ -411,8 +438,11 @@ static int start_rates(comp_t *cp, double t0) {
   if (cp->comp) {
     w->try_s = t0;
     w->try_h = 0; /* the inflow is then Z_H'(t0) */
-    w->up_count = wait_for(s, w->up, t0);
-    if (!w->up_count) return GS_ENUMERIC;
+    w->up_count = wait_for(s, w->up, t0, w->key);
+    if (!w->up_count) {
+      w->stop = 1;
+      return GS_ENUMERIC;
+    }
     nodes_eval(w->up, w->up_count, s->nflow, t0, w->p0, w->d0, w->s0);
     w->at0 = t0;
     w->at1 = NAN;
@@ -460,6 +490,16 @@ static void unpack(const struct gs_comp_steps *s, size_t comp, const double *y, 
   memcpy(Y + m->nstate + comp * nl, y + s->off_ledger, nl * sizeof(double));
 }
 
+/* Zeroed arrays on cache-line boundaries: threads write neighbouring
+ * elements (compartments, workers) at every step, and elements that share a
+ * line had made each thread's writes evict the other's. */
+static void *calloc_lines(size_t n, size_t size) {
+  size_t bytes = (n * size + 63) / 64 * 64;
+  void *p = aligned_alloc(64, bytes ? bytes : 64);
+  if (p) memset(p, 0, bytes);
+  return p;
+}
+
 static int worker_init(struct gs_comp_steps *s, worker_t *w, gs_error *err) {
   w->s = s;
   double **bufs[] = {&w->p0, &w->p1, &w->d0, &w->d1, &w->s0, &w->s1, &w->halo};
@@ -494,8 +534,9 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   if ((size_t)nw > s->ncomp) nw = (int)s->ncomp;
   s->nworkers = nw < 1 ? 1 : nw;
   s->k = gs_calloc(s->ncomp, sizeof(double), err);
-  s->comp = gs_calloc(s->ncomp, sizeof(comp_t), err);
-  s->workers = gs_calloc((size_t)s->nworkers, sizeof(worker_t), err);
+  s->comp = calloc_lines(s->ncomp, sizeof(comp_t));
+  s->workers = calloc_lines((size_t)s->nworkers, sizeof(worker_t));
+  if (!s->comp || !s->workers) return gs_error_set(err, GS_ENOMEM, "out of memory");
   s->next_k = gs_calloc(s->ncomp, sizeof(size_t), err);
   s->running = gs_calloc(s->ncomp, sizeof(int), err);
   s->home = gs_calloc((size_t)s->nworkers + 1, sizeof(size_t), err);
@@ -564,17 +605,23 @@ static void view_one(worker_t *w, size_t comp, const gs_stretch *st) {
 
 static int check_coupling(struct gs_comp_steps *s, const comp_t *cp, size_t k, gs_error *err);
 
-/* Record a failure at stretch k, compartment c (c = ncomp: done_fn); the
- * earliest one is the run's. */
-static void fail(struct gs_comp_steps *s, size_t k, size_t c, int rc, const gs_error *err) {
+/* Record a failure at stretch k, compartment c (c = ncomp: done_fn) by
+ * worker w (NULL: done_fn); the earliest one is the run's. */
+static void fail(struct gs_comp_steps *s, size_t k, size_t c, int rc, const gs_error *err,
+                 const worker_t *w) {
   omp_set_lock(&s->lock);
-  if (!s->fail_rc || k < s->fail_k || (k == s->fail_k && c < s->fail_c)) {
+  const size_t key = task_key(s, k, c);
+  if (!s->fail_rc || key < atomic_load(&s->fail_key)) {
     s->fail_rc = rc;
-    s->fail_k = k;
-    s->fail_c = c;
     s->fail_err = *err;
+    /* a rate that was not finite: where, for the run's message */
+    s->bad_rate = w && w->bad == 1;
+    if (s->bad_rate) {
+      s->bad_t = w->bad_t;
+      s->bad_index = w->bad_index;
+    }
+    atomic_store_explicit(&s->fail_key, key, memory_order_release);
   }
-  atomic_store(&s->abort, 1);
   omp_unset_lock(&s->lock);
 }
 
@@ -588,6 +635,8 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
   gs_error errbuf, *err = &errbuf;
   node_list *L = &cp->rec[k % s->depth];
   cp->w = w;
+  w->key = task_key(s, k, comp);
+  w->stop = 0;
   cp->cur = L;
   w->up = comp ? &s->comp[comp - 1].rec[k % s->depth] : NULL;
   w->up_count = 0;
@@ -621,7 +670,14 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
   }
   cp->ode.jumped = st->jumped;
   view_one(w, comp, st);
-  if (!rc) rc = cp->it.type->advance(cp->it.self, &cp->ode, &cp->t, stop, cp->y, err);
+  if (!rc) {
+    rc = cp->it.type->advance(cp->it.self, &cp->ode, &cp->t, stop, cp->y, err);
+    if (rc && !w->stop && !w->off_stretch && w->bad != 1) { /* say which compartment */
+      char msg[sizeof err->msg];
+      snprintf(msg, sizeof msg, "%s", err->msg);
+      gs_error_set(err, rc, "compartment %zu: %s", comp + 1, msg);
+    }
+  }
   if (!rc && cp->has_next && !L->start_f_known && start_rates(cp, t0))
     rc = gs_error_set(err, GS_ENUMERIC, "per-compartment steps: compartment %zu: rates at t = %.9g failed", comp + 1, t0);
   if (!rc && w->bad == 2) rc = gs_error_set(err, GS_ENOMEM, "out of memory for the per-compartment step record");
@@ -638,17 +694,9 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
                       comp + 1, w->bad_t, w->try_s, w->try_s + w->try_h);
   int aborted = 0;
   if (rc) {
-    /* a compartment whose upstream failed fails too: not its own failure */
-    aborted = comp && w->up_count == 0 && atomic_load(&s->abort);
-    if (!aborted) {
-      if (w->bad == 1) { /* where: the run's message names the cell */
-        s->bad_t = w->bad_t;
-        s->bad_index = w->bad_index;
-        s->bad_rate = 1;
-      }
-      fail(s, k, comp, rc, err);
-    }
-    atomic_store(&s->abort, 1);
+    /* a task stopped for a failure elsewhere did not fail on its own */
+    aborted = w->stop;
+    if (!aborted) fail(s, k, comp, rc, err, w);
   } else {
     unpack(s, comp, cp->y, s->ring[k % s->depth]);
     if (cp->has_next) {
@@ -661,13 +709,10 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
     }
     if (comp) { /* once the one before has booked what it discharged */
       const node_list *up = w->up;
-      while (!atomic_load_explicit(&up->done, memory_order_acquire) && !atomic_load(&s->abort)) {
-#if defined(__x86_64__) || defined(__i386__)
-        __builtin_ia32_pause();
-#endif
-      }
-      if (atomic_load(&s->abort)) aborted = 1;
-      else if ((rc = check_coupling(s, cp, k, err))) fail(s, k, comp, rc, err);
+      for (unsigned spins = 0; !atomic_load_explicit(&up->done, memory_order_acquire) && !stopped(s, w->key); spins++)
+        relax(spins);
+      if (stopped(s, w->key)) aborted = 1;
+      else if ((rc = check_coupling(s, cp, k, err))) fail(s, k, comp, rc, err, w);
     }
   }
   atomic_store_explicit(&L->done, 1, memory_order_release);
@@ -711,8 +756,11 @@ static long pick_task(struct gs_comp_steps *s, int wi, int *finished) {
   *finished = 1;
   for (size_t c = 0; c < s->ncomp; c++) {
     const size_t k = s->next_k[c];
-    if (k < s->nst) *finished = 0;
-    if (k >= s->nst || s->running[c]) continue;
+    /* left: a task not after the earliest failure, or one running (which may
+     * make the next of its compartment available) */
+    const int left = k < s->nst && !stopped(s, task_key(s, k, c));
+    if (left || s->running[c]) *finished = 0;
+    if (!left || s->running[c]) continue;
     /* the one before has started this stretch (its record is being written) */
     const int up_done = !c || s->next_k[c - 1] > k;
     if (!up_done && !(s->running[c - 1] && s->next_k[c - 1] == k)) continue;
@@ -737,7 +785,7 @@ static void outputs(struct gs_comp_steps *s) {
   for (;;) {
     omp_set_lock(&s->lock);
     const size_t k = s->outputs_done;
-    const int ready = k < s->nst && s->complete[k % s->depth] == s->ncomp && !atomic_load(&s->abort);
+    const int ready = k < s->nst && s->complete[k % s->depth] == s->ncomp && !s->fail_rc;
     if (!ready) atomic_store(&s->outputs_ready, 0);
     omp_unset_lock(&s->lock);
     if (!ready) break;
@@ -746,7 +794,7 @@ static void outputs(struct gs_comp_steps *s) {
     worker_t *me = &s->workers[omp_get_thread_num() < s->nworkers ? omp_get_thread_num() : 0];
     int rc = s->done_fn ? s->done_fn(s->done_ctx, k, s->st[k].t1, s->ring[k % s->depth], &err) : GS_OK;
     if (rc) {
-      fail(s, k, s->ncomp, rc, &err);
+      fail(s, k, s->ncomp, rc, &err, NULL);
       break;
     }
     omp_set_lock(&s->lock);
@@ -764,12 +812,13 @@ static void outputs(struct gs_comp_steps *s) {
   omp_unset_lock(&s->out_lock);
 }
 
-/* One thread: take tasks until none is left (or the run failed). */
+/* One thread: take tasks until none is left (after a failure: none before
+ * it). */
 static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
   for (unsigned idle = 0;;) {
     int finished = 0;
     omp_set_lock(&s->lock);
-    const long c = atomic_load(&s->abort) ? -1 : pick_task(s, (int)(w - s->workers), &finished);
+    const long c = pick_task(s, (int)(w - s->workers), &finished);
     const size_t k = c >= 0 ? s->next_k[c] : 0;
     if (c >= 0) {
       s->running[c] = 1;
@@ -781,7 +830,6 @@ static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
     }
     omp_unset_lock(&s->lock);
     if (c < 0) {
-      if (atomic_load(&s->abort)) break;
       if (finished) { /* the last stretches' outputs */
         outputs(s);
         break;
@@ -792,9 +840,9 @@ static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
         outputs(s);
       }
       const double t_idle0 = now_seconds();
-      for (int i = 0; i < 50; i++) __builtin_ia32_pause();
+      for (int i = 0; i < 50; i++) relax(idle); /* waiting for another thread's task */
+      idle++;
       w->t_idle += now_seconds() - t_idle0;
-      if (++idle > 100) sched_yield(); /* waiting for another thread's task */
       continue;
     }
     idle = 0;
@@ -827,7 +875,7 @@ int gs_comp_steps_run(gs_comp_steps *s, const gs_stretch *st, size_t nst, double
   atomic_store(&s->outputs_ready, 0);
   s->fail_rc = 0;
   s->bad_rate = 0;
-  atomic_store(&s->abort, 0);
+  atomic_store(&s->fail_key, SIZE_MAX);
   /* Threads take (compartment, stretch) tasks: a compartment runs ahead of
    * the next one by up to RING stretches, and follows the one before through
    * a stretch they share, waiting only when it would step past the last
