@@ -23,7 +23,12 @@
  * in blocks that never move, so that the next compartment reads the nodes
  * published so far while this one appends. */
 #define NODE_MAX 32768          /* steps one compartment may take in one stretch */
-#define NODE_BLOCK_BYTES 131072 /* nodes per block: as many as fit, 1 to 16 */
+/* nodes per block: as many as fit in NODE_BLOCK_BYTES, 1 to 16; below
+ * malloc's mmap threshold (128 KiB), so that blocks freed and allocated
+ * again come from the heap, not from fresh pages */
+#define NODE_BLOCK_BYTES 65536
+/* a ring slot keeps the blocks of its busiest stretch up to this much */
+#define NODE_KEEP_BYTES ((size_t)256 << 10)
 #define DIR_SIZE 512 /* block pointers per directory page */
 #define DIR_PAGES (NODE_MAX / DIR_SIZE)
 typedef struct {
@@ -648,9 +653,11 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
   if (k == 0) pack(s, comp, Y, cp->y);
   memset(cp->y + s->off_recv, 0, (cp->n - s->off_recv) * sizeof(double)); /* received, Z */
   cp->t = t0;
-  /* a slot keeps its first block; those a busy stretch added go back (each
-   * compartment's slots would otherwise all keep the largest record) */
-  for (size_t b = 1; L->dir[b / DIR_SIZE] && L->dir[b / DIR_SIZE][b % DIR_SIZE]; b++) {
+  /* a slot keeps NODE_KEEP_BYTES of blocks (at least one); those a busy
+   * stretch added beyond go back (each compartment's slots would otherwise
+   * all keep the largest record) */
+  const size_t keep = NODE_KEEP_BYTES / (L->per * (1 + 3 * s->nflow) * sizeof(double));
+  for (size_t b = keep > 1 ? keep : 1; L->dir[b / DIR_SIZE] && L->dir[b / DIR_SIZE][b % DIR_SIZE]; b++) {
     free(L->dir[b / DIR_SIZE][b % DIR_SIZE]);
     L->dir[b / DIR_SIZE][b % DIR_SIZE] = NULL;
   }
