@@ -50,7 +50,7 @@ typedef struct {
  * records, and the full states waiting for their output, are kept in rings
  * this deep; shallower when the records of many large compartments would
  * take too much memory, gs_comp_steps.depth). */
-#define RING 4
+#define RING 8
 #define RING_BYTES ((size_t)64 << 20)
 
 static double *node_at(const node_list *L, size_t nflow, size_t j) {
@@ -560,9 +560,13 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   const size_t node_bytes = (1 + 3 * s->nflow) * sizeof(double);
   size_t per = NODE_BLOCK_BYTES / node_bytes;
   per = per < 1 ? 1 : per > 16 ? 16 : per;
-  /* rings as deep as RING while a block of records per compartment and
-   * ring slot stays within RING_BYTES, else 2 */
-  s->depth = RING;
+  /* one thread takes the stretches in order and needs no lead: 2 slots
+   * (more only cost cache); several run as deep as RING while a block of
+   * records per compartment and ring slot stays within RING_BYTES, else 2.
+   * A deep ring lets the first compartments bank a lead that the others
+   * work off while the first are slow (the spray's onset), and absorbs a
+   * vCPU that runs slower for a while */
+  s->depth = s->nworkers > 1 ? RING : 2;
   while (s->depth > 2 && s->depth * (s->ncomp - 1) * per * node_bytes > RING_BYTES) s->depth--;
   for (size_t comp = 0; comp < s->ncomp; comp++) {
     comp_t *cp = &s->comp[comp];
