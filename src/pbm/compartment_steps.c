@@ -51,7 +51,7 @@ typedef struct {
  * this deep; shallower when the records of many large compartments would
  * take too much memory, gs_comp_steps.depth). */
 #define RING 8
-#define RING_BYTES ((size_t)64 << 20)
+#define RING_BYTES ((size_t)16 << 20)
 
 static double *node_at(const node_list *L, size_t nflow, size_t j) {
   const size_t b = j / L->per;
@@ -567,7 +567,8 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
    * work off while the first are slow (the spray's onset), and absorbs a
    * vCPU that runs slower for a while */
   s->depth = s->nworkers > 1 ? RING : 2;
-  while (s->depth > 2 && s->depth * (s->ncomp - 1) * per * node_bytes > RING_BYTES) s->depth--;
+  const size_t slot_bytes = per * node_bytes > NODE_KEEP_BYTES ? per * node_bytes : NODE_KEEP_BYTES;
+  while (s->depth > 2 && s->depth * (s->ncomp - 1) * slot_bytes > RING_BYTES) s->depth--;
   for (size_t comp = 0; comp < s->ncomp; comp++) {
     comp_t *cp = &s->comp[comp];
     cp->s = s;
