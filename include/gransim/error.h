@@ -36,6 +36,11 @@ int gs_error_prefix(gs_error *err, const char *fmt, ...) __attribute__((format(p
 /* malloc/calloc that set GS_ENOMEM in *err on failure (return NULL). */
 void *gs_malloc(size_t nbytes, gs_error *err);
 void *gs_calloc(size_t count, size_t size, gs_error *err);
+/* Zeroed memory on a cache-line (64-byte) boundary, for arrays that threads
+ * write in separate parts (free with free()); and a count of doubles rounded
+ * up to whole cache lines, for the stride between those parts. */
+void *gs_calloc_lines(size_t nbytes, gs_error *err);
+static inline size_t gs_doubles_to_lines(size_t n) { return (n + 7) / 8 * 8; }
 
 #ifdef __cplusplus
 }

@@ -41,6 +41,14 @@ void *gs_malloc(size_t nbytes, gs_error *err) {
   return p;
 }
 
+void *gs_calloc_lines(size_t nbytes, gs_error *err) {
+  const size_t bytes = (nbytes ? nbytes + 63 : 64) / 64 * 64;
+  void *p = aligned_alloc(64, bytes);
+  if (p) memset(p, 0, bytes);
+  else gs_error_set(err, GS_ENOMEM, "out of memory allocating %zu bytes", nbytes);
+  return p;
+}
+
 void *gs_calloc(size_t count, size_t size, gs_error *err) {
   void *p = calloc(count ? count : 1, size ? size : 1);
   if (!p) gs_error_set(err, GS_ENOMEM, "out of memory allocating %zu x %zu bytes", count, size);

@@ -78,7 +78,8 @@ typedef struct {
   size_t *span;          /* per compartment and row: [lo, hi) of the cells taking part */
   comp_choice *cs;       /* per compartment: when its spans and wetness were chosen */
   int nc;                /* carried quantities */
-  double *pcar;          /* nc * ncells: load per particle in the compartment being evaluated */
+  double *pcar;          /* per slot (pcar_len apart) nc * ncells: load per particle in the compartment being evaluated */
+  size_t pcar_len, masked_len; /* per-slot strides, whole cache lines */
   int wet, wet_liquid;   /* WET_*; carried index of the liquid */
   double wet_min;        /* liquid / solid volume ratio that makes a particle wet */
   double wet_ramp;       /* relative width of the switch (0: a step, as in seed 000) */
@@ -230,21 +231,24 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     A->nthreads = m->nslots > 0 ? m->nslots : 1;
     A->nc = m->ncarried;
     const size_t nslot = (size_t)A->nthreads;
-    A->pcar = gs_calloc(nslot * ((size_t)A->nc * A->ncells + 1), sizeof(double), err);
+    /* per slot, on cache lines of their own: threads write them at once */
+    A->pcar_len = gs_doubles_to_lines((size_t)A->nc * A->ncells + 1);
+    A->pcar = gs_calloc_lines(nslot * A->pcar_len * sizeof(double), err);
     A->wet_ok = gs_calloc(A->ncomp * A->ncells, sizeof(double), err);
-    A->masked = gs_calloc(nslot * A->ncells, sizeof(double), err);
+    A->masked_len = gs_doubles_to_lines(A->ncells);
+    A->masked = gs_calloc_lines(nslot * A->masked_len * sizeof(double), err);
     A->cs = aligned_alloc(64, A->ncomp * sizeof(comp_choice));
     if (!A->pcar || !A->wet_ok || !A->cs || !A->masked) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
     for (size_t c = 0; !rc && c < A->ncomp; c++)
       A->cs[c] = (comp_choice){0.0, NAN, {0, 0}, 0}; /* nothing chosen yet */
     /* loads are computed only where pairs read them (carried_loads): a read
      * elsewhere would show as NaN, not as a load of another compartment */
-    for (size_t i = 0; !rc && i < nslot * ((size_t)A->nc * A->ncells + 1); i++) A->pcar[i] = NAN;
+    for (size_t i = 0; !rc && i < nslot * A->pcar_len; i++) A->pcar[i] = NAN;
     A->nrows = A->n[0] * A->n[1];
     A->span = gs_malloc(2 * A->nrows * A->ncomp * sizeof(size_t), err);
     if (!A->span) rc = GS_ENOMEM;
-    A->work_len = (size_t)(7 + A->nc) * A->ncells + A->n[2];
-    A->work = gs_malloc((size_t)A->nthreads * A->work_len * sizeof(double), err);
+    A->work_len = gs_doubles_to_lines((size_t)(7 + A->nc) * A->ncells + A->n[2]);
+    A->work = gs_calloc_lines((size_t)A->nthreads * A->work_len * sizeof(double), err);
     A->dirty = aligned_alloc(64, (size_t)A->nthreads * sizeof(dirty_range));
     if (!A->work || !A->dirty) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
     for (int t = 0; !rc && t < A->nthreads; t++) { /* all of it, the first time */
@@ -628,8 +632,8 @@ typedef struct {
 
 static evaluator evaluator_for(const agg_t *A, int slot) {
   int res = slot < 0 ? 0 : slot;
-  evaluator e = {slot, res, A->pcar + (size_t)res * ((size_t)A->nc * A->ncells + 1),
-                 A->masked + (size_t)res * A->ncells};
+  evaluator e = {slot, res, A->pcar + (size_t)res * A->pcar_len,
+                 A->masked + (size_t)res * A->masked_len};
   return e;
 }
 

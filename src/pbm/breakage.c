@@ -50,6 +50,7 @@ typedef struct {
   double *births, *vol; /* CA workspace per slot (gs_model.slot): ncells and dim*ncells */
   int nc;               /* carried quantities */
   double *cbirth;       /* CA workspace per slot: nc*ncells pooled loads */
+  size_t births_len, vol_len, cbirth_len; /* per-slot strides, whole cache lines */
 } brk_t;
 
 static void brk_free(void *self) {
@@ -189,10 +190,14 @@ static int brk_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   if (!rc) {
     B->rate = gs_malloc(g->ncells * sizeof(double), err);
     const size_t nslot = m->nslots > 0 ? (size_t)m->nslots : 1;
-    B->births = gs_malloc(nslot * g->ncells * sizeof(double), err);
-    B->vol = gs_malloc(nslot * g->ncells * (size_t)g->dim * sizeof(double), err);
+    /* per slot, on cache lines of their own: threads write them at once */
     B->nc = m->ncarried;
-    B->cbirth = gs_calloc(nslot * ((size_t)B->nc * g->ncells + 1), sizeof(double), err);
+    B->births_len = gs_doubles_to_lines(g->ncells);
+    B->vol_len = gs_doubles_to_lines(g->ncells * (size_t)g->dim);
+    B->cbirth_len = gs_doubles_to_lines((size_t)B->nc * g->ncells + 1);
+    B->births = gs_calloc_lines(nslot * B->births_len * sizeof(double), err);
+    B->vol = gs_calloc_lines(nslot * B->vol_len * sizeof(double), err);
+    B->cbirth = gs_calloc_lines(nslot * B->cbirth_len * sizeof(double), err);
     if (!B->rate || !B->births || !B->vol || !B->cbirth) rc = GS_ENOMEM;
   }
   for (size_t k = 0; !rc && k < g->ncells; k++) {
@@ -216,8 +221,8 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
   const int dim = B->dim;
   /* this caller's workspace (several may evaluate compartments at once) */
   const size_t slot = m->slot > 0 ? (size_t)m->slot : 0;
-  double *births = B->births + slot * B->ncells, *vol = B->vol + slot * B->ncells * (size_t)dim;
-  double *cbirth = B->cbirth + slot * ((size_t)B->nc * B->ncells + 1);
+  double *births = B->births + slot * B->births_len, *vol = B->vol + slot * B->vol_len;
+  double *cbirth = B->cbirth + slot * B->cbirth_len;
   for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
     const double start = gs_model_clock(m);
     const double *N = gs_model_numbers_c(m, y, comp);

@@ -495,16 +495,6 @@ static void unpack(const struct gs_comp_steps *s, size_t comp, const double *y, 
   memcpy(Y + m->nstate + comp * nl, y + s->off_ledger, nl * sizeof(double));
 }
 
-/* Zeroed arrays on cache-line boundaries: threads write neighbouring
- * elements (compartments, workers) at every step, and elements that share a
- * line had made each thread's writes evict the other's. */
-static void *calloc_lines(size_t n, size_t size) {
-  size_t bytes = (n * size + 63) / 64 * 64;
-  void *p = aligned_alloc(64, bytes ? bytes : 64);
-  if (p) memset(p, 0, bytes);
-  return p;
-}
-
 static int worker_init(struct gs_comp_steps *s, worker_t *w, gs_error *err) {
   w->s = s;
   double **bufs[] = {&w->p0, &w->p1, &w->d0, &w->d1, &w->s0, &w->s1, &w->halo};
@@ -539,9 +529,11 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   if ((size_t)nw > s->ncomp) nw = (int)s->ncomp;
   s->nworkers = nw < 1 ? 1 : nw;
   s->k = gs_calloc(s->ncomp, sizeof(double), err);
-  s->comp = calloc_lines(s->ncomp, sizeof(comp_t));
-  s->workers = calloc_lines((size_t)s->nworkers, sizeof(worker_t));
-  if (!s->comp || !s->workers) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  /* on cache lines: threads write neighbouring compartments and workers at
+   * every step */
+  s->comp = gs_calloc_lines(s->ncomp * sizeof(comp_t), err);
+  s->workers = gs_calloc_lines((size_t)s->nworkers * sizeof(worker_t), err);
+  if (!s->comp || !s->workers) return GS_ENOMEM;
   s->next_k = gs_calloc(s->ncomp, sizeof(size_t), err);
   s->running = gs_calloc(s->ncomp, sizeof(int), err);
   s->home = gs_calloc((size_t)s->nworkers + 1, sizeof(size_t), err);
