@@ -106,6 +106,52 @@ TL_FN double tl_lost(const gs_model *m, const double *ledger, size_t comp, int k
   return ledger[comp * 2 * (size_t)m->nvol + (size_t)m->nvol + (size_t)k];
 }
 
+/* Advance a case's state from *t to t_out the way the run driver does: one
+ * advance per stretch between rate switches (gs_model_next_switch), the
+ * model's switch interval set for it, and `jumped` when a stretch starts at a
+ * switch.  advance(ctx, t, stop, jumped, err) moves *t to stop; *switched
+ * keeps the last switch reached across calls (NAN at first). */
+typedef int (*tl_advance_fn)(void *ctx, double *t, double stop, int jumped, gs_error *err);
+TL_FN int tl_advance_to(gs_model *m, double *t, double t_out, double *switched, tl_advance_fn advance,
+                        void *ctx, gs_error *err) {
+  while (*t < t_out) {
+    const double sw = gs_model_next_switch(m, *t), stop = fmin(t_out, sw);
+    const int jumped = *t == *switched;
+    m->switch_lo = *t;
+    m->switch_hi = stop;
+    int rc = advance(ctx, t, stop, jumped, err);
+    m->switch_lo = 1;
+    m->switch_hi = 0;
+    if (rc) return rc;
+    if (*t == sw) *switched = *t;
+  }
+  return GS_OK;
+}
+
+/* At an output time: the most negative number relative to the largest
+ * (*most_negative, kept as the minimum over calls), and per volume
+ * coordinate and compartment the ledger balance held = initial + exchanged -
+ * lost and the loss through the grid, relative to the coordinate's turnover
+ * over all compartments (*worst_ledger, *worst_lost: maxima over calls). */
+TL_FN void tl_state_checks(const gs_model *m, const double *y0, const double *y, double *most_negative,
+                           double *worst_ledger, double *worst_lost) {
+  double ymax = 0;
+  for (size_t j = 0; j < m->nstate; j++) ymax = fmax(ymax, fabs(y[j]));
+  for (size_t j = 0; ymax > 0 && j < m->nstate; j++) *most_negative = fmin(*most_negative, y[j] / ymax);
+  const double *L = y + m->nstate;
+  const size_t ncomp = m->grid.ncomp;
+  for (int k = 0; k < m->nvol; k++) {
+    double scale = 0;
+    for (size_t comp = 0; comp < ncomp; comp++)
+      scale += fabs(gs_model_held(m, y, comp, k)) + fabs(tl_ext(m, L, comp, k)) + fabs(gs_model_held(m, y0, comp, k));
+    for (size_t comp = 0; scale > 0 && comp < ncomp; comp++) {
+      double held = gs_model_held(m, y, comp, k), ext = tl_ext(m, L, comp, k), lost = tl_lost(m, L, comp, k);
+      *worst_ledger = fmax(*worst_ledger, fabs(held - (gs_model_held(m, y0, comp, k) + ext - lost)) / scale);
+      *worst_lost = fmax(*worst_lost, fabs(lost) / scale);
+    }
+  }
+}
+
 /* Projection of a 1-D density f(v) onto the pivots the way gransim
  * discretises initial distributions: per cell, the number and first moment of
  * f are integrated (adaptive quadrature) and placed on the two pivots around
