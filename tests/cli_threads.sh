@@ -58,7 +58,7 @@ fi
 # once, and the files are those of one thread byte for byte.
 run_rc 0 "$BIN" run "$SRC/examples/corimix-continuous.yaml" --out "$WORK/c1" --threads 1 --quiet
 run_rc 0 "$BIN" run "$SRC/examples/corimix-continuous.yaml" --out "$WORK/c2" --threads 2 --timings
-stderr_has "per-compartment steps (steps / rejected / evaluations):" "2 threads, waiting" "  thread 1: compartments"
+stderr_has "per-compartment steps (steps / rejected / evaluations / ms in rates / ms in tasks):" "2 threads, waiting" "  thread 1: compartments" "page faults while it ran:"
 cmp "$WORK/c1/summary.csv" "$WORK/c2/summary.csv" >&2 || fail "per-compartment steps: summary.csv differs on 2 threads"
 if command -v h5diff >/dev/null 2>&1; then
   h5diff "$WORK/c1/result.h5" "$WORK/c2/result.h5" >&2 || fail "per-compartment steps: result.h5 differs on 2 threads"

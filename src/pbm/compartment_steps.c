@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <time.h>
 
+#include "core/block_pool.h"
 #include "gransim/pbm.h"
 #include "pbm/all_finite.h"
 #include "pbm/distributed.h"
@@ -23,17 +24,19 @@
  * in blocks that never move, so that the next compartment reads the nodes
  * published so far while this one appends. */
 #define NODE_MAX 32768          /* steps one compartment may take in one stretch */
-/* nodes per block: as many as fit in NODE_BLOCK_BYTES, 1 to 16; below
- * malloc's mmap threshold (128 KiB), so that blocks freed and allocated
- * again come from the heap, not from fresh pages */
+/* nodes per block: as many as fit in NODE_BLOCK_BYTES, 1 to 16; the
+ * blocks come from the run's pool (gs_block_pool: reused while still in
+ * cache, on huge pages) and go back to it as soon as the next compartment
+ * has read the record */
 #define NODE_BLOCK_BYTES 65536
-/* a ring slot keeps the blocks of its busiest stretch up to this much */
+/* a stretch's record, as the ring's depth budgets it (RING_BYTES) */
 #define NODE_KEEP_BYTES ((size_t)256 << 10)
 #define DIR_SIZE 512 /* block pointers per directory page */
 #define DIR_PAGES (NODE_MAX / DIR_SIZE)
 typedef struct {
   size_t count;  /* nodes written */
   size_t per;    /* nodes per block */
+  gs_block_pool *pool; /* where its blocks come from */
   /* blocks of per * (1 + 3 nflow) doubles, through pages of DIR_SIZE
    * pointers made as needed (a reader only looks up published nodes, whose
    * pages and blocks exist) */
@@ -78,6 +81,7 @@ typedef struct {
   node_list rec[RING];  /* per stretch k, in rec[k % s->depth] */
   node_list *cur;       /* the record of the stretch being advanced */
   double sent[RING][GS_MAX_VOL]; /* what it discharged in a stretch */
+  double t_rhs; /* seconds in its rates */
 } comp_t;
 
 /* One thread's model view and scratch. */
@@ -151,6 +155,7 @@ struct gs_comp_steps {
   size_t fail_k, fail_c;
   gs_error fail_err;
   double worst_coupling;
+  gs_block_pool *pool; /* the records' blocks */
 };
 
 static double now_seconds(void) {
@@ -192,7 +197,7 @@ static int nodes_push(node_list *L, size_t nflow, double t, const double *z, con
   double ***page = &L->dir[b / DIR_SIZE];
   if (!*page && !(*page = calloc(DIR_SIZE, sizeof(double *)))) return GS_ENOMEM;
   double **block = &(*page)[b % DIR_SIZE];
-  if (!*block && !(*block = malloc(L->per * (1 + 3 * nflow) * sizeof(double)))) return GS_ENOMEM;
+  if (!*block && !(*block = gs_block_pool_get(L->pool))) return GS_ENOMEM;
   double *at = node_at(L, nflow, L->count);
   at[0] = t;
   if (z) memcpy(at + 1, z, nflow * sizeof(double));
@@ -412,7 +417,9 @@ static int comp_rhs(void *ctx, double t, const double *y, double *f) {
       publish(L);
     }
   }
-  w->t_rhs += now_seconds() - start;
+  const double spent = now_seconds() - start;
+  w->t_rhs += spent;
+  cp->t_rhs += spent;
   if (gs_all_finite(f, cp->n)) return 0;
   for (size_t i = 0; i < cp->n; i++)
     if (!isfinite(f[i])) {
@@ -561,6 +568,7 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   s->depth = s->nworkers > 1 ? RING : 2;
   const size_t slot_bytes = per * node_bytes > NODE_KEEP_BYTES ? per * node_bytes : NODE_KEEP_BYTES;
   while (s->depth > 2 && s->depth * (s->ncomp - 1) * slot_bytes > RING_BYTES) s->depth--;
+  if (s->ncomp > 1 && !(s->pool = gs_block_pool_create(per * node_bytes, err))) return GS_ENOMEM;
   for (size_t comp = 0; comp < s->ncomp; comp++) {
     comp_t *cp = &s->comp[comp];
     cp->s = s;
@@ -574,6 +582,7 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
     for (int r = 0; r < RING; r++) {
       node_list *L = &cp->rec[r];
       L->per = per;
+      L->pool = s->pool;
       atomic_init(&L->published, 0);
       atomic_init(&L->done, 0);
     }
@@ -627,6 +636,14 @@ static void fail(struct gs_comp_steps *s, size_t k, size_t c, int rc, const gs_e
   omp_unset_lock(&s->lock);
 }
 
+/* Give a record's blocks back to the pool. */
+static void release_blocks(node_list *L) {
+  for (size_t b = 0; L->dir[b / DIR_SIZE] && L->dir[b / DIR_SIZE][b % DIR_SIZE]; b++) {
+    gs_block_pool_put(L->pool, L->dir[b / DIR_SIZE][b % DIR_SIZE]);
+    L->dir[b / DIR_SIZE][b % DIR_SIZE] = NULL;
+  }
+}
+
 /* Advance compartment comp over stretch k on worker w: from its state at
  * the end of stretch k - 1 (Y for the first), into the ring's full state of
  * stretch k.  Returns 0, or 1 when it failed because another did. */
@@ -650,14 +667,7 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
   if (k == 0) pack(s, comp, Y, cp->y);
   memset(cp->y + s->off_recv, 0, (cp->n - s->off_recv) * sizeof(double)); /* received, Z */
   cp->t = t0;
-  /* a slot keeps NODE_KEEP_BYTES of blocks (at least one); those a busy
-   * stretch added beyond go back (each compartment's slots would otherwise
-   * all keep the largest record) */
-  const size_t keep = NODE_KEEP_BYTES / (L->per * (1 + 3 * s->nflow) * sizeof(double));
-  for (size_t b = keep > 1 ? keep : 1; L->dir[b / DIR_SIZE] && L->dir[b / DIR_SIZE][b % DIR_SIZE]; b++) {
-    free(L->dir[b / DIR_SIZE][b % DIR_SIZE]);
-    L->dir[b / DIR_SIZE][b % DIR_SIZE] = NULL;
-  }
+  release_blocks(L); /* those the next compartment did not give back (it failed) */
   L->count = 0;
   L->start_f_known = 0; /* published and done were reset when the task was taken */
   int rc = GS_OK;
@@ -717,6 +727,10 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
         relax(spins);
       if (stopped(s, w->key)) aborted = 1;
       else if ((rc = check_coupling(s, cp, k, err))) fail(s, k, comp, rc, err, w);
+      /* read to the end: its blocks serve the records still to be written
+       * (the compartment before writes this slot again only after this
+       * task has ended, pick_task) */
+      release_blocks(&s->comp[comp - 1].rec[k % s->depth]);
     }
   }
   atomic_store_explicit(&L->done, 1, memory_order_release);
@@ -916,6 +930,11 @@ void gs_comp_steps_comp_stats(const gs_comp_steps *s, size_t comp, gs_integrator
   cp->it.type->get_stats(cp->it.self, st);
 }
 
+void gs_comp_steps_comp_seconds(const gs_comp_steps *s, size_t comp, double *rates, double *tasks) {
+  *rates = s->comp[comp].t_rhs;
+  *tasks = s->cost[comp];
+}
+
 void gs_comp_steps_stats(const gs_comp_steps *s, gs_integrator_stats *st) {
   memset(st, 0, sizeof *st);
   for (size_t comp = 0; comp < s->ncomp; comp++) {
@@ -955,10 +974,7 @@ void gs_comp_steps_free(gs_comp_steps *s) {
     free(cp->end_f);
     for (int r = 0; r < RING; r++) {
       node_list *L = &cp->rec[r];
-      for (size_t p = 0; p < DIR_PAGES && L->dir[p]; p++) {
-        for (size_t b = 0; b < DIR_SIZE; b++) free(L->dir[p][b]);
-        free(L->dir[p]);
-      }
+      for (size_t p = 0; p < DIR_PAGES && L->dir[p]; p++) free(L->dir[p]); /* blocks: the pool's */
     }
   }
   for (int i = 0; s->workers && i < s->nworkers; i++) {
@@ -978,6 +994,7 @@ void gs_comp_steps_free(gs_comp_steps *s) {
   }
   free(s->k);
   free(s->comp);
+  gs_block_pool_free(s->pool);
   free(s);
 }
 

@@ -73,6 +73,9 @@ int gs_comp_steps_advance(gs_comp_steps *s, double *t, double stop, double *Y, i
 void gs_comp_steps_stats(const gs_comp_steps *s, gs_integrator_stats *st);
 /* Compartment comp's own counts. */
 void gs_comp_steps_comp_stats(const gs_comp_steps *s, size_t comp, gs_integrator_stats *st);
+/* Seconds compartment comp spent in its rates, and in its tasks (waits
+ * excluded). */
+void gs_comp_steps_comp_seconds(const gs_comp_steps *s, size_t comp, double *rates, double *tasks);
 /* Seconds threads waited for the compartment before (summed). */
 double gs_comp_steps_wait_seconds(const gs_comp_steps *s);
 /* Threads that share the compartments. */

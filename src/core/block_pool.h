@@ -1,0 +1,30 @@
+/* A pool of equal blocks for memory that a run fills and empties many times
+ * (the per-compartment steps' records): blocks given back are handed out
+ * again, last in first out (still in cache), and the pool takes its memory
+ * from the system in 2 MiB-aligned chunks marked for transparent huge
+ * pages.  On the project's VM a first write to a 4 KiB page costs ~14 µs
+ * (a guest fault and the hypervisor's own); a 2 MiB huge page costs
+ * ~0.15 ms, 1/50 of that per byte.  Where the kernel gives no huge pages the
+ * chunks are plain pages and only the reuse helps.  Safe to use from
+ * several threads at once. */
+#ifndef GS_BLOCK_POOL_H
+#define GS_BLOCK_POOL_H
+
+#include <stddef.h>
+
+#include "gransim/error.h"
+
+typedef struct gs_block_pool gs_block_pool;
+
+/* A pool of blocks of block_bytes (rounded up to 64) each; no memory yet. */
+gs_block_pool *gs_block_pool_create(size_t block_bytes, gs_error *err);
+/* A block (its contents undefined), or NULL when out of memory. */
+void *gs_block_pool_get(gs_block_pool *p);
+/* Give a block from gs_block_pool_get back. */
+void gs_block_pool_put(gs_block_pool *p, void *block);
+/* Bytes the pool took from the system. */
+size_t gs_block_pool_bytes(const gs_block_pool *p);
+/* Return all memory; the blocks handed out are gone with it. */
+void gs_block_pool_free(gs_block_pool *p);
+
+#endif
