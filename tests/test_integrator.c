@@ -120,6 +120,49 @@ static int drain_f(void *vctx, double t, const double *y, double *dydt) {
   return 0;
 }
 
+/* A compartment filling from empty: y0' = q, y1' = q - y1 / 2 from zero. */
+static int fill_f(void *vctx, double t, const double *y, double *dydt) {
+  (void)t;
+  const double q = *(const double *)vctx;
+  dydt[0] = q;
+  dydt[1] = q - 0.5 * y[1];
+  return 0;
+}
+
+/* The first step: from an empty state, the change of f over an Euler probe
+ * sets it (before, h0 = 0.01 atol / |f| = 1e-11 s and 16 steps growing by 5x
+ * before t = 1); from a full one, it is accepted at once. */
+static void test_rk_first_step(const char *variant) {
+  char yaml[160];
+  snprintf(yaml, sizeof yaml, "solver:\n  method: rk\n  variant: %s\n  rtol: 1e-6\n  atol: 1\n", variant);
+  double q = 1e9;
+  gs_ode ode = {2, fill_f, &q, NULL, 2, NULL, NULL, NULL, 0, NULL, 0, NULL};
+  gs_integrator it;
+  if (make_ok(yaml, &ode, &it)) return;
+  gs_error err = {0};
+  double t = 0, y[2] = {0, 0};
+  CHECK(advance(&it, &ode, &t, 1.0, y, &err) == GS_OK);
+  gs_integrator_stats s = stats_of(&it);
+  if (!(s.steps <= 8 && s.rejected <= 2))
+    fprintf(stderr, "rk %s filling: %ld steps, %ld rejected\n", variant, s.steps, s.rejected);
+  CHECK(s.steps <= 8 && s.rejected <= 2);
+  CHECK_REL(y[0], q, 1e-12);
+  CHECK_REL(y[1], 2 * q * (1 - exp(-0.5)), 1e-6);
+  gs_integrator_free(&it);
+
+  snprintf(yaml, sizeof yaml, "solver:\n  method: rk\n  variant: %s\n  rtol: 1e-9\n  atol: 1e-12\n", variant);
+  decay_ctx c = {1.3, 0, HUGE_VAL};
+  gs_ode dec = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL};
+  if (make_ok(yaml, &dec, &it)) return;
+  t = 0;
+  y[0] = 1;
+  CHECK(advance(&it, &dec, &t, 2.0, y, &err) == GS_OK);
+  s = stats_of(&it);
+  CHECK(s.rejected == 0);
+  CHECK_REL(y[0], exp(-2.6), 1e-7);
+  gs_integrator_free(&it);
+}
+
 /* ---- accuracy and landing on t_out ----------------------------------------- */
 
 /* y' = -k y over 50 outputs at t = 0.1 i (none representable exactly). */
@@ -663,6 +706,9 @@ int main(void) {
   test_nan("solver:\n  method: cvode\n");
   test_nan("solver:\n  method: euler\n");
   test_rk_min_step();
+  test_rk_first_step("rkf45");
+  test_rk_first_step("rkck");
+  test_rk_first_step("rk8pd");
   test_max_steps("rk");
   test_max_steps("cvode");
   test_max_steps("euler");

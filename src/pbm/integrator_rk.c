@@ -288,27 +288,50 @@ static int gs_rk_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_e
   return GS_OK;
 }
 
-/* First step from the size of y and f in the tolerance norm (the first half
- * of Hairer–Nørsett–Wanner's estimate): h = 0.01 * |y| / |f|, or the time f
- * needs to move y by one tolerance unit when y is below atol.  The
- * controller corrects a poor guess within a few steps; this only avoids
- * wasting many rejections on a wildly wrong start. */
-static int gs_rk_initial_step(gs_rk *self, double t, double span, const double *y,
-                              gs_error *err) {
-  double *f = self->evolve->dydt_out; /* scratch: evolve overwrites it anyway */
-  if (gs_rk_rhs(t, y, f, self) != GSL_SUCCESS || gs_rk_agree(self)) return gs_rk_rhs_error(self, err);
-  double d0 = 0, d1 = 0;
+/* The largest of |v| in tolerance units (scale of y), over the components
+ * in the error control (agreed across MPI ranks). */
+static double gs_rk_tol_norm(const gs_rk *self, const double *v, const double *y) {
+  double d = 0;
   for (size_t i = 0; i < self->n; i++) {
     if (self->scale[i] >= GS_RK_EXCLUDED_SCALE) continue;
-    double sc = self->atol * self->scale[i] + self->rtol * fabs(y[i]);
-    d0 = fmax(d0, fabs(y[i]) / sc);
-    d1 = fmax(d1, fabs(f[i]) / sc);
+    d = fmax(d, fabs(v[i]) / (self->atol * self->scale[i] + self->rtol * fabs(y[i])));
   }
-  if (self->ode->reduce_max) {
-    d0 = self->ode->reduce_max(self->ode->ctx, d0);
-    d1 = self->ode->reduce_max(self->ode->ctx, d1);
+  return self->ode->reduce_max ? self->ode->reduce_max(self->ode->ctx, d) : d;
+}
+
+/* First step, after Hairer, Nørsett and Wanner (Solving ODEs I, II.4): h0 =
+ * 0.01 |y| / |f| in the tolerance norm, or the time f needs to move y by
+ * 0.01 of a tolerance unit when y is below atol; then the change of f over
+ * an Euler step of h0 estimates y'' and gives h1 = (0.01 / max(|f|,
+ * |y''|))^(1 / (order + 1)), the step whose leading error term is 0.01 of a
+ * tolerance unit.  h = min(100 h0, h1), as they advise, except where y is
+ * below atol everywhere (an empty compartment filling): there h0 says
+ * nothing about the solution's scale, and the 100 h0 cap had made the run
+ * start at 1e-11 s and take 16 steps growing by 5x before its first second
+ * (the controller corrects a guess that is too large within a rejection or
+ * two). */
+static int gs_rk_initial_step(gs_rk *self, double t, double span, const double *y,
+                              gs_error *err) {
+  /* scratch: evolve computes its own afterwards (reset below) */
+  double *f0 = self->evolve->dydt_out, *f1 = self->evolve->dydt_in, *y1 = self->evolve->yerr;
+  const gs_ode *ode = self->ode;
+  if (ode->trying) ode->trying(ode->ctx, t, 0.0); /* an evaluation at t only */
+  if (gs_rk_rhs(t, y, f0, self) != GSL_SUCCESS || gs_rk_agree(self)) return gs_rk_rhs_error(self, err);
+  const double d0 = gs_rk_tol_norm(self, y, y), d1 = gs_rk_tol_norm(self, f0, y);
+  double h0 = (d1 > 0 && isfinite(d1)) ? 0.01 * fmax(d0, 1.0) / d1 : span;
+  h0 = fmin(fmin(h0, span), self->h_max);
+  double h = h0;
+  if (d1 > 0 && isfinite(d1) && h0 < span) {
+    for (size_t i = 0; i < self->n; i++) y1[i] = y[i] + h0 * f0[i];
+    if (ode->trying) ode->trying(ode->ctx, t, h0);
+    if (gs_rk_rhs(t + h0, y1, f1, self) != GSL_SUCCESS || gs_rk_agree(self))
+      return gs_rk_rhs_error(self, err);
+    for (size_t i = 0; i < self->n; i++) f1[i] -= f0[i];
+    const double d2 = gs_rk_tol_norm(self, f1, y) / h0, big = fmax(d1, d2);
+    const double h1 = pow(0.01 / big, 1.0 / (gsl_odeiv2_step_order(self->step) + 1.0));
+    h = d0 < 1.0 ? h1 : fmin(100.0 * h0, h1);
   }
-  double h = (d1 > 0 && isfinite(d1)) ? 0.01 * fmax(d0, 1.0) / d1 : span;
+  gsl_odeiv2_evolve_reset(self->evolve);
   self->h = fmin(fmin(h, span), self->h_max);
   if (self->h < self->h_min) self->h = self->h_min;
   return GS_OK;
@@ -392,7 +415,6 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
    * h shrank to ~1e-3 s */
   if (ode->jumped) gsl_odeiv2_evolve_reset(self->evolve);
   if (self->h <= 0) {
-    if (ode->trying) ode->trying(ode->ctx, *t, t_out - *t);
     int rc = gs_rk_initial_step(self, *t, t_out - *t, y, err);
     if (rc) return rc;
   }
