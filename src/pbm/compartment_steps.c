@@ -269,7 +269,7 @@ static void relax(unsigned spins) {
 /* Wait until the compartment before has published nodes up to t (or is
  * done); returns how many may be read, 0 when the task must stop (it comes
  * after a failure, or the compartment before ended short of t: it failed). */
-static void outputs(struct gs_comp_steps *s);
+static void outputs(struct gs_comp_steps *s, int wait);
 
 static size_t wait_for(struct gs_comp_steps *s, const node_list *up, double t, size_t key) {
   for (unsigned spins = 0;; spins++) {
@@ -281,10 +281,7 @@ static size_t wait_for(struct gs_comp_steps *s, const node_list *up, double t, s
       return all && node_t(up, s->nflow, all - 1) >= t ? all : 0;
     }
     /* rather than wait, write the stretches every compartment is done with */
-    if (spins % 64 == 63 && s->nworkers > 1 && s->outputs_ready && omp_test_lock(&s->out_lock)) {
-      omp_unset_lock(&s->out_lock);
-      outputs(s);
-    }
+    if (spins % 64 == 63 && s->nworkers > 1 && s->outputs_ready) outputs(s, 0);
     relax(spins);
   }
 }
@@ -797,9 +794,11 @@ static long pick_task(struct gs_comp_steps *s, int wi, int *finished) {
 }
 
 /* Stretches every compartment is done with go to done_fn, in order, one
- * thread at a time. */
-static void outputs(struct gs_comp_steps *s) {
-  omp_set_lock(&s->out_lock);
+ * thread at a time; without wait, nothing when another thread is at it (it
+ * writes what is ready before it stops). */
+static void outputs(struct gs_comp_steps *s, int wait) {
+  if (wait) omp_set_lock(&s->out_lock);
+  else if (!omp_test_lock(&s->out_lock)) return;
   for (;;) {
     omp_set_lock(&s->lock);
     const size_t k = s->outputs_done;
@@ -849,14 +848,11 @@ static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
     omp_unset_lock(&s->lock);
     if (c < 0) {
       if (finished) { /* the last stretches' outputs */
-        outputs(s);
+        outputs(s, 1);
         break;
       }
       /* a free thread writes the stretches every compartment is done with */
-      if (omp_test_lock(&s->out_lock)) {
-        omp_unset_lock(&s->out_lock);
-        outputs(s);
-      }
+      outputs(s, 0);
       const double t_idle0 = now_seconds();
       for (int i = 0; i < 50; i++) relax(idle); /* waiting for another thread's task */
       idle++;
@@ -875,7 +871,10 @@ static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
     const int all = ++s->complete[k % s->depth] == s->ncomp;
     if (all) atomic_store(&s->outputs_ready, 1);
     omp_unset_lock(&s->lock);
-    if (all && s->nworkers == 1) outputs(s); /* several: whichever is free (above) */
+    /* the thread that completes a stretch writes it (or leaves it to the one
+     * writing the stretch before): outputs written late hold the ring's
+     * slots, and a burst of them had stalled the first compartments */
+    if (all) outputs(s, s->nworkers == 1);
   }
 }
 
