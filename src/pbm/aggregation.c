@@ -75,6 +75,10 @@ typedef struct {
   size_t table_size, table_comps; /* table_comps: ncomp, or 1 when beta is the same in all */
   double negligible;     /* cells holding less than this share of number and volume are skipped */
   size_t nrows;          /* rows along the last padded axis: n[0] * n[1] */
+  /* per compartment, on whole cache lines (threads advancing neighbouring
+   * compartments write them at every evaluation): entries of span (2 nrows)
+   * and of wet_ok (ncells) */
+  size_t span_len, wet_len;
   size_t *span;          /* per compartment and row: [lo, hi) of the cells taking part */
   comp_choice *cs;       /* per compartment: when its spans and wetness were chosen */
   int nc;                /* carried quantities */
@@ -234,7 +238,8 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     /* per slot, on cache lines of their own: threads write them at once */
     A->pcar_len = gs_doubles_to_lines((size_t)A->nc * A->ncells + 1);
     A->pcar = gs_calloc_lines(nslot * A->pcar_len * sizeof(double), err);
-    A->wet_ok = gs_calloc(A->ncomp * A->ncells, sizeof(double), err);
+    A->wet_len = gs_doubles_to_lines(A->ncells);
+    A->wet_ok = gs_calloc_lines(A->ncomp * A->wet_len * sizeof(double), err);
     A->masked_len = gs_doubles_to_lines(A->ncells);
     A->masked = gs_calloc_lines(nslot * A->masked_len * sizeof(double), err);
     A->cs = aligned_alloc(64, A->ncomp * sizeof(comp_choice));
@@ -245,7 +250,8 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
      * elsewhere would show as NaN, not as a load of another compartment */
     for (size_t i = 0; !rc && i < nslot * A->pcar_len; i++) A->pcar[i] = NAN;
     A->nrows = A->n[0] * A->n[1];
-    A->span = gs_malloc(2 * A->nrows * A->ncomp * sizeof(size_t), err);
+    A->span_len = gs_doubles_to_lines(2 * A->nrows); /* size_t: 8 bytes, as a double */
+    A->span = gs_calloc_lines(A->span_len * A->ncomp * sizeof(size_t), err);
     if (!A->span) rc = GS_ENOMEM;
     A->work_len = gs_doubles_to_lines((size_t)(7 + A->nc) * A->ncells + A->n[2]);
     A->work = gs_calloc_lines((size_t)A->nthreads * A->work_len * sizeof(double), err);
@@ -330,7 +336,7 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
   const double *restrict beta =
       A->table ? A->table + (A->table_comps > 1 ? comp : 0) * A->table_size + packed_offset(a, ncells) - a
                : acc->row - a;
-  const size_t *restrict span = A->span + comp * 2 * A->nrows;
+  const size_t *restrict span = A->span + comp * A->span_len;
   const int off = 3 - DIM;
   double *restrict death = acc->death, *restrict births = acc->births, *restrict fp = acc->fp;
   double *restrict v0 = acc->vol[off], *restrict v1 = DIM > 1 ? acc->vol[off + 1] : NULL;
@@ -503,7 +509,7 @@ static void reduce_threads(const agg_t *A, int nth, acc_t *acc) {
  * so whole rows and most pairs drop out. */
 static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
   const size_t n2 = A->n[2];
-  size_t *span = A->span + comp * 2 * A->nrows;
+  size_t *span = A->span + comp * A->span_len;
   double ntot = 0, vtot = 0;
   for (size_t c = 0; c < A->ncells; c++) {
     double v = 0;
@@ -558,7 +564,7 @@ static void choose_cells(agg_t *A, size_t comp, double t, const double *N, const
  * compartments, so the loop is serial (result in acc[slot]). */
 static void compartment_pairs(agg_t *A, size_t comp, const double *N, acc_t *acc, int slot,
                               const double *pcar) {
-  const size_t *span = A->span + comp * 2 * A->nrows;
+  const size_t *span = A->span + comp * A->span_len;
   /* small grids (or one thread): a parallel region costs more than the pairs */
   if (slot < 0 && (A->nthreads < 2 || gs_threads_for(A->ncells, 401) < 2)) slot = 0;
   if (slot >= 0) {
@@ -659,7 +665,7 @@ static void carried_loads(const agg_t *A, const gs_model *m, size_t comp, const 
  * the participating cells), so Newton iterations see one function. */
 static const double *wet_cells(agg_t *A, const gs_model *m, size_t comp, double t,
                                const double *y) {
-  double *psi = A->wet_ok + comp * A->ncells;
+  double *psi = A->wet_ok + comp * A->wet_len;
   if (m->hold || (m->in_integrator && t == A->cs[comp].wet_t)) return psi;
   const double *N = gs_model_numbers_c(m, y, comp), *L = gs_model_carried_c(m, y, comp, A->wet_liquid);
   const double lo = A->wet_min * (1 - 0.5 * A->wet_ramp), hi = A->wet_min * (1 + 0.5 * A->wet_ramp);
