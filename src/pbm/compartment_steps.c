@@ -722,12 +722,15 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
       const node_list *up = w->up;
       for (unsigned spins = 0; !atomic_load_explicit(&up->done, memory_order_acquire) && !stopped(s, w->key); spins++)
         relax(spins);
-      if (stopped(s, w->key)) aborted = 1;
-      else if ((rc = check_coupling(s, cp, k, err))) fail(s, k, comp, rc, err, w);
-      /* read to the end: its blocks serve the records still to be written
-       * (the compartment before writes this slot again only after this
-       * task has ended, pick_task) */
-      release_blocks(&s->comp[comp - 1].rec[k % s->depth]);
+      if (stopped(s, w->key)) {
+        aborted = 1; /* the one before may still be writing its record */
+      } else {
+        if ((rc = check_coupling(s, cp, k, err))) fail(s, k, comp, rc, err, w);
+        /* read to the end, and the one before is done with it: its blocks
+         * serve the records still to be written (the one before writes this
+         * slot again only after this task has ended, pick_task) */
+        release_blocks(&s->comp[comp - 1].rec[k % s->depth]);
+      }
     }
   }
   atomic_store_explicit(&L->done, 1, memory_order_release);
