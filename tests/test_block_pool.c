@@ -1,4 +1,4 @@
-/* The block pool (core/block_pool.h): blocks are 64-byte aligned, never
+/* The block pool (core/block_pool.h): blocks are whole pages, never
  * overlap, keep what is written into them, come back last in first out,
  * and stay whole when several threads get and put at once. */
 #include <omp.h>
@@ -28,7 +28,7 @@ static void distinct_blocks(size_t n) {
   for (size_t i = 0; i < n; i++) {
     b[i] = gs_block_pool_get(p);
     CHECK(b[i] != NULL);
-    CHECK((uintptr_t)b[i] % 64 == 0);
+    CHECK((uintptr_t)b[i] % GS_APART == 0);
     memset(b[i], (int)(i % 251), BLOCK);
   }
   int intact = 1;
@@ -38,7 +38,7 @@ static void distinct_blocks(size_t n) {
   CHECK(intact);
   qsort(b, n, sizeof *b, cmp_ptr);
   for (size_t i = 1; i < n; i++) CHECK((uintptr_t)b[i] - (uintptr_t)b[i - 1] >= BLOCK);
-  const size_t chunk = (size_t)2 << 20, block = (BLOCK + 63) / 64 * 64;
+  const size_t chunk = (size_t)2 << 20, block = (BLOCK + GS_APART - 1) / GS_APART * GS_APART;
   const size_t per_chunk = chunk / block, chunks = (n + per_chunk - 1) / per_chunk;
   CHECK(gs_block_pool_bytes(p) == chunks * chunk);
   free(b);
@@ -49,9 +49,9 @@ static void distinct_blocks(size_t n) {
  * memory. */
 static void reuse(void) {
   gs_error err;
-  gs_block_pool *p = gs_block_pool_create(100, &err); /* rounded up to 128 */
+  gs_block_pool *p = gs_block_pool_create(100, &err); /* rounded up to a page */
   void *a = gs_block_pool_get(p), *b = gs_block_pool_get(p), *c = gs_block_pool_get(p);
-  CHECK((uintptr_t)b - (uintptr_t)a == 128 && (uintptr_t)c - (uintptr_t)b == 128);
+  CHECK((uintptr_t)b - (uintptr_t)a == GS_APART && (uintptr_t)c - (uintptr_t)b == GS_APART);
   const size_t bytes = gs_block_pool_bytes(p);
   gs_block_pool_put(p, a);
   gs_block_pool_put(p, c);

@@ -36,11 +36,23 @@ int gs_error_prefix(gs_error *err, const char *fmt, ...) __attribute__((format(p
 /* malloc/calloc that set GS_ENOMEM in *err on failure (return NULL). */
 void *gs_malloc(size_t nbytes, gs_error *err);
 void *gs_calloc(size_t count, size_t size, gs_error *err);
-/* Zeroed memory on a cache-line (64-byte) boundary, for arrays that threads
+/* Data that different threads write must lie whole 4 KiB pages apart, not
+ * just whole cache lines: the cores' prefetchers fetch the lines next to
+ * those they miss (never across a 4 KiB page), and a neighbouring line that
+ * another core is writing then moves between the cores at every write.  On
+ * the project's VM, whose two vCPUs sit on different core complexes in most
+ * periods (~500 ns per cache-line round trip), lines apart but pages shared
+ * made every rate evaluation of the seed-000 example 10-20 % slower on two
+ * threads than on one (docs/performance.md, eleventh session). */
+#define GS_APART ((size_t)4096)
+/* Zeroed memory on a page boundary, in whole pages, for arrays that threads
  * write in separate parts (free with free()); and a count of doubles rounded
- * up to whole cache lines, for the stride between those parts. */
-void *gs_calloc_lines(size_t nbytes, gs_error *err);
-static inline size_t gs_doubles_to_lines(size_t n) { return (n + 7) / 8 * 8; }
+ * up to whole pages, for the stride between those parts. */
+void *gs_calloc_apart(size_t nbytes, gs_error *err);
+static inline size_t gs_doubles_apart(size_t n) {
+  const size_t per = GS_APART / sizeof(double);
+  return (n + per - 1) / per * per;
+}
 
 #ifdef __cplusplus
 }

@@ -29,9 +29,11 @@ static void lock(gs_block_pool *p) {
 static void unlock(gs_block_pool *p) { atomic_flag_clear_explicit(&p->busy, memory_order_release); }
 
 gs_block_pool *gs_block_pool_create(size_t block_bytes, gs_error *err) {
-  gs_block_pool *p = gs_calloc(1, sizeof *p, err);
+  /* its lock and free list on a page of their own: every thread writes them */
+  gs_block_pool *p = gs_calloc_apart(sizeof *p, err);
   if (!p) return NULL;
-  p->block = (block_bytes ? block_bytes + 63 : 64) / 64 * 64;
+  /* whole pages (GS_APART): different threads write neighbouring blocks */
+  p->block = (block_bytes ? block_bytes + GS_APART - 1 : GS_APART) / GS_APART * GS_APART;
   p->chunk = (p->block + CHUNK_ALIGN - 1) / CHUNK_ALIGN * CHUNK_ALIGN;
   atomic_flag_clear(&p->busy);
   return p;

@@ -16,7 +16,8 @@
 
 typedef struct gs_block_pool gs_block_pool;
 
-/* A pool of blocks of block_bytes (rounded up to 64) each; no memory yet. */
+/* A pool of blocks of block_bytes each, rounded up to whole 4 KiB pages
+ * (GS_APART: threads write neighbouring blocks); no memory yet. */
 gs_block_pool *gs_block_pool_create(size_t block_bytes, gs_error *err);
 /* A block (its contents undefined), or NULL when out of memory. */
 void *gs_block_pool_get(gs_block_pool *p);

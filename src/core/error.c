@@ -41,9 +41,9 @@ void *gs_malloc(size_t nbytes, gs_error *err) {
   return p;
 }
 
-void *gs_calloc_lines(size_t nbytes, gs_error *err) {
-  const size_t bytes = (nbytes ? nbytes + 63 : 64) / 64 * 64;
-  void *p = aligned_alloc(64, bytes);
+void *gs_calloc_apart(size_t nbytes, gs_error *err) {
+  const size_t bytes = (nbytes ? nbytes + GS_APART - 1 : GS_APART) / GS_APART * GS_APART;
+  void *p = aligned_alloc(GS_APART, bytes);
   if (p) memset(p, 0, bytes);
   else gs_error_set(err, GS_ENOMEM, "out of memory allocating %zu bytes", nbytes);
   return p;

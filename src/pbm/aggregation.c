@@ -44,20 +44,20 @@
 enum { CELL_AVERAGE = 0, FIXED_PIVOT = 1 };
 enum { WET_OFF = 0, WET_BOTH = 1, WET_EITHER = 2 };
 
-/* Per compartment, the choices made once per time value; one cache line
- * each, as threads evaluating neighbouring compartments at once write them
- * at every evaluation (per-compartment steps). */
+/* Per compartment, the choices made once per time value; a page each
+ * (GS_APART), as threads evaluating neighbouring compartments at once write
+ * them at every evaluation (per-compartment steps). */
 typedef struct {
-  _Alignas(64) double span_t; /* time of the state the spans were computed from */
+  _Alignas(GS_APART) double span_t; /* time of the state the spans were computed from */
   double wet_t;               /* time of the wetness choice (NAN: none yet) */
   size_t prange[2];           /* [lo, hi) of the cells in the spans */
   int span_valid;             /* spans computed at least once */
 } comp_choice;
 
-/* Per slot, the cells of its summed arrays its last use wrote (one cache
- * line each, for the same reason). */
+/* Per slot, the cells of its summed arrays its last use wrote (a page
+ * each, for the same reason). */
 typedef struct {
-  _Alignas(64) size_t lo, hi;
+  _Alignas(GS_APART) size_t lo, hi;
 } dirty_range;
 
 typedef struct {
@@ -75,7 +75,7 @@ typedef struct {
   size_t table_size, table_comps; /* table_comps: ncomp, or 1 when beta is the same in all */
   double negligible;     /* cells holding less than this share of number and volume are skipped */
   size_t nrows;          /* rows along the last padded axis: n[0] * n[1] */
-  /* per compartment, on whole cache lines (threads advancing neighbouring
+  /* per compartment, on whole pages (threads advancing neighbouring
    * compartments write them at every evaluation): entries of span (2 nrows)
    * and of wet_ok (ncells) */
   size_t span_len, wet_len;
@@ -83,7 +83,7 @@ typedef struct {
   comp_choice *cs;       /* per compartment: when its spans and wetness were chosen */
   int nc;                /* carried quantities */
   double *pcar;          /* per slot (pcar_len apart) nc * ncells: load per particle in the compartment being evaluated */
-  size_t pcar_len, masked_len; /* per-slot strides, whole cache lines */
+  size_t pcar_len, masked_len; /* per-slot strides, whole pages (GS_APART) */
   int wet, wet_liquid;   /* WET_*; carried index of the liquid */
   double wet_min;        /* liquid / solid volume ratio that makes a particle wet */
   double wet_ramp;       /* relative width of the switch (0: a step, as in seed 000) */
@@ -235,14 +235,14 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     A->nthreads = m->nslots > 0 ? m->nslots : 1;
     A->nc = m->ncarried;
     const size_t nslot = (size_t)A->nthreads;
-    /* per slot, on cache lines of their own: threads write them at once */
-    A->pcar_len = gs_doubles_to_lines((size_t)A->nc * A->ncells + 1);
-    A->pcar = gs_calloc_lines(nslot * A->pcar_len * sizeof(double), err);
-    A->wet_len = gs_doubles_to_lines(A->ncells);
-    A->wet_ok = gs_calloc_lines(A->ncomp * A->wet_len * sizeof(double), err);
-    A->masked_len = gs_doubles_to_lines(A->ncells);
-    A->masked = gs_calloc_lines(nslot * A->masked_len * sizeof(double), err);
-    A->cs = aligned_alloc(64, A->ncomp * sizeof(comp_choice));
+    /* per slot, on pages of their own: threads write them at once */
+    A->pcar_len = gs_doubles_apart((size_t)A->nc * A->ncells + 1);
+    A->pcar = gs_calloc_apart(nslot * A->pcar_len * sizeof(double), err);
+    A->wet_len = gs_doubles_apart(A->ncells);
+    A->wet_ok = gs_calloc_apart(A->ncomp * A->wet_len * sizeof(double), err);
+    A->masked_len = gs_doubles_apart(A->ncells);
+    A->masked = gs_calloc_apart(nslot * A->masked_len * sizeof(double), err);
+    A->cs = gs_calloc_apart(A->ncomp * sizeof(comp_choice), err);
     if (!A->pcar || !A->wet_ok || !A->cs || !A->masked) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
     for (size_t c = 0; !rc && c < A->ncomp; c++)
       A->cs[c] = (comp_choice){0.0, NAN, {0, 0}, 0}; /* nothing chosen yet */
@@ -250,12 +250,12 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
      * elsewhere would show as NaN, not as a load of another compartment */
     for (size_t i = 0; !rc && i < nslot * A->pcar_len; i++) A->pcar[i] = NAN;
     A->nrows = A->n[0] * A->n[1];
-    A->span_len = gs_doubles_to_lines(2 * A->nrows); /* size_t: 8 bytes, as a double */
-    A->span = gs_calloc_lines(A->span_len * A->ncomp * sizeof(size_t), err);
+    A->span_len = gs_doubles_apart(2 * A->nrows); /* size_t: 8 bytes, as a double */
+    A->span = gs_calloc_apart(A->span_len * A->ncomp * sizeof(size_t), err);
     if (!A->span) rc = GS_ENOMEM;
-    A->work_len = gs_doubles_to_lines((size_t)(7 + A->nc) * A->ncells + A->n[2]);
-    A->work = gs_calloc_lines((size_t)A->nthreads * A->work_len * sizeof(double), err);
-    A->dirty = aligned_alloc(64, (size_t)A->nthreads * sizeof(dirty_range));
+    A->work_len = gs_doubles_apart((size_t)(7 + A->nc) * A->ncells + A->n[2]);
+    A->work = gs_calloc_apart((size_t)A->nthreads * A->work_len * sizeof(double), err);
+    A->dirty = gs_calloc_apart((size_t)A->nthreads * sizeof(dirty_range), err);
     if (!A->work || !A->dirty) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
     for (int t = 0; !rc && t < A->nthreads; t++) { /* all of it, the first time */
       A->dirty[t].lo = 0;

@@ -50,7 +50,7 @@ typedef struct {
   double *births, *vol; /* CA workspace per slot (gs_model.slot): ncells and dim*ncells */
   int nc;               /* carried quantities */
   double *cbirth;       /* CA workspace per slot: nc*ncells pooled loads */
-  size_t births_len, vol_len, cbirth_len; /* per-slot strides, whole cache lines */
+  size_t births_len, vol_len, cbirth_len; /* per-slot strides, whole pages (GS_APART) */
 } brk_t;
 
 static void brk_free(void *self) {
@@ -190,14 +190,14 @@ static int brk_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   if (!rc) {
     B->rate = gs_malloc(g->ncells * sizeof(double), err);
     const size_t nslot = m->nslots > 0 ? (size_t)m->nslots : 1;
-    /* per slot, on cache lines of their own: threads write them at once */
+    /* per slot, on pages of their own: threads write them at once */
     B->nc = m->ncarried;
-    B->births_len = gs_doubles_to_lines(g->ncells);
-    B->vol_len = gs_doubles_to_lines(g->ncells * (size_t)g->dim);
-    B->cbirth_len = gs_doubles_to_lines((size_t)B->nc * g->ncells + 1);
-    B->births = gs_calloc_lines(nslot * B->births_len * sizeof(double), err);
-    B->vol = gs_calloc_lines(nslot * B->vol_len * sizeof(double), err);
-    B->cbirth = gs_calloc_lines(nslot * B->cbirth_len * sizeof(double), err);
+    B->births_len = gs_doubles_apart(g->ncells);
+    B->vol_len = gs_doubles_apart(g->ncells * (size_t)g->dim);
+    B->cbirth_len = gs_doubles_apart((size_t)B->nc * g->ncells + 1);
+    B->births = gs_calloc_apart(nslot * B->births_len * sizeof(double), err);
+    B->vol = gs_calloc_apart(nslot * B->vol_len * sizeof(double), err);
+    B->cbirth = gs_calloc_apart(nslot * B->cbirth_len * sizeof(double), err);
     if (!B->rate || !B->births || !B->vol || !B->cbirth) rc = GS_ENOMEM;
   }
   for (size_t k = 0; !rc && k < g->ncells; k++) {

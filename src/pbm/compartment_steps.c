@@ -65,8 +65,10 @@ static double node_t(const node_list *L, size_t nflow, size_t j) { return *node_
 
 struct worker;
 
+/* A compartment: on pages of its own (GS_APART), since the threads
+ * advancing neighbouring compartments write theirs at every step. */
 typedef struct {
-  struct gs_comp_steps *s;
+  _Alignas(GS_APART) struct gs_comp_steps *s;
   struct worker *w; /* the thread advancing it */
   size_t comp;
   int has_next; /* feeds the next compartment: integrates Z and keeps a record */
@@ -86,7 +88,7 @@ typedef struct {
 
 /* One thread's model view and scratch. */
 typedef struct worker {
-  _Alignas(64) struct gs_comp_steps *s; /* threads write their own: a cache line apart */
+  _Alignas(GS_APART) struct gs_comp_steps *s; /* threads write their own: pages apart */
   gs_model m; /* a copy: its own view of one compartment, and slot */
   /* the step being tried by its compartment: Z_H and its first two
    * derivatives at both ends, and the inflow state P' */
@@ -127,8 +129,11 @@ struct gs_comp_steps {
   void *done_ctx;
   /* the schedule, under `lock`: per compartment the first stretch it has
    * not finished and whether a thread advances it; per ring slot the
-   * compartments done with its stretch; the stretches passed to done_fn */
-  omp_lock_t lock, out_lock;
+   * compartments done with its stretch; the stretches passed to done_fn.
+   * Every thread writes it: pages away from the fields above, which the
+   * rates read at every evaluation */
+  _Alignas(GS_APART) omp_lock_t lock;
+  omp_lock_t out_lock;
   atomic_int outputs_ready; /* a stretch is complete and not yet passed to done_fn */
   size_t *next_k, outputs_done;
   int *running;
@@ -503,9 +508,9 @@ static int worker_init(struct gs_comp_steps *s, worker_t *w, gs_error *err) {
   w->s = s;
   double **bufs[] = {&w->p0, &w->p1, &w->d0, &w->d1, &w->s0, &w->s1, &w->halo};
   for (size_t i = 0; i < sizeof bufs / sizeof *bufs; i++)
-    if (!(*bufs[i] = gs_calloc(s->nflow, sizeof(double), err))) return GS_ENOMEM;
-  if (!(w->scratch = gs_calloc(s->off_z + s->nflow, sizeof(double), err)) ||
-      !(w->ytmp = gs_calloc(s->off_z + s->nflow, sizeof(double), err)))
+    if (!(*bufs[i] = gs_calloc_apart(s->nflow * sizeof(double), err))) return GS_ENOMEM;
+  if (!(w->scratch = gs_calloc_apart((s->off_z + s->nflow) * sizeof(double), err)) ||
+      !(w->ytmp = gs_calloc_apart((s->off_z + s->nflow) * sizeof(double), err)))
     return GS_ENOMEM;
   return GS_OK;
 }
@@ -513,7 +518,7 @@ static int worker_init(struct gs_comp_steps *s, worker_t *w, gs_error *err) {
 int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, gs_error *err) {
   gs_model *m = &c->model;
   *out = NULL;
-  struct gs_comp_steps *s = gs_calloc(1, sizeof *s, err);
+  struct gs_comp_steps *s = gs_calloc_apart(sizeof *s, err); /* its schedule: pages of its own */
   if (!s) return GS_ENOMEM;
   s->m = m;
   s->ncomp = m->grid.ncomp;
@@ -533,15 +538,15 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   if ((size_t)nw > s->ncomp) nw = (int)s->ncomp;
   s->nworkers = nw < 1 ? 1 : nw;
   s->k = gs_calloc(s->ncomp, sizeof(double), err);
-  /* on cache lines: threads write neighbouring compartments and workers at
-   * every step */
-  s->comp = gs_calloc_lines(s->ncomp * sizeof(comp_t), err);
-  s->workers = gs_calloc_lines((size_t)s->nworkers * sizeof(worker_t), err);
+  /* on pages of their own (GS_APART): threads write neighbouring
+   * compartments and workers at every step, and the schedule at every task */
+  s->comp = gs_calloc_apart(s->ncomp * sizeof(comp_t), err);
+  s->workers = gs_calloc_apart((size_t)s->nworkers * sizeof(worker_t), err);
   if (!s->comp || !s->workers) return GS_ENOMEM;
-  s->next_k = gs_calloc(s->ncomp, sizeof(size_t), err);
-  s->running = gs_calloc(s->ncomp, sizeof(int), err);
-  s->home = gs_calloc((size_t)s->nworkers + 1, sizeof(size_t), err);
-  s->cost = gs_calloc(s->ncomp + (size_t)s->nworkers, sizeof(double), err);
+  s->next_k = gs_calloc_apart(s->ncomp * sizeof(size_t), err);
+  s->running = gs_calloc_apart(s->ncomp * sizeof(int), err);
+  s->home = gs_calloc_apart(((size_t)s->nworkers + 1) * sizeof(size_t), err);
+  s->cost = gs_calloc_apart((s->ncomp + (size_t)s->nworkers) * sizeof(double), err);
   if (!s->k || !s->comp || !s->workers || !s->next_k || !s->running || !s->home || !s->cost)
     return GS_ENOMEM;
   for (int r = 0; r <= s->nworkers; r++) s->home[r] = s->ncomp * (size_t)r / (size_t)s->nworkers;
@@ -572,9 +577,11 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
     cp->comp = comp;
     cp->has_next = comp + 1 < s->ncomp;
     cp->n = s->off_z + (cp->has_next ? s->nflow : 0);
-    cp->y = gs_calloc(cp->n, sizeof(double), err);
-    cp->scale = gs_calloc(cp->n, sizeof(double), err); /* received and Z: no error control */
-    cp->end_f = cp->has_next ? gs_calloc(s->nflow, sizeof(double), err) : NULL;
+    /* pages apart from the other compartments' (GS_APART); its integrator's
+     * own vectors come after them, and before the next compartment's */
+    cp->y = gs_calloc_apart(cp->n * sizeof(double), err);
+    cp->scale = gs_calloc_apart(cp->n * sizeof(double), err); /* received and Z: no error control */
+    cp->end_f = cp->has_next ? gs_calloc_apart(s->nflow * sizeof(double), err) : NULL;
     if (!cp->y || !cp->scale || (cp->has_next && !cp->end_f)) return GS_ENOMEM;
     for (int r = 0; r < RING; r++) {
       node_list *L = &cp->rec[r];

@@ -22,6 +22,7 @@ typedef struct {
   double start, end;
   double c, emin;        /* consolidation */
   double *G;             /* per cell rates (workspace / precomputed) */
+  size_t row_len;        /* liquid_addition: stride of the slots' rows, whole pages (GS_APART) */
   double *solid_vol;     /* per cell solid volume */
   double *work;          /* preconditioner: 2 * cells along the axis */
 } grow_t;
@@ -88,9 +89,12 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
   G->kind = kind;
   G->liquid = G->gas = -1;
   /* liquid_addition recomputes the rates per compartment: one row per slot
-   * (gs_model.slot); the others' stay in the first */
-  G->G = gs_calloc((kind == KIND_LIQUID && m->nslots > 1 ? (size_t)m->nslots : 1) * g->ncells,
-                   sizeof(double), err);
+   * (gs_model.slot), on pages of their own as threads write them at once;
+   * the others' stay in the first */
+  const size_t rows = kind == KIND_LIQUID && m->nslots > 1 ? (size_t)m->nslots : 1;
+  G->row_len = rows > 1 ? gs_doubles_apart(g->ncells) : g->ncells;
+  G->G = rows > 1 ? gs_calloc_apart(rows * G->row_len * sizeof(double), err)
+                  : gs_calloc(g->ncells, sizeof(double), err);
   int rc = G->G ? GS_OK : GS_ENOMEM;
   if (!rc && m->ncarried > 0) /* particles moving between cells would leave their load behind */
     rc = gs_cfg_fail(node, err, "growth along an axis cannot be combined with carried quantities "
@@ -155,7 +159,7 @@ static int active(const grow_t *G, const gs_model *m, double t) {
 static const double *compartment_rates(grow_t *G, const gs_model *m, size_t comp, const double *N) {
   const gs_grid *g = &m->grid;
   if (G->kind != KIND_LIQUID) return G->G; /* precomputed */
-  double *rates = G->G + (m->slot > 0 ? (size_t)m->slot : 0) * g->ncells;
+  double *rates = G->G + (m->slot > 0 ? (size_t)m->slot : 0) * G->row_len;
   /* share the spray in proportion to solid volume */
   double solid = 0;
   for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
