@@ -34,19 +34,25 @@
 #define DIR_SIZE 512 /* block pointers per directory page */
 #define DIR_PAGES (NODE_MAX / DIR_SIZE)
 typedef struct {
-  size_t count;  /* nodes written */
   size_t per;    /* nodes per block */
+  /* doubles from one node to the next, 1 + 3 nflow rounded up to whole
+   * pages (GS_APART): the next compartment reads a node while this one
+   * writes the one after */
+  size_t stride;
   gs_block_pool *pool; /* where its blocks come from */
-  /* blocks of per * (1 + 3 nflow) doubles, through pages of DIR_SIZE
-   * pointers made as needed (a reader only looks up published nodes, whose
-   * pages and blocks exist) */
+  /* blocks of per * stride doubles, through pages of DIR_SIZE pointers made
+   * as needed (a reader only looks up published nodes, whose pages and
+   * blocks exist) */
   double **dir[DIR_PAGES];
   /* nodes the next compartment may read, and whether the stretch is over
    * (or failed): on a cache line of their own, which the next compartment's
    * thread reads while this one works */
   _Alignas(64) atomic_size_t published;
   atomic_int done;
-  _Alignas(64) int start_f_known; /* the first node has its rates */
+  /* this compartment's alone, written at every step: off the lines the
+   * next one reads */
+  _Alignas(64) size_t count; /* nodes written */
+  int start_f_known;         /* the first node has its rates */
 } node_list;
 
 /* Stretches a compartment may run ahead of the next one, at most (its
@@ -56,12 +62,12 @@ typedef struct {
 #define RING 8
 #define RING_BYTES ((size_t)16 << 20)
 
-static double *node_at(const node_list *L, size_t nflow, size_t j) {
+static double *node_at(const node_list *L, size_t j) {
   const size_t b = j / L->per;
-  return L->dir[b / DIR_SIZE][b % DIR_SIZE] + (j % L->per) * (1 + 3 * nflow);
+  return L->dir[b / DIR_SIZE][b % DIR_SIZE] + (j % L->per) * L->stride;
 }
 /* a node: t, then z, n, f (nflow each) */
-static double node_t(const node_list *L, size_t nflow, size_t j) { return *node_at(L, nflow, j); }
+static double node_t(const node_list *L, size_t j) { return *node_at(L, j); }
 
 struct worker;
 
@@ -200,10 +206,14 @@ static int nodes_push(node_list *L, size_t nflow, double t, const double *z, con
   const size_t b = L->count / L->per;
   if (L->count >= NODE_MAX) return GS_ENUMERIC;
   double ***page = &L->dir[b / DIR_SIZE];
-  if (!*page && !(*page = calloc(DIR_SIZE, sizeof(double *)))) return GS_ENOMEM;
+  if (!*page) { /* a page of its own (GS_APART): the next compartment reads it */
+    if (!(*page = aligned_alloc(GS_APART, (DIR_SIZE * sizeof(double *) + GS_APART - 1) / GS_APART * GS_APART)))
+      return GS_ENOMEM;
+    memset(*page, 0, DIR_SIZE * sizeof(double *));
+  }
   double **block = &(*page)[b % DIR_SIZE];
   if (!*block && !(*block = gs_block_pool_get(L->pool))) return GS_ENOMEM;
-  double *at = node_at(L, nflow, L->count);
+  double *at = node_at(L, L->count);
   at[0] = t;
   if (z) memcpy(at + 1, z, nflow * sizeof(double));
   else memset(at + 1, 0, nflow * sizeof(double));
@@ -221,16 +231,16 @@ static void nodes_eval(const node_list *L, size_t count, size_t nflow, double t,
                        double *dz, double *d2z) {
   const size_t last = count - 1;
   size_t j = 0;
-  if (t >= node_t(L, nflow, last)) j = last;
-  else if (t > node_t(L, nflow, 0)) {
+  if (t >= node_t(L, last)) j = last;
+  else if (t > node_t(L, 0)) {
     size_t lo = 0, hi = last; /* t[lo] <= t < t[hi] */
     while (hi - lo > 1) {
       size_t mid = lo + (hi - lo) / 2;
-      if (node_t(L, nflow, mid) <= t) lo = mid;
+      if (node_t(L, mid) <= t) lo = mid;
       else hi = mid;
     }
     j = lo;
-    const double *a = node_at(L, nflow, lo), *b = node_at(L, nflow, lo + 1);
+    const double *a = node_at(L, lo), *b = node_at(L, lo + 1);
     if (t != a[0]) {
       const double H = b[0] - a[0], u = (t - a[0]) / H;
       double bs[3][6]; /* the basis and its first two derivatives in u */
@@ -249,7 +259,7 @@ static void nodes_eval(const node_list *L, size_t count, size_t nflow, double t,
       return;
     }
   }
-  const double *at = node_at(L, nflow, j);
+  const double *at = node_at(L, j);
   memcpy(z, at + 1, nflow * sizeof(double));
   memcpy(dz, at + 1 + nflow, nflow * sizeof(double));
   memcpy(d2z, at + 1 + 2 * nflow, nflow * sizeof(double));
@@ -280,10 +290,10 @@ static size_t wait_for(struct gs_comp_steps *s, const node_list *up, double t, s
   for (unsigned spins = 0;; spins++) {
     if (stopped(s, key)) return 0;
     const size_t count = atomic_load_explicit(&up->published, memory_order_acquire);
-    if (count && node_t(up, s->nflow, count - 1) >= t) return count;
+    if (count && node_t(up, count - 1) >= t) return count;
     if (atomic_load_explicit(&up->done, memory_order_acquire)) {
       const size_t all = atomic_load_explicit(&up->published, memory_order_acquire);
-      return all && node_t(up, s->nflow, all - 1) >= t ? all : 0;
+      return all && node_t(up, all - 1) >= t ? all : 0;
     }
     /* rather than wait, write the stretches every compartment is done with */
     if (spins % 64 == 63 && s->nworkers > 1 && s->outputs_ready) outputs(s, 0);
@@ -414,7 +424,7 @@ static int comp_rhs(void *ctx, double t, const double *y, double *f) {
     /* the first node's rates: the integrator's own evaluation at the start */
     node_list *L = cp->cur;
     if (!L->start_f_known && t == w->stretch_t0 && L->count == 1) {
-      memcpy(node_at(L, s->nflow, 0) + 1 + 2 * s->nflow, f, s->nflow * sizeof(double));
+      memcpy(node_at(L, 0) + 1 + 2 * s->nflow, f, s->nflow * sizeof(double));
       L->start_f_known = 1;
       publish(L);
     }
@@ -446,7 +456,7 @@ static int extra_rates(comp_t *cp, double t, const double *y) {
 static int start_rates(comp_t *cp, double t0) {
   struct gs_comp_steps *s = cp->s;
   worker_t *w = cp->w;
-  double *y = w->ytmp, *node0 = node_at(cp->cur, s->nflow, 0);
+  double *y = w->ytmp, *node0 = node_at(cp->cur, 0);
   memset(y, 0, cp->n * sizeof(double));
   memcpy(y, node0 + 1 + s->nflow, s->nflow * sizeof(double));
   if (cp->comp) {
@@ -558,7 +568,7 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   for (int i = 0; i < s->nworkers; i++)
     if (worker_init(s, &s->workers[i], err)) return GS_ENOMEM;
   for (size_t comp = 0; comp < s->ncomp; comp++) s->k[comp] = gs_model_transfer_rate(m, comp);
-  const size_t node_bytes = (1 + 3 * s->nflow) * sizeof(double);
+  const size_t node_stride = gs_doubles_apart(1 + 3 * s->nflow), node_bytes = node_stride * sizeof(double);
   size_t per = NODE_BLOCK_BYTES / node_bytes;
   per = per < 1 ? 1 : per > 16 ? 16 : per;
   /* one thread takes the stretches in order and needs no lead: 2 slots
@@ -586,6 +596,7 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
     for (int r = 0; r < RING; r++) {
       node_list *L = &cp->rec[r];
       L->per = per;
+      L->stride = node_stride;
       L->pool = s->pool;
       atomic_init(&L->published, 0);
       atomic_init(&L->done, 0);
@@ -681,7 +692,7 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
     /* without a jump the integrator starts from the rates it ended the last
      * stretch with, and evaluates none at t0 */
     if (!rc && !st->jumped && cp->end_f_valid) {
-      memcpy(node_at(L, s->nflow, 0) + 1 + 2 * s->nflow, cp->end_f, s->nflow * sizeof(double));
+      memcpy(node_at(L, 0) + 1 + 2 * s->nflow, cp->end_f, s->nflow * sizeof(double));
       L->start_f_known = 1;
       publish(L);
     }
@@ -718,7 +729,7 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
   } else {
     unpack(s, comp, cp->y, s->ring[k % s->depth]);
     if (cp->has_next) {
-      memcpy(cp->end_f, node_at(L, s->nflow, L->count - 1) + 1 + 2 * s->nflow, s->nflow * sizeof(double));
+      memcpy(cp->end_f, node_at(L, L->count - 1) + 1 + 2 * s->nflow, s->nflow * sizeof(double));
       cp->end_f_valid = 1;
       double *sent = cp->sent[k % s->depth];
       volumes_of(s, cp->y + s->off_z, sent);
