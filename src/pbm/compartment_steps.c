@@ -840,9 +840,10 @@ static void outputs(struct gs_comp_steps *s, int wait) {
     s->outputs_done++;
     s->t_out += now_seconds() - start;
     me->t_done += now_seconds() - start;
-    if (s->nworkers > 1) { /* the outputs go to whichever thread is free */
+    if (s->nworkers > 1) { /* the first thread writes the outputs: they count in its block */
       double *extra = s->cost + s->ncomp;
       memset(extra, 0, (size_t)s->nworkers * sizeof(double));
+      extra[0] = s->t_out;
       gs_dist_balanced_split(s->cost, s->ncomp, extra, s->nworkers, s->home);
     }
     omp_unset_lock(&s->lock);
@@ -892,10 +893,16 @@ static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
     const int all = ++s->complete[k % s->depth] == s->ncomp;
     if (all) atomic_store(&s->outputs_ready, 1);
     omp_unset_lock(&s->lock);
-    /* the thread that completes a stretch writes it (or leaves it to the one
-     * writing the stretch before): outputs written late hold the ring's
-     * slots, and a burst of them had stalled the first compartments */
-    if (all) outputs(s, s->nworkers == 1);
+    /* One thread writes the outputs between its tasks, the first: the
+     * outputs are work the split of the compartments counts in its block
+     * (outputs() above), which balances the blocks with fewer compartments
+     * taken from another thread's block (each such move carries the
+     * compartment's data to another core), and their own data (the output
+     * file's buffers, HDF5's) stays in one core's cache.  As soon as
+     * complete: outputs written late hold the ring's slots, and a burst of
+     * them had stalled the first compartments.  Any thread without a task
+     * writes them too (above, and wait_for). */
+    if (s->nworkers == 1 ? all : w == s->workers && atomic_load(&s->outputs_ready)) outputs(s, s->nworkers == 1);
   }
 }
 
