@@ -118,10 +118,28 @@ static void threads(void) {
   gs_block_pool_free(p);
 }
 
+/* A reservation takes the memory for its blocks at once, and the gets
+ * after it take no more, the blocks coming in the order they were cut. */
+static void reserve(void) {
+  gs_error err;
+  gs_block_pool *p = gs_block_pool_create(BLOCK, &err);
+  const size_t block = (BLOCK + GS_APART - 1) / GS_APART * GS_APART, per_chunk = ((size_t)2 << 20) / block;
+  const size_t n = per_chunk + 3; /* two chunks */
+  CHECK(gs_block_pool_reserve(p, n, &err) == GS_OK);
+  CHECK(gs_block_pool_bytes(p) == 2 * ((size_t)2 << 20));
+  char *first = gs_block_pool_get(p), *second = gs_block_pool_get(p);
+  CHECK(first != NULL && second == first + block);
+  for (size_t i = 2; i < n; i++) CHECK(gs_block_pool_get(p) != NULL);
+  CHECK(gs_block_pool_bytes(p) == 2 * ((size_t)2 << 20));
+  CHECK(gs_block_pool_reserve(p, 0, &err) == GS_OK);
+  gs_block_pool_free(p);
+}
+
 int main(void) {
   distinct_blocks(1);
   distinct_blocks(100); /* three chunks */
   reuse();
+  reserve();
   large_blocks();
   threads();
   TEST_EXIT();

@@ -96,6 +96,21 @@ void gs_block_pool_put(gs_block_pool *p, void *block) {
   unlock(p);
 }
 
+int gs_block_pool_reserve(gs_block_pool *p, size_t n, gs_error *err) {
+  void **taken = n ? malloc(n * sizeof *taken) : NULL;
+  if (n && !taken) return gs_error_set(err, GS_ENOMEM, "out of memory reserving %zu blocks", n);
+  size_t got = 0;
+  for (; got < n; got++) {
+    char *b = taken[got] = gs_block_pool_get(p);
+    if (!b) break;
+    for (size_t at = 0; at < p->block; at += GS_APART) b[at] = 0;
+  }
+  /* back in reverse, so that they come out again in the order taken */
+  for (size_t i = got; i-- > 0;) gs_block_pool_put(p, taken[i]);
+  free(taken);
+  return got == n ? GS_OK : gs_error_set(err, GS_ENOMEM, "out of memory reserving %zu blocks", n);
+}
+
 size_t gs_block_pool_bytes(const gs_block_pool *p) { return p->nchunks * p->chunk; }
 
 void gs_block_pool_free(gs_block_pool *p) {

@@ -23,6 +23,10 @@ gs_block_pool *gs_block_pool_create(size_t block_bytes, gs_error *err);
 void *gs_block_pool_get(gs_block_pool *p);
 /* Give a block from gs_block_pool_get back. */
 void gs_block_pool_put(gs_block_pool *p, void *block);
+/* Take the memory for n blocks now and touch its pages (a first touch is
+ * what costs here), so that the first n gets are cheap; returns GS_OK or
+ * GS_ENOMEM. */
+int gs_block_pool_reserve(gs_block_pool *p, size_t n, gs_error *err);
 /* Bytes the pool took from the system. */
 size_t gs_block_pool_bytes(const gs_block_pool *p);
 /* Return all memory; the blocks handed out are gone with it. */
