@@ -144,12 +144,20 @@ struct gs_comp_steps {
   size_t *next_k, outputs_done;
   int *running;
   /* each thread's block of compartments [home[w], home[w + 1]), split
-   * (gs_dist_balanced_split) by the seconds each compartment's tasks took,
-   * the thread that writes the outputs carrying their seconds too: a thread
-   * keeps its compartments' data in its own cache, and a compartment is
-   * followed, not waited for, by the next block's thread */
+   * (gs_dist_balanced_split, resplit) by the seconds each compartment's
+   * tasks took lately, the thread that writes the outputs carrying their
+   * seconds too: a thread keeps its compartments' data in its own cache, and
+   * a compartment is followed, not waited for, by the next block's thread */
   size_t *home;
   double *cost, t_out;
+  /* the split's figures: per compartment the seconds of its tasks, then
+   * those of the outputs, each fading by RECENT_KEEP per stretch written,
+   * so that the split follows the case's phases (the spray's onset, the
+   * last compartments filling); then nworkers of scratch; and the thread
+   * that writes the outputs between its tasks, chosen with the split */
+  double *recent;
+  size_t *home_try;
+  int writer;
   size_t complete[RING];
   /* the earliest failure so far, as task_key(stretch, compartment) (ncomp
    * for done_fn), SIZE_MAX while none: tasks after it stop, tasks before it
@@ -556,8 +564,11 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   s->next_k = gs_calloc_apart(s->ncomp * sizeof(size_t), err);
   s->running = gs_calloc_apart(s->ncomp * sizeof(int), err);
   s->home = gs_calloc_apart(((size_t)s->nworkers + 1) * sizeof(size_t), err);
-  s->cost = gs_calloc_apart((s->ncomp + (size_t)s->nworkers) * sizeof(double), err);
-  if (!s->k || !s->comp || !s->workers || !s->next_k || !s->running || !s->home || !s->cost)
+  s->cost = gs_calloc_apart(s->ncomp * sizeof(double), err);
+  s->recent = gs_calloc_apart((s->ncomp + 1 + (size_t)s->nworkers) * sizeof(double), err);
+  s->home_try = gs_calloc_apart(((size_t)s->nworkers + 1) * sizeof(size_t), err);
+  if (!s->k || !s->comp || !s->workers || !s->next_k || !s->running || !s->home || !s->cost ||
+      !s->recent || !s->home_try)
     return GS_ENOMEM;
   for (int r = 0; r <= s->nworkers; r++) s->home[r] = s->ncomp * (size_t)r / (size_t)s->nworkers;
   for (int r = 0; r < RING; r++)
@@ -822,6 +833,25 @@ static long pick_task(struct gs_comp_steps *s, int wi, int *finished) {
   return best;
 }
 
+/* Under s->lock, after an output: the blocks of the threads, and which of
+ * them writes the outputs, from the recent seconds (the outputs' in the
+ * writer's block: the choice that leaves the largest block the smallest). */
+#define RECENT_KEEP 0.9
+static void resplit(struct gs_comp_steps *s) {
+  double *extra = s->recent + s->ncomp + 1, best = INFINITY;
+  for (int wr = 0; wr < s->nworkers; wr++) {
+    memset(extra, 0, (size_t)s->nworkers * sizeof(double));
+    extra[wr] = s->recent[s->ncomp];
+    const double worst = gs_dist_balanced_split(s->recent, s->ncomp, extra, s->nworkers, s->home_try);
+    if (worst < best) {
+      best = worst;
+      s->writer = wr;
+      memcpy(s->home, s->home_try, ((size_t)s->nworkers + 1) * sizeof(size_t));
+    }
+  }
+  for (size_t i = 0; i <= s->ncomp; i++) s->recent[i] *= RECENT_KEEP;
+}
+
 /* Stretches every compartment is done with go to done_fn, in order, one
  * thread at a time; without wait, nothing when another thread is at it (it
  * writes what is ready before it stops). */
@@ -848,12 +878,8 @@ static void outputs(struct gs_comp_steps *s, int wait) {
     s->outputs_done++;
     s->t_out += now_seconds() - start;
     me->t_done += now_seconds() - start;
-    if (s->nworkers > 1) { /* the first thread writes the outputs: they count in its block */
-      double *extra = s->cost + s->ncomp;
-      memset(extra, 0, (size_t)s->nworkers * sizeof(double));
-      extra[0] = s->t_out;
-      gs_dist_balanced_split(s->cost, s->ncomp, extra, s->nworkers, s->home);
-    }
+    s->recent[s->ncomp] += now_seconds() - start;
+    if (s->nworkers > 1) resplit(s);
     omp_unset_lock(&s->lock);
   }
   omp_unset_lock(&s->out_lock);
@@ -896,21 +922,23 @@ static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
     w->t_busy += now_seconds() - start;
     omp_set_lock(&s->lock);
     s->cost[c] += spent;
+    s->recent[c] += spent;
     s->running[c] = 0;
     s->next_k[c]++;
     const int all = ++s->complete[k % s->depth] == s->ncomp;
     if (all) atomic_store(&s->outputs_ready, 1);
+    const int writes = (int)(w - s->workers) == s->writer;
     omp_unset_lock(&s->lock);
-    /* One thread writes the outputs between its tasks, the first: the
-     * outputs are work the split of the compartments counts in its block
-     * (outputs() above), which balances the blocks with fewer compartments
-     * taken from another thread's block (each such move carries the
-     * compartment's data to another core), and their own data (the output
-     * file's buffers, HDF5's) stays in one core's cache.  As soon as
+    /* One thread writes the outputs between its tasks, the one chosen with
+     * the split: the outputs are work the split counts in its block
+     * (resplit), which balances the blocks with fewer compartments taken
+     * from another thread's block (each such move carries the compartment's
+     * data to another core), and their own data (the output file's buffers,
+     * HDF5's) stays in one core's cache.  As soon as
      * complete: outputs written late hold the ring's slots, and a burst of
      * them had stalled the first compartments.  Any thread without a task
      * writes them too (above, and wait_for). */
-    if (s->nworkers == 1 ? all : w == s->workers && atomic_load(&s->outputs_ready)) outputs(s, s->nworkers == 1);
+    if (s->nworkers == 1 ? all : writes && atomic_load(&s->outputs_ready)) outputs(s, s->nworkers == 1);
   }
 }
 
@@ -1023,6 +1051,8 @@ void gs_comp_steps_free(gs_comp_steps *s) {
   free(s->running);
   free(s->home);
   free(s->cost);
+  free(s->recent);
+  free(s->home_try);
   if (s->locks) {
     omp_destroy_lock(&s->lock);
     omp_destroy_lock(&s->out_lock);
