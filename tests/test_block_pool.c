@@ -1,6 +1,7 @@
 /* The block pool (core/block_pool.h): blocks are whole pages, never
  * overlap, keep what is written into them, come back last in first out,
- * and stay whole when several threads get and put at once. */
+ * can be reserved ahead, and stay whole when several threads get and put
+ * at once; and the helpers that keep threads' data pages apart. */
 #include <omp.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -135,11 +136,33 @@ static void reserve(void) {
   gs_block_pool_free(p);
 }
 
+/* The helpers that keep data different threads write whole pages apart
+ * (gransim/error.h): strides in whole pages, at least what was asked for;
+ * memory on a page boundary, zeroed. */
+static void apart_helpers(void) {
+  const size_t per = GS_APART / sizeof(double);
+  CHECK(GS_APART == 4096);
+  CHECK(gs_doubles_apart(0) == 0);
+  CHECK(gs_doubles_apart(1) == per && gs_doubles_apart(per) == per && gs_doubles_apart(per + 1) == 2 * per);
+  gs_error err;
+  for (size_t bytes = 1; bytes <= 3 * GS_APART; bytes += GS_APART / 2 + 3) {
+    unsigned char *p = gs_calloc_apart(bytes, &err);
+    CHECK(p != NULL);
+    if (!p) continue;
+    CHECK((uintptr_t)p % GS_APART == 0);
+    int zero = 1;
+    for (size_t i = 0; i < bytes; i++) zero &= p[i] == 0;
+    CHECK(zero);
+    free(p);
+  }
+}
+
 int main(void) {
   distinct_blocks(1);
   distinct_blocks(100); /* three chunks */
   reuse();
   reserve();
+  apart_helpers();
   large_blocks();
   threads();
   TEST_EXIT();
