@@ -1,4 +1,4 @@
-/* Tests for the YAML configuration tree (src/io/cfg.c): structure, lines,
+/* Tests for the YAML configuration tree (src/cfg/cfg.c): structure, lines,
  * paths, every accessor's success and failure messages, unknown keys,
  * duplicate keys, syntax errors and file loading. */
 #define _POSIX_C_SOURCE 200809L /* mkdtemp, rmdir */

@@ -1,4 +1,4 @@
-/* Direct chunk writes (src/io/chunk_writer.c): what HDF5's own reader gets
+/* Direct chunk writes (src/output/chunk_writer.c): what HDF5's own reader gets
  * back through its filter pipeline is exactly what was written, for a
  * deflated dataset (compressible rows deflated, incompressible ones stored
  * raw with the filter marked skipped) and for a plain one; the deflated
@@ -12,7 +12,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "io/chunk_writer.h"
+#include "output/chunk_writer.h"
 
 enum { NROWS = 4, NA = 3, NB = 1000, ROW = NA * NB };
 

@@ -1,5 +1,5 @@
 /* Per-compartment time steps (solver.steps: per_compartment,
- * src/pbm/compartment_steps.c).
+ * src/run/compartment_steps.c).
  *  1. The seed-000 example (which takes its own steps in each compartment), checked
  *     at every output time against the closed forms of test_seed000.c
  *     (solids: tanks in series, V_n = F/k P(n, k t); sprayed liquid), scaled
@@ -19,7 +19,7 @@
 #include <gsl/gsl_sf_gamma.h>
 #include <omp.h>
 
-#include "pbm/compartment_steps.h"
+#include "run/compartment_steps.h"
 #include "pbm_testlib.h"
 
 #define K_TRANSFER (7.7551e-3 / 0.095)

@@ -1,4 +1,4 @@
-/* gs_csv_number (src/io/csv_number.c) writes exactly what snprintf's
+/* gs_csv_number (src/output/csv_number.c) writes exactly what snprintf's
  * "%.10g" writes: on 3 million random bit patterns (every exponent, subnormals
  * included), 1 million short decimals (k / 10^j, where ties to 10 digits are
  * common), integers up to 2^53, the neighbours of every power of ten, exact
@@ -9,7 +9,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "io/csv_number.h"
+#include "output/csv_number.h"
 
 static long mismatches;
 

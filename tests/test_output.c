@@ -14,7 +14,7 @@
 
 #include "check.h"
 #include "gransim/output.h"
-#include "io/deferred_output.h"
+#include "output/deferred_output.h"
 
 static char base[64];
 
@@ -319,7 +319,7 @@ static void test_many_times(double checkpoint, size_t ncomp) {
 }
 
 /* Rows of 8192 values and more are deflated (written chunk by chunk by
- * src/io/chunk_writer.c): HDF5 reads every value back through its filter. */
+ * src/output/chunk_writer.c): HDF5 reads every value back through its filter. */
 static void test_deflated(void) {
   char dir[256];
   gs_model m;

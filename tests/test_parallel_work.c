@@ -1,5 +1,5 @@
 /* How work is shared between MPI ranks and OpenMP threads:
- *  - gs_dist_balanced_split (src/pbm/distributed.c), the contiguous split of
+ *  - gs_dist_balanced_split (src/run/distributed.c), the contiguous split of
  *    compartments over ranks used when rebalancing: on 4,000 random cases
  *    (up to 9 compartments, 1-4 ranks, a fixed extra cost on some ranks) the
  *    split it returns is valid (contiguous, every rank at least one
@@ -16,7 +16,7 @@
 
 #include "check.h"
 #include "gransim/threads.h"
-#include "pbm/distributed.h"
+#include "run/distributed.h"
 
 /* Cost of the largest block of split lo. */
 static double largest_block(const double *cost, size_t n, const double *extra, int nr,

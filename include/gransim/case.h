@@ -41,7 +41,7 @@ typedef struct gs_case {
    * cheaper (0: whenever the best split differs; none: never) */
   double rebalance;
   /* solver.steps: 1 = per_compartment (each compartment its own steps,
-   * src/pbm/compartment_steps.h), 0 = shared (one step for all) */
+   * src/run/compartment_steps.h), 0 = shared (one step for all) */
   int per_compartment;
 } gs_case;
 

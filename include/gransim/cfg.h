@@ -94,6 +94,13 @@ int gs_cfg_node_double(const gs_cfg_node *n, double *out, gs_error *err);
  * Also fails if map is not a map.  Call after reading all keys of a section. */
 int gs_cfg_check_unused(const gs_cfg_node *map, gs_error *err);
 
+/* Shared helper: read node's "type" and return the entry of the NULL-terminated
+ * registry `types` with that name.  Every registered type struct starts with
+ * its `const char *name`.  Unknown names give an error listing the known ones;
+ * `what` names the registry in messages ("kernel", "selection function"...). */
+const void *gs_registry_pick(gs_cfg_node *node, const void *const *types, const char *what,
+                             gs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -66,7 +66,7 @@ typedef struct gs_ode {
    * with the span to t_out before the first step's size is estimated).  A
    * forcing that f interpolates per step, with an integral over [t0, t0 + h]
    * that the Runge-Kutta weights reproduce exactly, needs it (per-compartment
-   * steps, src/pbm/compartment_steps.c).  NULL: f does not depend on it. */
+   * steps, src/run/compartment_steps.c).  NULL: f does not depend on it. */
   void (*trying)(void *ctx, double t0, double h);
 } gs_ode;
 

@@ -89,13 +89,6 @@ int gs_daughter_create(gs_cfg_node *node, gs_daughter *d, gs_error *err);
 void gs_daughter_free(gs_daughter *d);
 const gs_daughter_type *const *gs_daughter_types(void);
 
-/* Shared helper: read node's "type" and return the entry of the NULL-terminated
- * registry `types` with that name.  Every registered type struct starts with
- * its `const char *name`.  Unknown names give an error listing the known ones;
- * `what` names the registry in messages ("kernel", "selection function"...). */
-const void *gs_registry_pick(gs_cfg_node *node, const void *const *types, const char *what,
-                             gs_error *err);
-
 #ifdef __cplusplus
 }
 #endif

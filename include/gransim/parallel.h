@@ -3,7 +3,7 @@
  * Built with -DGRANSIM_MPI=ON, gransim starts MPI when it was launched by
  * mpirun (and only then, so that a plain `gransim run` never needs an MPI
  * runtime); otherwise, or when built without MPI, there is one rank.  The
- * sectional solver spreads compartments over the ranks (src/pbm/distributed.c),
+ * sectional solver spreads compartments over the ranks (src/run/distributed.c),
  * the stochastic solver its independent runs. */
 #ifndef GRANSIM_PARALLEL_H
 #define GRANSIM_PARALLEL_H

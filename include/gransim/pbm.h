@@ -135,7 +135,7 @@ struct gs_model {
    * follow the costs as the granulation front moves downstream. */
   double *comp_seconds;
   /* Threads that evaluate different compartments at the same time
-   * (per-compartment steps, src/pbm/compartment_steps.c) each pass their own
+   * (per-compartment steps, src/run/compartment_steps.c) each pass their own
    * copy of the model, with its own view and slot in [0, nslots): mechanisms
    * keep one set of scratch per slot (nslots = OpenMP's maximum threads when
    * the model was built) and, given a slot, evaluate serially in it.  -1:

@@ -8,7 +8,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "io/h5_setup.h"
+#include "output/h5_setup.h"
 
 #ifndef GRANSIM_VERSION
 #define GRANSIM_VERSION "unknown"

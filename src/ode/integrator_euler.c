@@ -19,7 +19,7 @@
 #include <stdlib.h>
 
 #include "gransim/integrator.h"
-#include "pbm/integrator_interval.h"
+#include "ode/integrator_interval.h"
 
 int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
                               double *initial_step, double *min_step, double *max_step,

@@ -1,5 +1,5 @@
 /* See deferred_output.h. */
-#include "io/deferred_output.h"
+#include "output/deferred_output.h"
 
 #include <stdlib.h>
 #include <string.h>

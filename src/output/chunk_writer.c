@@ -1,5 +1,5 @@
 /* See chunk_writer.h. */
-#include "io/chunk_writer.h"
+#include "output/chunk_writer.h"
 
 #include <stdint.h>
 #include <stdlib.h>

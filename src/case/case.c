@@ -232,7 +232,7 @@ static int read_output(gs_cfg_node *root, gs_case *c, gs_error *err) {
     }
     c->times[c->ntimes - 1] = end;
   }
-  /* wall seconds between commits of the result files (src/io/output.c) */
+  /* wall seconds between commits of the result files (src/output/output.c) */
   if (!rc) rc = gs_cfg_double_range(out, "checkpoint", 0, 10, 0, 0, HUGE_VAL, 0, &c->checkpoint, err);
   if (!rc) rc = gs_cfg_check_unused(out, err);
   return rc;

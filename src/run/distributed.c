@@ -1,6 +1,6 @@
 /* See distributed.h.  Compiled with MPI when GRANSIM_HAVE_MPI is defined
  * (cmake -DGRANSIM_MPI=ON); otherwise one process owns every compartment. */
-#include "pbm/distributed.h"
+#include "run/distributed.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,6 +1,6 @@
 /* Per-compartment time steps: see compartment_steps.h for the scheme, why it
  * conserves exactly, and how threads share the compartments. */
-#include "pbm/compartment_steps.h"
+#include "run/compartment_steps.h"
 
 #include <float.h>
 #include <math.h>
@@ -16,7 +16,7 @@
 #include "core/block_pool.h"
 #include "gransim/pbm.h"
 #include "pbm/all_finite.h"
-#include "pbm/distributed.h"
+#include "run/distributed.h"
 
 /* A stretch's accepted step ends of one compartment: times, the integral Z
  * of its numbers and carried totals since the stretch began, those numbers

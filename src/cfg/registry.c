@@ -1,7 +1,7 @@
 /* Lookup of registered types by the "type" key of a case-file map. */
 #include <string.h>
 
-#include "gransim/kernel.h"
+#include "gransim/cfg.h"
 
 const void *gs_registry_pick(gs_cfg_node *node, const void *const *types, const char *what,
                              gs_error *err) {

@@ -13,10 +13,10 @@
 #include "gransim/case.h"
 #include "gransim/output.h"
 #include "gransim/parallel.h"
-#include "io/deferred_output.h"
-#include "pbm/compartment_steps.h"
+#include "output/deferred_output.h"
+#include "run/compartment_steps.h"
 #include "pbm/all_finite.h"
-#include "pbm/distributed.h"
+#include "run/distributed.h"
 
 /* Describe cell `cell` of compartment `comp`: "compartment 2, cell (3, 5) [solid = ..., ...]". */
 static void describe_cell(const gs_model *m, size_t comp, size_t cell, char *buf, size_t len) {

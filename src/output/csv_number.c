@@ -9,7 +9,7 @@
  * absolute for s < 1e10.  Where the fraction of s lies within 1e-6 of one
  * half (exact ties included, which printf breaks to even on the exact
  * value) or long double is no wider than double, snprintf decides. */
-#include "io/csv_number.h"
+#include "output/csv_number.h"
 
 #include <float.h>
 #include <math.h>

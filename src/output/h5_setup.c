@@ -1,5 +1,5 @@
 /* See h5_setup.h. */
-#include "io/h5_setup.h"
+#include "output/h5_setup.h"
 
 #include <hdf5.h>
 #include <stdio.h>

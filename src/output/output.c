@@ -49,9 +49,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "io/chunk_writer.h"
-#include "io/csv_number.h"
-#include "io/h5_setup.h"
+#include "output/chunk_writer.h"
+#include "output/csv_number.h"
+#include "output/h5_setup.h"
 
 #ifndef GRANSIM_VERSION
 #define GRANSIM_VERSION "unknown"
