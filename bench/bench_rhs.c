@@ -71,12 +71,11 @@ int main(int argc, char **argv) {
   /* a dense, smooth state: every cell occupied */
   double *y = calloc(n, sizeof(double)), *f = calloc(n, sizeof(double));
   for (size_t i = 0; i < m->nstate; i++) y[i] = 1.0 + 0.5 * sin((double)i);
-  const gs_mech_type *agg = m->mech[0].type;
   double t0 = now();
-  for (int r = 0; r < reps; r++) agg->rhs(m->mech[0].self, m, 0, y, f, f + m->nstate);
+  for (int r = 0; r < reps; r++) gs_mech_rhs(m, &m->mech[0], &c.eval, 0, y, f, f + m->nstate);
   double ours = (now() - t0) / reps;
   memset(f, 0, n * sizeof(double)); /* rhs adds to f: one clean evaluation for the comparison */
-  agg->rhs(m->mech[0].self, m, 0, y, f, f + m->nstate);
+  gs_mech_rhs(m, &m->mech[0], &c.eval, 0, y, f, f + m->nstate);
   /* baseline: rebuild the kernel from the case and run the textbook loop */
   gs_cfg *cfg = gs_cfg_load_file(argv[1], &err);
   gs_cfg_node *kn = gs_cfg_get(gs_cfg_item(gs_cfg_get(gs_cfg_root(cfg), "mechanisms"), 0), "kernel");

@@ -108,20 +108,20 @@ TL_FN double tl_lost(const gs_model *m, const double *ledger, size_t comp, int k
 
 /* Advance a case's state from *t to t_out the way the run driver does: one
  * advance per stretch between rate switches (gs_model_next_switch), the
- * model's switch interval set for it, and `jumped` when a stretch starts at a
+ * switch interval of the evaluation context ev set for it, and `jumped` when a stretch starts at a
  * switch.  advance(ctx, t, stop, jumped, err) moves *t to stop; *switched
  * keeps the last switch reached across calls (NAN at first). */
 typedef int (*tl_advance_fn)(void *ctx, double *t, double stop, int jumped, gs_error *err);
-TL_FN int tl_advance_to(gs_model *m, double *t, double t_out, double *switched, tl_advance_fn advance,
+TL_FN int tl_advance_to(const gs_model *m, gs_eval *ev, double *t, double t_out, double *switched, tl_advance_fn advance,
                         void *ctx, gs_error *err) {
   while (*t < t_out) {
     const double sw = gs_model_next_switch(m, *t), stop = fmin(t_out, sw);
     const int jumped = *t == *switched;
-    m->switch_lo = *t;
-    m->switch_hi = stop;
+    ev->switch_lo = *t;
+    ev->switch_hi = stop;
     int rc = advance(ctx, t, stop, jumped, err);
-    m->switch_lo = 1;
-    m->switch_hi = 0;
+    ev->switch_lo = 1;
+    ev->switch_hi = 0;
     if (rc) return rc;
     if (*t == sw) *switched = *t;
   }

@@ -110,7 +110,7 @@ static double imbalance(const gs_model *m, const double *d, const double *dl) {
 /* Rates of state k: into d (nstate) and dl (nledger). */
 static void rates(const gs_model *m, int k, double *y, double *d, double *dl) {
   fill_state(m, k, y);
-  gs_model_rhs(m, 0.1 * k, y, d, dl);
+  gs_model_rhs(m, NULL, 0.1 * k, y, d, dl);
 }
 
 /* threads_later: OpenMP's team size set after the models are made */
@@ -200,7 +200,7 @@ static void check_denormal_cell(void) {
   const size_t stray = 3 * NAX + 9; /* inside the range the pairs write, outside the box */
   gs_model_numbers(m, y, 0)[stray] = 4.9e-324;
   gs_model_carried(m, y, 0, 0)[stray] = 1e-3;
-  gs_model_rhs(m, 0, y, d, dl);
+  gs_model_rhs(m, NULL, 0, y, d, dl);
   size_t bad = 0;
   for (size_t i = 0; i < m->nstate; i++) bad += !isfinite(d[i]);
   printf("aggregation, a denormal number with a finite load: %zu non-finite rates\n", bad);

@@ -311,9 +311,9 @@ static void test_negligible_cells(void) {
     size_t i1 = i / 20, i2 = i % 20;
     y[i] = (i1 < 6 && i2 < 6 && i2 + 2 >= i1 && i1 + 2 >= i2) ? 0.5 + tl_uniform(&rng) : 1e-20;
   }
-  gs_model_rhs(m, 0, y, d, dl);
-  gs_model_rhs(&ce.model, 0, y, de, dle);
-  m->mech[0].type->number_rates(m->mech[0].self, m, 0, y, &birth, &death);
+  gs_model_rhs(m, &c.eval, 0, y, d, dl);
+  gs_model_rhs(&ce.model, &ce.eval, 0, y, de, dle);
+  gs_mech_number_rates(m, &m->mech[0], &c.eval, 0, y, &birth, &death);
   double diff = 0, dmax = 0, vol[2] = {0, 0}, vscale[2] = {0, 0};
   for (size_t i = 0; i < n; i++) {
     diff = fmax(diff, fabs(d[i] - de[i]));
@@ -331,18 +331,20 @@ static void test_negligible_cells(void) {
   CHECK(diff < 1e-15 * dmax);
   /* integrator: choose at t = 0, then the whole grid fills with noise */
   const size_t corner = n - 1;
-  m->in_integrator = 1;
-  gs_model_rhs(m, 0, y, d, dl);
+  gs_eval ev;
+  gs_eval_init(&ev, m);
+  ev.noise_floor = c.eval.noise_floor;
+  ev.in_integrator = 1;
+  gs_model_rhs(m, &ev, 0, y, d, dl);
   for (size_t i = 0; i < n; i++) y[i] += 1e-6;
-  m->hold = 1;
-  gs_model_rhs(m, 0, y, d, dl);
+  ev.hold = 1;
+  gs_model_rhs(m, &ev, 0, y, d, dl);
   double held = d[corner];
-  m->hold = 0;
-  gs_model_rhs(m, 0, y, d, dl);
+  ev.hold = 0;
+  gs_model_rhs(m, &ev, 0, y, d, dl);
   double same_t = d[corner];
-  gs_model_rhs(m, 0.5, y, d, dl);
+  gs_model_rhs(m, &ev, 0.5, y, d, dl);
   double new_t = d[corner];
-  m->in_integrator = 0;
   printf("negligible cells: noisy far corner rate held %g, same t %g, new t %g\n", held, same_t, new_t);
   CHECK(held == 0.0 && same_t == 0.0);
   CHECK(fabs(new_t) > 1e-9); /* now it takes part (collisions of the noise with the band) */

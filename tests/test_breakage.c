@@ -277,7 +277,7 @@ static void test_dem_impact(void) {
     memset(y, 0, m->nstate * sizeof *y);
     y[k] = 3.0;
     double birth, death;
-    m->mech[0].type->number_rates(m->mech[0].self, m, 0, y, &birth, &death);
+    gs_mech_number_rates(m, &m->mech[0], &c.eval, 0, y, &birth, &death);
     double v = g->x[k], d = cbrt(6 * v / M_PI);
     int cls = v >= 1e-12;
     double want = v < 2e-15 ? 0.0

@@ -40,8 +40,8 @@ static void check_agg(const char *mech, const char *what, tl_rng *r, double wet_
     gs_model_carried(m, y, 0, 0)[i] = content * y[i] * g->volume[i];
     gs_model_carried(m, y, 0, 1)[i] = 0.5 * y[i] * g->volume[i] * tl_uniform(r);
   }
-  gs_model_rhs(m, 0, y, d, dl);
-  m->mech[0].type->number_rates(m->mech[0].self, m, 0, y, &birth, &death);
+  gs_model_rhs(m, &c.eval, 0, y, d, dl);
+  gs_mech_number_rates(m, &m->mech[0], &c.eval, 0, y, &birth, &death);
   double worst = 0;
   for (int k = 0; k < m->nvol; k++) {
     double change = 0, scale = 0;
@@ -87,8 +87,8 @@ static void test_breakage(void) {
     gs_model_carried(m, y, 0, 0)[i] = 0.2 * y[i] * g->volume[i];
     gs_model_carried(m, y, 0, 1)[i] = 0.6 * y[i] * g->volume[i] * tl_uniform(&r);
   }
-  gs_model_rhs(m, 0, y, d, dl);
-  m->mech[0].type->number_rates(m->mech[0].self, m, 0, y, &birth, &death);
+  gs_model_rhs(m, &c.eval, 0, y, d, dl);
+  gs_mech_number_rates(m, &m->mech[0], &c.eval, 0, y, &birth, &death);
   double worst = 0;
   for (int k = 0; k < m->nvol; k++) {
     double change = 0, scale = 0;

@@ -28,11 +28,10 @@
 
 static double fed_rate(gs_case *c, int k) {
   double *d = calloc(c->model.nstate, sizeof(double)), dl[64] = {0};
-  c->model.in_integrator = 0;
   double r = 0;
   for (size_t i = 0; i < c->model.nmech; i++)
     if (!strcmp(c->model.mech[i].type->name, "feed")) {
-      c->model.mech[i].type->rhs(c->model.mech[i].self, &c->model, 1.0, c->y0, d, dl);
+      gs_mech_rhs(&c->model, &c->model.mech[i], NULL, 1.0, c->y0, d, dl);
       r = tl_ext(&c->model, dl, 0, k);
     }
   free(d);
@@ -72,7 +71,7 @@ static void test_example(void) {
   double worst_solid = 0, worst_liquid = 0, worst_ledger = 0, worst_lost = 0, most_negative = 0;
   comp_advance adv = {cs, y};
   for (size_t i = 1; cs && i < c.ntimes; i++) {
-    int rc = tl_advance_to(m, &t, c.times[i], &switched, comp_steps_advance, &adv, &err);
+    int rc = tl_advance_to(m, &c.eval, &t, c.times[i], &switched, comp_steps_advance, &adv, &err);
     CHECK(rc == GS_OK);
     if (rc) {
       fprintf(stderr, "%s\n", err.msg);

@@ -240,9 +240,9 @@ static void check_aggregation(const char *what, const char *yaml, int kern, int 
   double *y = calloc(m->nstate, sizeof(double)), *d = calloc(m->nstate, sizeof(double));
   double *dl = calloc(m->nledger, sizeof(double)), *ref = calloc(m->nstate, sizeof(double));
   random_state(g, r, inner, y);
-  gs_model_rhs(m, 0.0, y, d, dl);
+  gs_model_rhs(m, NULL, 0.0, y, d, dl);
   double birth[8], death[8];
-  m->mech[0].type->number_rates(m->mech[0].self, m, 0.0, y, birth, death);
+  gs_mech_number_rates(m, &m->mech[0], NULL, 0.0, y, birth, death);
   for (size_t comp = 0; comp < g->ncomp; comp++) {
     const double *N = y + comp * n;
     const double *dc = d + comp * n;
@@ -350,7 +350,7 @@ static void test_hounslow(void) {
     const gs_model *m = &c.model;
     double y[n], d[n], dl[2], H[n];
     for (size_t i = 0; i < n; i++) y[i] = i + 1 < n ? tl_uniform(&r) : 0.0; /* top empty: no loss */
-    gs_model_rhs(m, 0, y, d, dl);
+    gs_model_rhs(m, NULL, 0, y, d, dl);
     /* Hounslow's equation (analytic-solutions.md T8), 0-based */
     double dmax = 0, hmax = 0, m0 = 0, m1 = 0, dsum = 0;
 #define BETA(i, j) table_C[(i) * n + (j)]
@@ -402,7 +402,7 @@ static void test_last_pivot(void) {
   for (int trial = 0; trial < 200; trial++) {
     double y[5] = {0}, d[5], dl[2];
     for (int i = 0; i < 4; i++) y[i] = tl_uniform(&r);
-    gs_model_rhs(&c.model, 0, y, d, dl);
+    gs_model_rhs(&c.model, NULL, 0, y, d, dl);
     double want = y[0] * y[3] + y[1] * y[2];
     if (!(fabs(d[4] - want) <= RT * want)) bad++;
   }
@@ -523,9 +523,9 @@ static void check_breakage(const grid_spec *gs, const daughter_spec *ds, const c
   double *y = calloc(n, sizeof(double)), *d = calloc(n, sizeof(double));
   double *S = calloc(n, sizeof(double)), dl[6] = {0};
   random_state(g, r, mode, y);
-  gs_model_rhs(m, 0, y, d, dl);
+  gs_model_rhs(m, NULL, 0, y, d, dl);
   double birth, death, Ssum = 0, m0dot = 0;
-  m->mech[0].type->number_rates(m->mech[0].self, m, 0, y, &birth, &death);
+  gs_mech_number_rates(m, &m->mech[0], NULL, 0, y, &birth, &death);
   for (size_t i = 0; i < n; i++) {
     S[i] = s0 * pow(g->volume[i], ex);
     Ssum += S[i] * y[i];
@@ -602,7 +602,7 @@ static void test_breakage(void) {
 static void rhs_with_ledger(const gs_model *m, double t, const double *y, double *d, double *dl,
                             const char *what) {
   const gs_grid *g = &m->grid;
-  gs_model_rhs(m, t, y, d, dl);
+  gs_model_rhs(m, NULL, t, y, d, dl);
   for (size_t comp = 0; comp < g->ncomp; comp++)
     for (int k = 0; k < g->dim; k++) {
       double s = 0, scale = 0;

@@ -56,7 +56,10 @@ static void check_mechanism(probe_t *p, const gs_mechanism *mech, double t, cons
                             double *worst_ratio) {
   const gs_model *m = &p->c->model;
   const size_t ncomp = m->grid.ncomp;
-  mech->type->number_rates(mech->self, m, t, y, p->birth, p->death);
+  gs_eval ev;
+  gs_eval_init(&ev, m);
+  ev.in_integrator = 1; /* the discrete choices the integrator's own f makes */
+  gs_mech_number_rates(m, mech, &ev, t, y, p->birth, p->death);
   for (size_t comp = 0; comp < ncomp; comp++) {
     if (p->death[comp] <= 0) continue;
     p->with_events++;
@@ -64,7 +67,7 @@ static void check_mechanism(probe_t *p, const gs_mechanism *mech, double t, cons
   }
   memset(p->d1, 0, m->nstate * sizeof(double));
   memset(p->dl1, 0, m->nledger * sizeof(double));
-  mech->type->rhs(mech->self, m, t, y, p->d1, p->dl1);
+  gs_mech_rhs(m, mech, &ev, t, y, p->d1, p->dl1);
   for (size_t comp = 0; comp < ncomp; comp++)
     for (int k = 0; k < m->nvol; k++) {
       double net, turn;
@@ -77,13 +80,11 @@ static int probed_rhs(void *ctx, double t, const double *y, double *dydt) {
   probe_t *p = ctx;
   gs_model *m = &p->c->model;
   p->evals++;
-  m->in_integrator = 1; /* the discrete choices the integrator's own f makes */
   for (size_t i = 0; i < m->nmech; i++) {
     const gs_mechanism *mech = &m->mech[i];
     if (!strcmp(mech->type->name, "aggregation")) check_mechanism(p, mech, t, y, 0.5, &p->worst_ratio_agg);
     if (!strcmp(mech->type->name, "breakage")) check_mechanism(p, mech, t, y, 2.0, &p->worst_ratio_brk);
   }
-  m->in_integrator = 0;
   return p->c->ode.f(p->c->ode.ctx, t, y, dydt);
 }
 
@@ -164,7 +165,7 @@ int main(void) {
   double switched = NAN;
   seed_advance adv = {&c, &ode, y};
   for (size_t i = 1; i < c.ntimes; i++) {
-    int rc = tl_advance_to(m, &t, c.times[i], &switched, integrator_advance, &adv, &err);
+    int rc = tl_advance_to(m, &c.eval, &t, c.times[i], &switched, integrator_advance, &adv, &err);
     CHECK(rc == GS_OK);
     if (rc) {
       fprintf(stderr, "%s\n", err.msg);

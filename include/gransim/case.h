@@ -31,7 +31,8 @@ typedef struct gs_case {
   double t0;
   double *times;       /* output times, increasing, times[0] = t0 */
   size_t ntimes;
-  gs_ode ode;          /* the ODE system of the model (numbers + ledger) */
+  gs_ode ode;          /* the ODE system of the model (numbers + ledger), in eval */
+  gs_eval eval;        /* the whole model's evaluation context (noise floor: solver.atol) */
   double *abs_scale;   /* error-control scale per component (ledger excluded) */
   gs_integrator integrator;
   gs_checks checks;

@@ -34,31 +34,47 @@ extern "C" {
 
 typedef struct gs_model gs_model;
 
+typedef struct gs_eval gs_eval;
+
 /* ---- mechanisms ---------------------------------------------------------- */
+/* A mechanism provides the rates of one compartment: the model owns the loop
+ * over compartments, the threads and the timing (gs_model_rhs), so a
+ * mechanism's author needs to know one compartment, the ledger and the time
+ * window (gs_window_on), nothing about MPI blocks, views or threads.  Vectors
+ * are reached through gs_eval_numbers/carried/upstream/ledger. */
 typedef struct gs_mech_type {
   const char *name;    /* key used in case files: "aggregation", "breakage", ... */
   const char *summary; /* one line for `gransim list` */
   /* Read parameters from node (a map; "type" already consumed) and prepare
    * all tables.  Must call gs_cfg_check_unused on the maps it reads. */
   int (*create)(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err);
-  /* Add this mechanism's rate to dydt (all compartments) and to dledger. */
-  void (*rhs)(void *self, const gs_model *m, double t, const double *y, double *dydt,
-              double *dledger);
-  /* Optional: total number formation (birth) and depletion (death) rates per
-   * compartment, for the 0.5 / 2 identities.  NULL if not meaningful. */
-  void (*number_rates)(void *self, const gs_model *m, double t, const double *y, double *birth,
-                       double *death);
+  /* Add compartment comp's rates to dydt and dledger.  Writes only comp's
+   * entries (reads comp's state, and the compartment upstream through
+   * gs_eval_upstream_c), so compartments may be evaluated at once. */
+  void (*rates)(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
+                const double *y, double *dydt, double *dledger);
+  /* Optional: compartment comp's total number formation (birth) and
+   * depletion (death) rates, for the 0.5 / 2 identities.  NULL if not
+   * meaningful. */
+  void (*number_rates)(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
+                       const double *y, double *birth, double *death);
   void (*free)(void *self);
-  /* Optional: apply in place an approximate inverse of (I - gamma J_m) to z
-   * (nstate numbers), J_m the Jacobian of this mechanism's rate at (t, y).
-   * Mechanisms whose rates are stiff and cheap to invert (growth along an
-   * axis: a bidiagonal J_m) provide it; the model composes them into the
-   * preconditioner of implicit integrators.  NULL: treated as identity. */
-  void (*precondition)(void *self, const gs_model *m, double t, const double *y, double gamma,
-                       double *z);
+  /* Optional: apply in place to compartment comp's numbers of z an
+   * approximate inverse of (I - gamma J_m), J_m the Jacobian of this
+   * mechanism's rate at (t, y).  Mechanisms whose rates are stiff and cheap
+   * to invert (growth along an axis: a bidiagonal J_m) provide it; the model
+   * composes them into the preconditioner of implicit integrators.  NULL:
+   * treated as identity. */
+  void (*precondition)(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
+                       const double *y, double gamma, double *z);
   /* Optional: the first time > t at which this mechanism's rate jumps (the
    * start or end of a time window), or INFINITY.  The run stops there. */
   double (*next_switch)(void *self, double t);
+  /* Optional, for flow between compartments: the rate k (1/s) at which
+   * compartment comp's particles flow into comp + 1 (the inflow of comp + 1
+   * is k times comp's numbers and carried totals).  Per-compartment steps
+   * need it to hand each compartment's discharge to the next. */
+  double (*outflow_rate)(void *self, size_t comp);
 } gs_mech_type;
 
 typedef struct gs_mechanism {
@@ -94,6 +110,48 @@ struct gs_model {
   int size_axes;  /* bitmask of axes summed into the granule volume for sizes (d10/d50/d90) */
   double *size_volume; /* ncells: granule volume used for diameters */
   char dir[1024];      /* directory of the case file, for relative paths in it ("." default) */
+  /* Scratch sets each mechanism keeps (OpenMP's maximum threads when the
+   * model was built): an evaluation context's slot picks one, so that
+   * threads evaluating different compartments at once never share scratch. */
+  int nslots;
+};
+
+/* ---- evaluation context -------------------------------------------------- */
+/* Who evaluates the rates, of which compartments, where the state lies and
+ * over which interval: everything that changes from one evaluation to the
+ * next, kept out of the model so that the model is never mutated during a
+ * run and several evaluators (threads, MPI ranks) share one model. */
+struct gs_eval {
+  /* Compartments evaluated, [comp_lo, comp_hi): all of them, or under MPI
+   * the rank's block, or one under per-compartment steps. */
+  size_t comp_lo, comp_hi;
+  /* Where compartment c's state lies in the vectors given: numbers at
+   * (c - view_lo) * ncells, carried totals from view_carried, ledger at
+   * (c - view_lo) * 2 nvol.  The full layout: view_lo 0, view_carried nnum.
+   * A packed part of the state (an MPI rank's block, one compartment) has
+   * the compartment before it, which transfer reads, in `halo` (numbers,
+   * then carried). */
+  size_t view_lo, view_carried;
+  const double *halo;
+  /* The interval [switch_lo, switch_hi] being integrated, which holds no
+   * switch (gs_model_next_switch) inside it, or switch_lo > switch_hi for
+   * none.  Mechanisms active over a time window decide on or off at its
+   * midpoint (gs_window_on), so that an evaluation at an end that is a
+   * switch time sees the interval's rates: Runge-Kutta stages and the
+   * end-of-step derivative fall on t + h exactly, and with the rate after
+   * the switch there a step ending at the switch fails its error test. */
+  double switch_lo, switch_hi;
+  /* Numbers at or below this are integration noise (the solver's absolute
+   * tolerance); mechanisms may skip cells holding no more than it. */
+  double noise_floor;
+  /* NULL, or ncomp seconds to which the model adds each compartment's rate
+   * evaluation (the MPI rebalancing follows the costs with them). */
+  double *comp_seconds;
+  /* The scratch set in [0, m->nslots) of a caller that evaluates its
+   * compartments serially beside other callers; -1: one caller, and the
+   * model may spread compartments, and a mechanism a compartment, over a
+   * team of threads. */
+  int slot;
   /* 1 while an implicit integrator forms Jacobian-vector difference
    * quotients: mechanisms keep the discrete choices (cells taking part) of
    * their last evaluation instead of making them again from y. */
@@ -102,46 +160,12 @@ struct gs_model {
    * discrete choices once per time value, so that the Newton iterations of
    * an implicit step (same t, several y) see one smooth function. */
   int in_integrator;
-  /* Compartments this process evaluates, [comp_lo, comp_hi): all of them,
-   * except under MPI, where each rank owns a contiguous block (the rates of
-   * the others are left 0).  Transfer reads compartment comp_lo - 1 too. */
-  size_t comp_lo, comp_hi;
-  /* Numbers at or below this are integration noise (the solver's absolute
-   * tolerance); mechanisms may skip cells holding no more than it. */
-  double noise_floor;
-  /* Where compartment c's state lies in the vectors mechanisms are given
-   * (read and written only through gs_model_numbers, gs_model_carried and
-   * gs_model_ledger): numbers at (c - view_lo) * ncells, carried totals from
-   * view_carried, ledger at (c - view_lo) * 2 nvol.  The full layout:
-   * view_lo 0, view_carried nnum.  Under MPI a rank's right-hand side works
-   * on its packed local vector directly (view_lo its first compartment; no
-   * copy into a full-size vector and back), the compartment before its
-   * block, which transfer reads, in `halo` (numbers, then carried). */
-  size_t view_lo, view_carried;
-  const double *halo;
-  /* The interval [switch_lo, switch_hi] being integrated, which holds no
-   * switch (gs_model_next_switch) inside it, or switch_lo > switch_hi for
-   * none.  Mechanisms active over a time window decide on or off at its
-   * midpoint (gs_window_on), so that an evaluation at an end that is a
-   * switch time sees the interval's rates: RK stages and the end-of-step
-   * derivative fall on t + h exactly, and with the rate after the switch
-   * there the step ending at the switch failed its error test at every
-   * size above ~1e-4 s (the seed-000 example: 17 rejected steps creeping
-   * up to the spray's start). */
-  double switch_lo, switch_hi;
-  /* NULL, or ncomp seconds: the work of each compartment whose cost depends
-   * on its contents (aggregation's pair loop, breakage), which mechanisms
-   * add with gs_model_clock/gs_model_charge; the MPI rebalancing reads it to
-   * follow the costs as the granulation front moves downstream. */
-  double *comp_seconds;
-  /* Threads that evaluate different compartments at the same time
-   * (per-compartment steps, src/run/compartment_steps.c) each pass their own
-   * copy of the model, with its own view and slot in [0, nslots): mechanisms
-   * keep one set of scratch per slot (nslots = OpenMP's maximum threads when
-   * the model was built) and, given a slot, evaluate serially in it.  -1:
-   * no slot (one caller; a mechanism may split a compartment over a team). */
-  int slot, nslots;
 };
+
+/* The context of an evaluation of the whole model in the full layout,
+ * outside any integrator. */
+void gs_eval_init(gs_eval *ev, const gs_model *m);
+
 
 /* Allocate an empty model around a grid (grid is moved in). */
 int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err);
@@ -149,77 +173,105 @@ int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err);
 int gs_model_set_carried(gs_model *m, const char *const *names, int n, gs_error *err);
 /* Index of a carried quantity by name, or -1. */
 int gs_model_carried_index(const gs_model *m, const char *name);
-/* Numbers of compartment comp in state y (see gs_model.view_lo). */
+/* Numbers of compartment comp in a full state vector y. */
 static inline double *gs_model_numbers(const gs_model *m, double *y, size_t comp) {
-  return y + (comp - m->view_lo) * m->grid.ncells;
+  return y + comp * m->grid.ncells;
 }
 static inline const double *gs_model_numbers_c(const gs_model *m, const double *y, size_t comp) {
-  return y + (comp - m->view_lo) * m->grid.ncells;
+  return y + comp * m->grid.ncells;
 }
-/* Totals of carried quantity q in compartment comp of state y. */
+/* Totals of carried quantity q in compartment comp of a full state y. */
 static inline double *gs_model_carried(const gs_model *m, double *y, size_t comp, int q) {
-  return y + m->view_carried +
-         ((comp - m->view_lo) * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
+  return y + m->nnum + (comp * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
 }
 static inline const double *gs_model_carried_c(const gs_model *m, const double *y, size_t comp,
                                                int q) {
-  return y + m->view_carried +
-         ((comp - m->view_lo) * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
+  return y + m->nnum + (comp * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
 }
-/* The compartment before comp, which flows into it (transfer): in y, or
- * under MPI the halo when comp is the first of the rank's block (numbers
- * for q < 0, else carried quantity q). */
-static inline const double *gs_model_upstream_c(const gs_model *m, const double *y, size_t comp,
-                                                int q) {
-  assert(!(comp == m->view_lo && m->view_lo > 0) || m->halo); /* a view needs its halo */
-  if (comp == m->view_lo && m->view_lo > 0)
-    return m->halo + (q < 0 ? 0 : (1 + (size_t)q) * m->grid.ncells);
-  return q < 0 ? gs_model_numbers_c(m, y, comp - 1) : gs_model_carried_c(m, y, comp - 1, q);
-}
-/* Ledger of compartment comp: [0, nvol) exchanged, [nvol, 2 nvol) lost. */
+/* Ledger of compartment comp in a full ledger: [0, nvol) exchanged, [nvol,
+ * 2 nvol) lost. */
 static inline double *gs_model_ledger(const gs_model *m, double *ledger, size_t comp) {
-  return ledger + (comp - m->view_lo) * 2 * (size_t)m->nvol;
+  return ledger + comp * 2 * (size_t)m->nvol;
+}
+
+/* The same in the vectors of an evaluation (gs_eval.view_lo): what
+ * mechanisms use. */
+static inline double *gs_eval_numbers(const gs_model *m, const gs_eval *ev, double *y,
+                                      size_t comp) {
+  return y + (comp - ev->view_lo) * m->grid.ncells;
+}
+static inline const double *gs_eval_numbers_c(const gs_model *m, const gs_eval *ev,
+                                              const double *y, size_t comp) {
+  return y + (comp - ev->view_lo) * m->grid.ncells;
+}
+static inline double *gs_eval_carried(const gs_model *m, const gs_eval *ev, double *y, size_t comp,
+                                      int q) {
+  return y + ev->view_carried +
+         ((comp - ev->view_lo) * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
+}
+static inline const double *gs_eval_carried_c(const gs_model *m, const gs_eval *ev,
+                                              const double *y, size_t comp, int q) {
+  return y + ev->view_carried +
+         ((comp - ev->view_lo) * (size_t)m->ncarried + (size_t)q) * m->grid.ncells;
+}
+/* The compartment before comp, which flows into it (transfer): in y, or the
+ * halo when comp is the first of a packed part (numbers for q < 0, else
+ * carried quantity q). */
+static inline const double *gs_eval_upstream_c(const gs_model *m, const gs_eval *ev,
+                                               const double *y, size_t comp, int q) {
+  assert(!(comp == ev->view_lo && ev->view_lo > 0) || ev->halo); /* a view needs its halo */
+  if (comp == ev->view_lo && ev->view_lo > 0)
+    return ev->halo + (q < 0 ? 0 : (1 + (size_t)q) * m->grid.ncells);
+  return q < 0 ? gs_eval_numbers_c(m, ev, y, comp - 1) : gs_eval_carried_c(m, ev, y, comp - 1, q);
+}
+static inline double *gs_eval_ledger(const gs_model *m, const gs_eval *ev, double *ledger,
+                                     size_t comp) {
+  return ledger + (comp - ev->view_lo) * 2 * (size_t)m->nvol;
 }
 /* Name of volume coordinate k (axis or carried quantity). */
 const char *gs_model_vol_name(const gs_model *m, int k);
 /* Held volume of coordinate k in compartment comp. */
 double gs_model_held(const gs_model *m, const double *y, size_t comp, int k);
 /* The rate k (1/s) at which compartment comp's particles flow into the next
- * one (the sum over the model's transfer mechanisms; 0 without any).  The
- * inflow of comp + 1 is k times comp's numbers and carried totals. */
+ * one (the sum of the mechanisms' outflow_rate; 0 without any).  The inflow
+ * of comp + 1 is k times comp's numbers and carried totals. */
 double gs_model_transfer_rate(const gs_model *m, size_t comp);
 /* Add a mechanism by type name, reading its parameters from node. */
 int gs_model_add_mechanism(gs_model *m, const char *type, gs_cfg_node *node, const char *label,
                            gs_error *err);
 void gs_model_free(gs_model *m);
 
-/* Timing of one compartment's work for m->comp_seconds (no clock is read
- * when it is NULL): start = gs_model_clock(m); ...; gs_model_charge(m, comp, start). */
+/* Monotonic wall-clock seconds. */
 double gs_model_seconds(void);
-static inline double gs_model_clock(const gs_model *m) {
-  return m->comp_seconds ? gs_model_seconds() : 0;
-}
-static inline void gs_model_charge(const gs_model *m, size_t comp, double start) {
-  if (m->comp_seconds) m->comp_seconds[comp] += gs_model_seconds() - start;
-}
 
-/* Full right-hand side: dydt (nstate) and dledger (nledger) are overwritten. */
-void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger);
+/* The rates of the compartments ev selects (ev NULL: the whole model, full
+ * layout, outside any integrator): those compartments' entries of dydt
+ * (nstate) and dledger (nledger) are overwritten. */
+void gs_model_rhs(const gs_model *m, const gs_eval *ev, double t, const double *y, double *dydt,
+                  double *dledger);
+/* Mechanism `mech`'s number formation and depletion rates per compartment
+ * (birth, death: ncomp entries; those outside ev's compartments are left
+ * alone); 0 when it provides none. */
+int gs_mech_number_rates(const gs_model *m, const gs_mechanism *mech, const gs_eval *ev, double t,
+                         const double *y, double *birth, double *death);
+/* Mechanism `mech`'s rates alone, added to dydt and dledger. */
+void gs_mech_rhs(const gs_model *m, const gs_mechanism *mech, const gs_eval *ev, double t,
+                 const double *y, double *dydt, double *dledger);
 /* The first time > t at which some mechanism's rate jumps, or INFINITY. */
 double gs_model_next_switch(const gs_model *m, double t);
 /* Helper for mechanisms active in [start, end). */
 double gs_window_next_switch(double start, double end, double t);
 /* 1 if a mechanism active in [start, end) is on for an evaluation at t: at
- * t itself, or, while an interval m->switch_lo..switch_hi is set, at its
+ * t itself, or, while an interval ev->switch_lo..switch_hi is set, at its
  * midpoint. */
-int gs_window_on(const gs_model *m, double start, double end, double t);
+int gs_window_on(const gs_eval *ev, double start, double end, double t);
 /* 1 if some mechanism provides a preconditioner. */
 int gs_model_has_preconditioner(const gs_model *m);
 /* Approximate solution of (I - gamma J) z = r over the numbers and the
- * ledger (n = nstate + nledger): the product of the mechanisms' inverses,
- * identity on the ledger. */
-void gs_model_precondition(const gs_model *m, double t, const double *y, double gamma,
-                           const double *r, double *z);
+ * ledger (n = nstate + nledger, full layout): the product of the
+ * mechanisms' inverses, identity on the ledger. */
+void gs_model_precondition(const gs_model *m, const gs_eval *ev, double t, const double *y,
+                           double gamma, const double *r, double *z);
 
 /* ---- moments and size statistics ---------------------------------------- */
 typedef struct gs_summary {

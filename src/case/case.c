@@ -248,23 +248,26 @@ static int read_checks(gs_cfg_node *root, gs_checks *k, gs_error *err) {
   return rc;
 }
 
+/* The case's ODE system: the whole model in the full layout, in the case's
+ * own evaluation context. */
 static int model_ode(void *ctx, double t, const double *y, double *dydt) {
-  gs_model *m = ctx;
-  m->in_integrator = 1;
-  gs_model_rhs(m, t, y, dydt, dydt + m->nstate);
-  m->in_integrator = 0;
+  gs_case *c = ctx;
+  c->eval.in_integrator = 1;
+  gs_model_rhs(&c->model, &c->eval, t, y, dydt, dydt + c->model.nstate);
+  c->eval.in_integrator = 0;
   return 0;
 }
 
 static int model_psolve(void *ctx, double t, const double *y, double gamma, const double *r,
                         double *z) {
-  gs_model_precondition(ctx, t, y, gamma, r, z);
+  gs_case *c = ctx;
+  gs_model_precondition(&c->model, &c->eval, t, y, gamma, r, z);
   return 0;
 }
 
 static void model_hold(void *ctx, int on) {
-  gs_model *m = ctx;
-  m->hold = on;
+  gs_case *c = ctx;
+  c->eval.hold = on;
 }
 
 /* Absolute-tolerance scale of the ledger entries of axis k: the coordinate
@@ -308,8 +311,14 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
     c->abs_scale[i] = i < m->nnum       ? 1.0
                       : i < m->nstate   ? vtyp
                                         : scale[(i - m->nstate) % (size_t)m->nvol];
-  c->ode = (gs_ode){n, model_ode, m, c->abs_scale, m->nstate,
-                    gs_model_has_preconditioner(m) ? model_psolve : NULL, model_hold, NULL, 0, NULL, 0, NULL};
+  gs_eval_init(&c->eval, m);
+  c->ode = (gs_ode){.n = n,
+                    .f = model_ode,
+                    .ctx = c,
+                    .abs_scale = c->abs_scale,
+                    .npositive = m->nstate,
+                    .psolve = gs_model_has_preconditioner(m) ? model_psolve : NULL,
+                    .hold = model_hold};
   gs_cfg_node *solver = gs_cfg_get(root, "solver");
   if (solver && gs_cfg_require_kind(solver, GS_CFG_MAP, err)) return GS_EINPUT;
   static const char *const steps[] = {"shared", "per_compartment", NULL};
@@ -355,7 +364,7 @@ static void negative_floor(gs_cfg_node *root, gs_case *c) {
   double atol = 1e-12;
   if (an) gs_cfg_node_double(an, &atol, NULL);
   c->checks.negative_floor = 100 * atol;
-  c->model.noise_floor = atol;
+  c->eval.noise_floor = atol;
 }
 
 /* Shared with the SWA solver (src/swa/case.c), which reads the same grid and

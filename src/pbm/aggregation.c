@@ -550,10 +550,10 @@ static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
  * time value under an integrator, and kept while held (Jacobian-vector
  * difference quotients, whose perturbed state has tolerance-sized noise in
  * every cell), so that Newton iterations see one smooth right-hand side. */
-static void choose_cells(agg_t *A, size_t comp, double t, const double *N, const gs_model *m) {
-  int keep = A->cs[comp].span_valid && (m->hold || (m->in_integrator && t == A->cs[comp].span_t));
+static void choose_cells(agg_t *A, size_t comp, double t, const double *N, const gs_eval *ev) {
+  int keep = A->cs[comp].span_valid && (ev->hold || (ev->in_integrator && t == A->cs[comp].span_t));
   if (!keep) {
-    find_spans(A, comp, N, A->negligible > 0 ? m->noise_floor : 0.0);
+    find_spans(A, comp, N, A->negligible > 0 ? ev->noise_floor : 0.0);
     A->cs[comp].span_t = t;
   }
 }
@@ -646,12 +646,12 @@ static evaluator evaluator_for(const agg_t *A, int slot) {
 /* Loads per particle of compartment comp's cells that take part (the only
  * ones the pairs read, and the losses where there are deaths): a large
  * grid's population sits in a band. */
-static void carried_loads(const agg_t *A, const gs_model *m, size_t comp, const double *y,
-                          double *pcar) {
+static void carried_loads(const agg_t *A, const gs_model *m, const gs_eval *ev, size_t comp,
+                          const double *y, double *pcar) {
   const size_t lo = A->cs[comp].prange[0], hi = A->cs[comp].prange[1];
-  const double *N = gs_model_numbers_c(m, y, comp);
+  const double *N = gs_eval_numbers_c(m, ev, y, comp);
   for (int q = 0; q < A->nc; q++) {
-    const double *Q = gs_model_carried_c(m, y, comp, q);
+    const double *Q = gs_eval_carried_c(m, ev, y, comp, q);
     double *p = pcar + (size_t)q * A->ncells;
     for (size_t c = lo; c < hi; c++) p[c] = N[c] > 0 ? Q[c] / N[c] : 0.0;
   }
@@ -663,11 +663,11 @@ static void carried_loads(const agg_t *A, const gs_model *m, size_t comp, const 
  * right-hand side jump whenever a cell crosses, which adaptive integrators
  * cannot step over).  Chosen once per time value under an integrator (like
  * the participating cells), so Newton iterations see one function. */
-static const double *wet_cells(agg_t *A, const gs_model *m, size_t comp, double t,
-                               const double *y) {
+static const double *wet_cells(agg_t *A, const gs_model *m, const gs_eval *ev, size_t comp,
+                               double t, const double *y) {
   double *psi = A->wet_ok + comp * A->wet_len;
-  if (m->hold || (m->in_integrator && t == A->cs[comp].wet_t)) return psi;
-  const double *N = gs_model_numbers_c(m, y, comp), *L = gs_model_carried_c(m, y, comp, A->wet_liquid);
+  if (ev->hold || (ev->in_integrator && t == A->cs[comp].wet_t)) return psi;
+  const double *N = gs_eval_numbers_c(m, ev, y, comp), *L = gs_eval_carried_c(m, ev, y, comp, A->wet_liquid);
   const double lo = A->wet_min * (1 - 0.5 * A->wet_ramp), hi = A->wet_min * (1 + 0.5 * A->wet_ramp);
   for (size_t c = 0; c < A->ncells; c++) {
     double content = N[c] > 0 ? L[c] / (N[c] * m->grid.volume[c]) : 0.0;
@@ -680,16 +680,17 @@ static const double *wet_cells(agg_t *A, const gs_model *m, size_t comp, double 
 /* One pass of pairs over the numbers Nv, its rates added with sign; choose:
  * choose the cells taking part from Nv and find their loads, else keep the
  * last pass's. */
-static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const double *y,
+static void pass(agg_t *A, const gs_model *m, const gs_eval *ev, size_t comp, double t,
+                 const double *y,
                  const double *Nv, double sign, int choose, double *dydt, double *dledger,
-                 double *born, double *dead, acc_t *acc, const evaluator *ev) {
+                 double *born, double *dead, acc_t *acc, const evaluator *wk) {
   if (choose) {
-    choose_cells(A, comp, t, Nv, m);
-    carried_loads(A, m, comp, y, ev->pcar);
+    choose_cells(A, comp, t, Nv, ev);
+    carried_loads(A, m, ev, comp, y, wk->pcar);
   }
-  compartment_pairs(A, comp, Nv, acc, ev->slot, ev->pcar);
-  acc_t *r = &acc[ev->res];
-  double *d = dydt ? gs_model_numbers(m, dydt, comp) : NULL;
+  compartment_pairs(A, comp, Nv, acc, wk->slot, wk->pcar);
+  acc_t *r = &acc[wk->res];
+  double *d = dydt ? gs_eval_numbers(m, ev, dydt, comp) : NULL;
   /* the cells outside [lo, hi) hold no deaths or births */
   const size_t lo = r->lo, hi = r->hi;
   if (d) {
@@ -702,8 +703,8 @@ static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const doubl
   }
   double *qdst[GS_MAX_CARRIED] = {NULL, NULL};
   for (int q = 0; d && q < A->nc; q++) {
-    qdst[q] = gs_model_carried(m, dydt, comp, q);
-    const double *p = ev->pcar + (size_t)q * A->ncells;
+    qdst[q] = gs_eval_carried(m, ev, dydt, comp, q);
+    const double *p = wk->pcar + (size_t)q * A->ncells;
     /* cells without events lose no load; skipping them also keeps a load
      * that overflows (a stray denormal number) from making 0 x inf = NaN */
     for (size_t c = lo; c < hi; c++) /* a select, not a branch: it vectorises */
@@ -713,75 +714,55 @@ static void pass(agg_t *A, const gs_model *m, size_t comp, double t, const doubl
   if (!d) memset(scratch, 0, A->ncells * sizeof(double));
   *born += place_births(A, &m->grid, r, sign, scratch, d ? qdst : NULL);
   if (dledger) {
-    double *lost = gs_model_ledger(m, dledger, comp) + m->nvol;
+    double *lost = gs_eval_ledger(m, ev, dledger, comp) + m->nvol;
     for (int k = 0; k < A->dim; k++) lost[k] += sign * r->lost_v[A->off + k];
     for (int q = 0; q < A->nc; q++) lost[A->dim + q] += sign * r->lost_c[q];
   }
 }
 
-static void compartment_rates(agg_t *A, const gs_model *m, double t, const double *y,
-                              double *dydt, double *dledger, double *birth, double *death,
-                              size_t comp, acc_t *acc, int slot) {
-  const evaluator ev = evaluator_for(A, slot);
-  const double *N = gs_model_numbers_c(m, y, comp);
-  const double start = gs_model_clock(m);
+/* Compartment comp's rates (dydt, dledger), or with dydt NULL its number
+ * formation and depletion rates alone (birth, death).  slot < 0: this
+ * compartment alone, its pair loop split over the OpenMP team; slot >= 0:
+ * serial, in that slot's scratch. */
+static void compartment_rates(agg_t *A, const gs_model *m, const gs_eval *ev, size_t comp,
+                              double t, const double *y, double *dydt, double *dledger,
+                              double *birth, double *death) {
+  acc_t acc[A->nthreads > 0 ? A->nthreads : 1];
+  const evaluator wk = evaluator_for(A, ev->slot);
+  const double *N = gs_eval_numbers_c(m, ev, y, comp);
   double born = 0, dead = 0;
   if (A->wet == WET_OFF) {
-    pass(A, m, comp, t, y, N, 1.0, 1, dydt, dledger, &born, &dead, acc, &ev);
+    pass(A, m, ev, comp, t, y, N, 1.0, 1, dydt, dledger, &born, &dead, acc, &wk);
   } else {
-    const double *psi = wet_cells(A, m, comp, t, y);
+    const double *psi = wet_cells(A, m, ev, comp, t, y);
     /* both: pair weight psi_a psi_b, so the numbers psi N; either:
      * 1 - (1 - psi_a)(1 - psi_b), all pairs minus those of (1 - psi) N */
     const int both = A->wet == WET_BOTH;
-    for (size_t c = 0; c < A->ncells; c++) ev.masked[c] = (both ? psi[c] : 1.0 - psi[c]) * N[c];
+    for (size_t c = 0; c < A->ncells; c++) wk.masked[c] = (both ? psi[c] : 1.0 - psi[c]) * N[c];
     /* either: the dry pairs subtracted are among the cells of all pairs (a
      * dry cell negligible in the whole compartment takes part in neither) */
-    if (!both) pass(A, m, comp, t, y, N, 1.0, 1, dydt, dledger, &born, &dead, acc, &ev);
-    pass(A, m, comp, t, y, ev.masked, both ? 1.0 : -1.0, both, dydt, dledger, &born, &dead, acc, &ev);
+    if (!both) pass(A, m, ev, comp, t, y, N, 1.0, 1, dydt, dledger, &born, &dead, acc, &wk);
+    pass(A, m, ev, comp, t, y, wk.masked, both ? 1.0 : -1.0, both, dydt, dledger, &born, &dead, acc, &wk);
   }
-  if (birth) birth[comp] = born;
-  if (death) death[comp] = dead;
-  gs_model_charge(m, comp, start);
+  if (birth) *birth = born;
+  if (death) *death = dead;
 }
 
-/* Several compartments and threads: each thread takes whole compartments
- * (one parallel region per evaluation instead of one per compartment and
- * pass; compartments write disjoint parts of dydt and of the ledger).  One
- * compartment: the threads split its pair loop. */
-static void agg_rates(agg_t *A, const gs_model *m, double t, const double *y, double *dydt,
-                      double *dledger, double *birth, double *death) {
-  acc_t acc[A->nthreads > 0 ? A->nthreads : 1];
-  const size_t lo = m->comp_lo, hi = m->comp_hi;
-  /* Threads take whole compartments only when the case has enough cells:
-   * two threads made the seed-000 example (4 x 256 cells) 15-50 % slower
-   * here, the region and the uneven compartments costing more than they
-   * save.  The choice depends on the whole case, not on this MPI rank's
-   * block, so that moving compartments between ranks never switches a
-   * compartment between this path (its sums in one thread, as in one
-   * process) and the shared pair loop (sums added in another order). */
-  if (m->slot >= 0) { /* one of several callers, each on its own compartments */
-    for (size_t comp = lo; comp < hi; comp++)
-      compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, m->slot);
-  } else if (A->ncomp > 1 && A->nthreads > 1 && gs_threads_for(A->ncells * A->ncomp, 4096) > 1) {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(A->nthreads)
-    for (size_t comp = lo; comp < hi; comp++)
-      compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, omp_get_thread_num());
-  } else {
-    for (size_t comp = lo; comp < hi; comp++)
-      compartment_rates(A, m, t, y, dydt, dledger, birth, death, comp, acc, -1);
-  }
+static void agg_rhs(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
+                    const double *y, double *dydt, double *dledger) {
+  compartment_rates(self, m, ev, comp, t, y, dydt, dledger, NULL, NULL);
 }
 
-static void agg_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
-                    double *dledger) {
-  agg_rates(self, m, t, y, dydt, dledger, NULL, NULL);
-}
-
-static void agg_number_rates(void *self, const gs_model *m, double t, const double *y,
-                             double *birth, double *death) {
-  agg_rates(self, m, t, y, NULL, NULL, birth, death);
+static void agg_number_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp,
+                             double t, const double *y, double *birth, double *death) {
+  compartment_rates(self, m, ev, comp, t, y, NULL, NULL, birth, death);
 }
 
 const gs_mech_type gs_mech_aggregation = {
-    "aggregation", "binary aggregation with a kernel; cell-average or fixed-pivot redistribution",
-    agg_create, agg_rhs, agg_number_rates, agg_free, NULL, NULL};
+    .name = "aggregation",
+    .summary = "binary aggregation with a kernel; cell-average or fixed-pivot redistribution",
+    .create = agg_create,
+    .rates = agg_rhs,
+    .number_rates = agg_number_rates,
+    .free = agg_free,
+};

@@ -215,19 +215,21 @@ static int brk_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   return GS_OK;
 }
 
-static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt, double *dledger,
-                      double *birth, double *death) {
+/* Compartment comp's rates (dydt, dledger), or with dydt NULL its number
+ * formation and depletion rates alone (birth, death). */
+static void brk_compartment(brk_t *B, const gs_model *m, const gs_eval *ev, size_t comp,
+                            const double *y, double *dydt, double *dledger, double *birth,
+                            double *death) {
   const gs_grid *g = &m->grid;
   const int dim = B->dim;
   /* this caller's workspace (several may evaluate compartments at once) */
-  const size_t slot = m->slot > 0 ? (size_t)m->slot : 0;
+  const size_t slot = ev->slot > 0 ? (size_t)ev->slot : 0;
   double *births = B->births + slot * B->births_len, *vol = B->vol + slot * B->vol_len;
   double *cbirth = B->cbirth + slot * B->cbirth_len;
-  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
-    const double start = gs_model_clock(m);
-    const double *N = gs_model_numbers_c(m, y, comp);
-    double *d = dydt ? gs_model_numbers(m, dydt, comp) : NULL;
-    double *lost = dledger ? gs_model_ledger(m, dledger, comp) + m->nvol : NULL;
+  {
+    const double *N = gs_eval_numbers_c(m, ev, y, comp);
+    double *d = dydt ? gs_eval_numbers(m, ev, dydt, comp) : NULL;
+    double *lost = dledger ? gs_eval_ledger(m, ev, dledger, comp) + m->nvol : NULL;
     double born = 0, dead = 0, excess[GS_MAX_DIM] = {0};
     if (B->scheme == CELL_AVERAGE) {
       memset(births, 0, B->ncells * sizeof(double));
@@ -235,7 +237,7 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
       memset(cbirth, 0, (size_t)B->nc * B->ncells * sizeof(double));
     }
     double *qdst[GS_MAX_CARRIED] = {NULL, NULL};
-    for (int q = 0; d && q < B->nc; q++) qdst[q] = gs_model_carried(m, dydt, comp, q);
+    for (int q = 0; d && q < B->nc; q++) qdst[q] = gs_eval_carried(m, ev, dydt, comp, q);
     for (size_t k = 0; k < B->ncells; k++) {
       double r = B->rate[k] * N[k];
       if (r == 0.0) continue;
@@ -243,7 +245,7 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
       if (d) d[k] -= r;
       double load[GS_MAX_CARRIED] = {0, 0}; /* carried by one parent */
       for (int q = 0; q < B->nc; q++) {
-        load[q] = N[k] > 0 ? gs_model_carried_c(m, y, comp, q)[k] / N[k] : 0.0;
+        load[q] = N[k] > 0 ? gs_eval_carried_c(m, ev, y, comp, q)[k] / N[k] : 0.0;
         if (d) qdst[q][k] -= r * load[q];
       }
       for (size_t p = B->first[k]; p < B->first[k + 1]; p++) {
@@ -271,24 +273,28 @@ static void brk_rates(brk_t *B, const gs_model *m, const double *y, double *dydt
     }
     if (lost)
       for (int q = 0; q < dim; q++) lost[q] += excess[q];
-    if (birth) birth[comp] = born;
-    if (death) death[comp] = dead;
-    gs_model_charge(m, comp, start);
+    if (birth) *birth = born;
+    if (death) *death = dead;
   }
 }
 
-static void brk_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
-                    double *dledger) {
+static void brk_rhs(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
+                    const double *y, double *dydt, double *dledger) {
   (void)t;
-  brk_rates(self, m, y, dydt, dledger, NULL, NULL);
+  brk_compartment(self, m, ev, comp, y, dydt, dledger, NULL, NULL);
 }
 
-static void brk_number_rates(void *self, const gs_model *m, double t, const double *y,
-                             double *birth, double *death) {
+static void brk_number_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp,
+                             double t, const double *y, double *birth, double *death) {
   (void)t;
-  brk_rates(self, m, y, NULL, NULL, birth, death);
+  brk_compartment(self, m, ev, comp, y, NULL, NULL, birth, death);
 }
 
 const gs_mech_type gs_mech_breakage = {
-    "breakage", "breakage with a selection function and a daughter distribution", brk_create,
-    brk_rhs, brk_number_rates, brk_free, NULL, NULL};
+    .name = "breakage",
+    .summary = "breakage with a selection function and a daughter distribution",
+    .create = brk_create,
+    .rates = brk_rhs,
+    .number_rates = brk_number_rates,
+    .free = brk_free,
+};

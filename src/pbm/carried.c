@@ -13,7 +13,6 @@
 #include <stdlib.h>
 
 #include "gransim/pbm.h"
-#include "gransim/threads.h"
 #include "pbm/sums.h"
 
 enum { SPRAY, PORE_CONSOLIDATION };
@@ -84,31 +83,35 @@ static int carried_create(gs_cfg_node *node, const gs_model *m, void **self, int
 }
 
 /* Compartment comp's share of the spray, in proportion to solid volume. */
-static void spray_compartment(const carried_t *C, const gs_model *m, const double *y,
-                              double *dydt, double *dledger, size_t comp) {
+static void spray_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
+                        const double *y, double *dydt, double *dledger) {
+  const carried_t *C = self;
+  if (!gs_window_on(ev, C->start, C->end, t)) return;
   const gs_grid *g = &m->grid;
-  const double *N = gs_model_numbers_c(m, y, comp);
+  const double *N = gs_eval_numbers_c(m, ev, y, comp);
   const double solid = gs_dot_strided(N, g->volume, 1, g->ncells);
   if (!(solid > 0) || C->q[comp] == 0.0) return;
-  double per = C->q[comp] / solid, *dL = gs_model_carried(m, dydt, comp, C->liquid);
+  double per = C->q[comp] / solid, *dL = gs_eval_carried(m, ev, dydt, comp, C->liquid);
   for (size_t c = 0; c < g->ncells; c++) dL[c] += per * N[c] * g->volume[c];
-  gs_model_ledger(m, dledger, comp)[g->dim + C->liquid] += C->q[comp];
+  gs_eval_ledger(m, ev, dledger, comp)[g->dim + C->liquid] += C->q[comp];
 }
 
 /* Compartment comp's loss of gas down to the minimum porosity. */
-static void consolidation_compartment(const carried_t *C, const gs_model *m, const double *y,
-                                      double *dydt, double *dledger, size_t comp) {
+static void consolidation_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp,
+                                double t, const double *y, double *dydt, double *dledger) {
+  (void)t;
+  const carried_t *C = self;
   const gs_grid *g = &m->grid;
   const double target = C->emin / (1 - C->emin); /* pore volume per solid volume at e_min */
-  const double *N = gs_model_numbers_c(m, y, comp);
-  const double *L = gs_model_carried_c(m, y, comp, C->liquid);
-  const double *G = gs_model_carried_c(m, y, comp, C->gas);
-  double *dG = gs_model_carried(m, dydt, comp, C->gas), lost = 0;
+  const double *N = gs_eval_numbers_c(m, ev, y, comp);
+  const double *L = gs_eval_carried_c(m, ev, y, comp, C->liquid);
+  const double *G = gs_eval_carried_c(m, ev, y, comp, C->gas);
+  double *dG = gs_eval_carried(m, ev, dydt, comp, C->gas), lost = 0;
   for (size_t c = 0; c < g->ncells; c++) {
     /* cells at the solver's noise floor hold no particles to speak of, and
      * their loads per particle (G / N, with N noise) are meaningless: the
      * rate, quadratic in the gas per particle, would be too */
-    if (!(N[c] > m->noise_floor) || !(G[c] > 0)) continue;
+    if (!(N[c] > ev->noise_floor) || !(G[c] > 0)) continue;
     double s = g->volume[c], l = L[c] / N[c], gas = G[c] / N[c];
     double excess = gas + l - target * s;
     if (!(excess > 0) || !(s > 0)) continue;
@@ -116,28 +119,7 @@ static void consolidation_compartment(const carried_t *C, const gs_model *m, con
     dG[c] -= rate;
     lost += rate;
   }
-  gs_model_ledger(m, dledger, comp)[g->dim + C->gas] -= lost;
-}
-
-/* Compartments write disjoint rates and ledger entries: a team splits them
- * when there is enough work. */
-static void carried_compartment(const carried_t *C, const gs_model *m, const double *y,
-                                double *dydt, double *dledger, size_t comp) {
-  if (C->kind == SPRAY) spray_compartment(C, m, y, dydt, dledger, comp);
-  else consolidation_compartment(C, m, y, dydt, dledger, comp);
-}
-
-static void carried_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
-                        double *dledger) {
-  const carried_t *C = self;
-  if (C->kind == SPRAY && !gs_window_on(m, C->start, C->end, t)) return;
-  const size_t lo = m->comp_lo, hi = m->comp_hi;
-  if (gs_threads_for((hi - lo) * m->grid.ncells, 20000) > 1) {
-#pragma omp parallel for schedule(static)
-    for (size_t comp = lo; comp < hi; comp++) carried_compartment(C, m, y, dydt, dledger, comp);
-  } else {
-    for (size_t comp = lo; comp < hi; comp++) carried_compartment(C, m, y, dydt, dledger, comp);
-  }
+  gs_eval_ledger(m, ev, dledger, comp)[g->dim + C->gas] -= lost;
 }
 
 static int spray_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
@@ -153,8 +135,17 @@ static double spray_switch(void *self, double t) {
 }
 
 const gs_mech_type gs_mech_spray = {
-    "spray", "liquid sprayed onto the carried liquid, shared in proportion to solid volume (seed 000 eq. 5)",
-    spray_create, carried_rhs, NULL, carried_free, NULL, spray_switch};
+    .name = "spray",
+    .summary = "liquid sprayed onto the carried liquid, shared in proportion to solid volume (seed 000 eq. 5)",
+    .create = spray_create,
+    .rates = spray_rates,
+    .free = carried_free,
+    .next_switch = spray_switch,
+};
 const gs_mech_type gs_mech_pore_consolidation = {
-    "pore_consolidation", "loss of carried gas down to a minimum porosity (seed 000 eq. 13, sign of a loss)",
-    pore_create, carried_rhs, NULL, carried_free, NULL, NULL};
+    .name = "pore_consolidation",
+    .summary = "loss of carried gas down to a minimum porosity (seed 000 eq. 13, sign of a loss)",
+    .create = pore_create,
+    .rates = consolidation_rates,
+    .free = carried_free,
+};

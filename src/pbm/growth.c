@@ -150,16 +150,17 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
   return GS_OK;
 }
 
-static int active(const grow_t *G, const gs_model *m, double t) {
-  return G->kind == KIND_CONSOLIDATION || gs_window_on(m, G->start, G->end, t);
+static int active(const grow_t *G, const gs_eval *ev, double t) {
+  return G->kind == KIND_CONSOLIDATION || gs_window_on(ev, G->start, G->end, t);
 }
 
 /* Rates of compartment comp (in this caller's row of G->G), or NULL when
  * nothing grows there. */
-static const double *compartment_rates(grow_t *G, const gs_model *m, size_t comp, const double *N) {
+static const double *compartment_rates(grow_t *G, const gs_model *m, const gs_eval *ev,
+                                       size_t comp, const double *N) {
   const gs_grid *g = &m->grid;
   if (G->kind != KIND_LIQUID) return G->G; /* precomputed */
-  double *rates = G->G + (m->slot > 0 ? (size_t)m->slot : 0) * G->row_len;
+  double *rates = G->G + (ev->slot > 0 ? (size_t)ev->slot : 0) * G->row_len;
   /* share the spray in proportion to solid volume */
   double solid = 0;
   for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
@@ -169,32 +170,27 @@ static const double *compartment_rates(grow_t *G, const gs_model *m, size_t comp
   return rates;
 }
 
-static void grow_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
-                     double *dledger) {
+static void grow_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
+                       const double *y, double *dydt, double *dledger) {
   grow_t *G = self;
-  const gs_grid *g = &m->grid;
-  if (!active(G, m, t)) return;
-  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
-    const double *N = gs_model_numbers_c(m, y, comp);
-    const double *rates = compartment_rates(G, m, comp, N);
-    if (rates)
-      gs_growth_apply(g, G->axis, rates, N, gs_model_numbers(m, dydt, comp),
-                      gs_model_ledger(m, dledger, comp), gs_model_ledger(m, dledger, comp) + m->nvol);
-  }
+  if (!active(G, ev, t)) return;
+  const double *N = gs_eval_numbers_c(m, ev, y, comp);
+  const double *rates = compartment_rates(G, m, ev, comp, N);
+  double *ledger = gs_eval_ledger(m, ev, dledger, comp);
+  if (rates)
+    gs_growth_apply(&m->grid, G->axis, rates, N, gs_eval_numbers(m, ev, dydt, comp), ledger,
+                    ledger + m->nvol);
 }
 
 /* Exact inverse of I - gamma J for the transfer along the axis with the
  * rates frozen at y (the spray's dependence on the total solid volume, a
  * rank-one term, is left to the Krylov iterations). */
-static void grow_precondition(void *self, const gs_model *m, double t, const double *y,
-                              double gamma, double *z) {
+static void grow_precondition(void *self, const gs_model *m, const gs_eval *ev, size_t comp,
+                              double t, const double *y, double gamma, double *z) {
   grow_t *G = self;
-  const gs_grid *g = &m->grid;
-  if (!active(G, m, t)) return;
-  for (size_t comp = m->comp_lo; comp < m->comp_hi; comp++) {
-    const double *rates = compartment_rates(G, m, comp, gs_model_numbers_c(m, y, comp));
-    if (rates) gs_growth_solve(g, G->axis, rates, gamma, gs_model_numbers(m, z, comp), G->work);
-  }
+  if (!active(G, ev, t)) return;
+  const double *rates = compartment_rates(G, m, ev, comp, gs_eval_numbers_c(m, ev, y, comp));
+  if (rates) gs_growth_solve(&m->grid, G->axis, rates, gamma, gs_eval_numbers(m, ev, z, comp), G->work);
 }
 
 static double grow_switch(void *self, double t) {
@@ -212,12 +208,30 @@ static int consol_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *
   return grow_create_kind(n, m, s, KIND_CONSOLIDATION, e);
 }
 
-const gs_mech_type gs_mech_growth = {"growth", "growth along an axis, G = constant + linear * x",
-                                     growth_create, grow_rhs, NULL, grow_free,
-                                     grow_precondition, grow_switch};
+const gs_mech_type gs_mech_growth = {
+    .name = "growth",
+    .summary = "growth along an axis, G = constant + linear * x",
+    .create = growth_create,
+    .rates = grow_rates,
+    .free = grow_free,
+    .precondition = grow_precondition,
+    .next_switch = grow_switch,
+};
 const gs_mech_type gs_mech_liquid_addition = {
-    "liquid_addition", "liquid spray shared in proportion to solid volume (seed 000 eq. 5)",
-    liquid_create, grow_rhs, NULL, grow_free, grow_precondition, grow_switch};
+    .name = "liquid_addition",
+    .summary = "liquid spray shared in proportion to solid volume (seed 000 eq. 5)",
+    .create = liquid_create,
+    .rates = grow_rates,
+    .free = grow_free,
+    .precondition = grow_precondition,
+    .next_switch = grow_switch,
+};
 const gs_mech_type gs_mech_consolidation = {
-    "consolidation", "loss of gas down to a minimum porosity (seed 002 eq. 2.12, corrected sign)",
-    consol_create, grow_rhs, NULL, grow_free, grow_precondition, grow_switch};
+    .name = "consolidation",
+    .summary = "loss of gas down to a minimum porosity (seed 002 eq. 2.12, corrected sign)",
+    .create = consol_create,
+    .rates = grow_rates,
+    .free = grow_free,
+    .precondition = grow_precondition,
+    .next_switch = grow_switch,
+};

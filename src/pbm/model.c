@@ -7,6 +7,7 @@
 #include <time.h>
 
 #include "gransim/pbm.h"
+#include "gransim/threads.h"
 #include "pbm/sums.h"
 
 extern const gs_mech_type gs_mech_aggregation, gs_mech_breakage, gs_mech_growth,
@@ -29,17 +30,11 @@ const gs_mech_type *gs_mech_lookup(const char *name) {
 
 int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err) {
   memset(m, 0, sizeof *m);
-  m->switch_lo = 1; /* no interval: windows decide at t */
-  m->slot = -1;
   m->nslots = omp_get_max_threads();
-  m->switch_hi = 0;
   m->grid = *grid;
   memset(grid, 0, sizeof *grid);
   m->nnum = m->nstate = m->grid.ncomp * m->grid.ncells;
-  m->view_carried = m->nnum; /* the full layout */
   m->nvol = m->grid.dim;
-  m->comp_lo = 0;
-  m->comp_hi = m->grid.ncomp;
   m->nledger = m->grid.ncomp * 2 * (size_t)m->nvol;
   m->size_axes = (1 << m->grid.dim) - 1;
   strcpy(m->dir, ".");
@@ -115,11 +110,11 @@ double gs_window_next_switch(double start, double end, double t) {
   return INFINITY;
 }
 
-int gs_window_on(const gs_model *m, double start, double end, double t) {
+int gs_window_on(const gs_eval *ev, double start, double end, double t) {
   /* every evaluation of an advance belongs to its interval, also one whose
    * time rounded past it (GSL's last stage at t0 + (t1 - t0) can be t1 plus
    * an ulp) */
-  if (m->switch_lo <= m->switch_hi) t = 0.5 * (m->switch_lo + m->switch_hi);
+  if (ev->switch_lo <= ev->switch_hi) t = 0.5 * (ev->switch_lo + ev->switch_hi);
   return t >= start && t < end;
 }
 
@@ -131,18 +126,45 @@ double gs_model_next_switch(const gs_model *m, double t) {
   return next;
 }
 
+double gs_model_transfer_rate(const gs_model *m, size_t comp) {
+  double k = 0;
+  for (size_t i = 0; i < m->nmech; i++)
+    if (m->mech[i].type->outflow_rate) k += m->mech[i].type->outflow_rate(m->mech[i].self, comp);
+  return k;
+}
+
 int gs_model_has_preconditioner(const gs_model *m) {
   for (size_t i = 0; i < m->nmech; i++)
     if (m->mech[i].type->precondition) return 1;
   return 0;
 }
 
-void gs_model_precondition(const gs_model *m, double t, const double *y, double gamma,
-                           const double *r, double *z) {
+void gs_eval_init(gs_eval *ev, const gs_model *m) {
+  *ev = (gs_eval){.comp_lo = 0,
+                  .comp_hi = m->grid.ncomp,
+                  .view_lo = 0,
+                  .view_carried = m->nnum,
+                  .switch_lo = 1, /* no interval: windows decide at t */
+                  .switch_hi = 0,
+                  .slot = -1};
+}
+
+/* ev, or the whole model's context in *own when ev is NULL. */
+static const gs_eval *context(const gs_model *m, const gs_eval *ev, gs_eval *own) {
+  if (ev) return ev;
+  gs_eval_init(own, m);
+  return own;
+}
+
+void gs_model_precondition(const gs_model *m, const gs_eval *ev, double t, const double *y,
+                           double gamma, const double *r, double *z) {
+  gs_eval own;
+  ev = context(m, ev, &own);
   memcpy(z, r, (m->nstate + m->nledger) * sizeof(double));
   for (size_t i = 0; i < m->nmech; i++)
     if (m->mech[i].type->precondition)
-      m->mech[i].type->precondition(m->mech[i].self, m, t, y, gamma, z);
+      for (size_t comp = ev->comp_lo; comp < ev->comp_hi; comp++)
+        m->mech[i].type->precondition(m->mech[i].self, m, ev, comp, t, y, gamma, z);
 }
 
 double gs_model_seconds(void) {
@@ -151,17 +173,71 @@ double gs_model_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-void gs_model_rhs(const gs_model *m, double t, const double *y, double *dydt, double *dledger) {
-  const size_t lo = m->comp_lo, nc = m->comp_hi - m->comp_lo, n = m->grid.ncells;
+/* Every mechanism's rates of one compartment, in the order of the case
+ * file (so a compartment's sums are the same whoever evaluates it), timed
+ * when the context asks. */
+static void compartment_rhs(const gs_model *m, const gs_eval *ev, size_t comp, double t,
+                            const double *y, double *dydt, double *dledger) {
+  const double start = ev->comp_seconds ? gs_model_seconds() : 0;
+  for (size_t i = 0; i < m->nmech; i++)
+    m->mech[i].type->rates(m->mech[i].self, m, ev, comp, t, y, dydt, dledger);
+  if (ev->comp_seconds) ev->comp_seconds[comp] += gs_model_seconds() - start;
+}
+
+/* Threads take whole compartments when the case has several and enough
+ * cells; with fewer, the region and the uneven compartments cost more than
+ * they save, and a mechanism may split a single compartment over the team
+ * instead (slot -1).  The choice depends on the whole case, not on an MPI
+ * rank's block, so that moving compartments between ranks never switches a
+ * compartment between the two (its sums would be added in another order). */
+static int threads_over_compartments(const gs_model *m, const gs_eval *ev) {
+  return ev->slot < 0 && m->grid.ncomp > 1 && m->nslots > 1 &&
+         gs_threads_for(m->grid.ncells * m->grid.ncomp, 4096) > 1;
+}
+
+void gs_model_rhs(const gs_model *m, const gs_eval *ev, double t, const double *y, double *dydt,
+                  double *dledger) {
+  gs_eval own;
+  ev = context(m, ev, &own);
+  const size_t lo = ev->comp_lo, nc = ev->comp_hi - ev->comp_lo, n = m->grid.ncells;
   const size_t nq = (size_t)m->ncarried * n, nl = 2 * (size_t)m->nvol;
-  if (nc == m->grid.ncomp) {
+  if (nc == m->grid.ncomp && ev->view_lo == 0) {
     memset(dydt, 0, m->nstate * sizeof(double));
     memset(dledger, 0, m->nledger * sizeof(double));
-  } else { /* under MPI only this rank's compartments are written and read back */
-    memset(gs_model_numbers(m, dydt, lo), 0, nc * n * sizeof(double));
-    if (nq) memset(gs_model_carried(m, dydt, lo, 0), 0, nc * nq * sizeof(double));
-    memset(gs_model_ledger(m, dledger, lo), 0, nc * nl * sizeof(double));
+  } else { /* a part: only its compartments are written and read back */
+    memset(gs_eval_numbers(m, ev, dydt, lo), 0, nc * n * sizeof(double));
+    if (nq) memset(gs_eval_carried(m, ev, dydt, lo, 0), 0, nc * nq * sizeof(double));
+    memset(gs_eval_ledger(m, ev, dledger, lo), 0, nc * nl * sizeof(double));
   }
-  for (size_t i = 0; i < m->nmech; i++)
-    m->mech[i].type->rhs(m->mech[i].self, m, t, y, dydt, dledger);
+  if (threads_over_compartments(m, ev)) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(m->nslots)
+    for (size_t comp = ev->comp_lo; comp < ev->comp_hi; comp++) {
+      gs_eval mine = *ev;
+      mine.slot = omp_get_thread_num();
+      compartment_rhs(m, &mine, comp, t, y, dydt, dledger);
+    }
+  } else {
+    for (size_t comp = ev->comp_lo; comp < ev->comp_hi; comp++)
+      compartment_rhs(m, ev, comp, t, y, dydt, dledger);
+  }
+}
+
+void gs_mech_rhs(const gs_model *m, const gs_mechanism *mech, const gs_eval *ev, double t,
+                 const double *y, double *dydt, double *dledger) {
+  gs_eval own;
+  ev = context(m, ev, &own);
+  for (size_t comp = ev->comp_lo; comp < ev->comp_hi; comp++)
+    mech->type->rates(mech->self, m, ev, comp, t, y, dydt, dledger);
+}
+
+int gs_mech_number_rates(const gs_model *m, const gs_mechanism *mech, const gs_eval *ev, double t,
+                         const double *y, double *birth, double *death) {
+  gs_eval own;
+  ev = context(m, ev, &own);
+  for (size_t comp = ev->comp_lo; comp < ev->comp_hi; comp++) {
+    birth[comp] = death[comp] = 0;
+    if (mech->type->number_rates)
+      mech->type->number_rates(mech->self, m, ev, comp, t, y, &birth[comp], &death[comp]);
+  }
+  return mech->type->number_rates != NULL;
 }

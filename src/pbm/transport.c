@@ -18,7 +18,6 @@
 
 #include "gransim/distribution.h"
 #include "gransim/pbm.h"
-#include "gransim/threads.h"
 #include "pbm/sums.h"
 
 typedef struct {
@@ -69,20 +68,20 @@ static int feed_create(gs_cfg_node *node, const gs_model *m, void **self, gs_err
   return GS_OK;
 }
 
-static void feed_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
-                     double *dledger) {
+static void feed_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
+                       const double *y, double *dydt, double *dledger) {
   (void)y;
   const feed_t *F = self;
   const gs_grid *g = &m->grid;
-  if (!gs_window_on(m, F->start, F->end, t) || F->comp < m->comp_lo || F->comp >= m->comp_hi) return;
-  double *d = gs_model_numbers(m, dydt, F->comp);
+  if (comp != F->comp || !gs_window_on(ev, F->start, F->end, t)) return;
+  double *d = gs_eval_numbers(m, ev, dydt, F->comp);
   for (size_t c = 0; c < g->ncells; c++) d[c] += F->rate[c];
   for (int q = 0; q < m->ncarried; q++) {
     if (F->ratio[q] == 0.0) continue;
-    double *dq = gs_model_carried(m, dydt, F->comp, q);
+    double *dq = gs_eval_carried(m, ev, dydt, F->comp, q);
     for (size_t c = 0; c < g->ncells; c++) dq[c] += F->rate[c] * F->ratio[q] * g->volume[c];
   }
-  double *ledger = gs_model_ledger(m, dledger, F->comp);
+  double *ledger = gs_eval_ledger(m, ev, dledger, F->comp);
   for (int k = 0; k < m->nvol; k++) ledger[k] += F->volume[k];
 }
 
@@ -161,52 +160,47 @@ static void add_scaled(double *restrict dst, const double *restrict v, double f,
 }
 
 /* Compartment comp's rates and ledger: what leaves it, and what comes in
- * from the one before.  It writes only its own entries, so compartments can
- * run in parallel. */
-static void transfer_compartment(const transfer_t *T, const gs_model *m, const double *y,
-                                 double *dydt, double *dledger, size_t comp) {
+ * from the one before.  It writes only its own entries. */
+static void transfer_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp,
+                           double t, const double *y, double *dydt, double *dledger) {
+  (void)t;
+  const transfer_t *T = self;
   const gs_grid *g = &m->grid;
   const size_t n = g->ncells, dim = (size_t)g->dim;
-  double *ledger = gs_model_ledger(m, dledger, comp);
+  double *ledger = gs_eval_ledger(m, ev, dledger, comp);
   for (int from = comp > 0 ? -1 : 0; from <= 0; from++) { /* -1: inflow from comp - 1 */
     const size_t sc = from == 0 ? comp : comp - 1;        /* source compartment */
     const double k = T->k[sc], sign = from == 0 ? -1.0 : 1.0;
-    const double *N = from == 0 ? gs_model_numbers_c(m, y, sc) : gs_model_upstream_c(m, y, comp, -1);
+    const double *N = from == 0 ? gs_eval_numbers_c(m, ev, y, sc) : gs_eval_upstream_c(m, ev, y, comp, -1);
     double moved[GS_MAX_VOL];
-    add_scaled(gs_model_numbers(m, dydt, comp), N, sign * k, n);
+    add_scaled(gs_eval_numbers(m, ev, dydt, comp), N, sign * k, n);
     for (size_t a = 0; a < dim; a++) moved[a] = k * gs_dot_strided(N, g->x + a, dim, n);
     for (int q = 0; q < m->ncarried; q++) {
-      const double *Q = from == 0 ? gs_model_carried_c(m, y, sc, q) : gs_model_upstream_c(m, y, comp, q);
-      add_scaled(gs_model_carried(m, dydt, comp, q), Q, sign * k, n);
+      const double *Q = from == 0 ? gs_eval_carried_c(m, ev, y, sc, q) : gs_eval_upstream_c(m, ev, y, comp, q);
+      add_scaled(gs_eval_carried(m, ev, dydt, comp, q), Q, sign * k, n);
       moved[dim + (size_t)q] = k * gs_sum(Q, n);
     }
     for (int a = 0; a < m->nvol; a++) ledger[a] += sign * moved[a];
   }
 }
 
-static void transfer_rhs(void *self, const gs_model *m, double t, const double *y, double *dydt,
-                         double *dledger) {
-  (void)t;
-  const transfer_t *T = self;
-  const size_t lo = m->comp_lo, hi = m->comp_hi;
-  if (gs_threads_for((hi - lo) * m->grid.ncells * (size_t)(1 + m->ncarried), 20000) > 1) {
-#pragma omp parallel for schedule(static)
-    for (size_t comp = lo; comp < hi; comp++) transfer_compartment(T, m, y, dydt, dledger, comp);
-  } else {
-    for (size_t comp = lo; comp < hi; comp++) transfer_compartment(T, m, y, dydt, dledger, comp);
-  }
+static double transfer_outflow(void *self, size_t comp) {
+  return ((const transfer_t *)self)->k[comp];
 }
 
-const gs_mech_type gs_mech_feed = {"feed", "particles fed into a compartment at a constant rate",
-                                   feed_create, feed_rhs, NULL, feed_free, NULL,
-                                   feed_switch};
+const gs_mech_type gs_mech_feed = {
+    .name = "feed",
+    .summary = "particles fed into a compartment at a constant rate",
+    .create = feed_create,
+    .rates = feed_rates,
+    .free = feed_free,
+    .next_switch = feed_switch,
+};
 const gs_mech_type gs_mech_transfer = {
-    "transfer", "flow to the next compartment at rate k N; out of the last as product",
-    transfer_create, transfer_rhs, NULL, transfer_free, NULL, NULL};
-
-double gs_model_transfer_rate(const gs_model *m, size_t comp) {
-  double k = 0;
-  for (size_t i = 0; i < m->nmech; i++)
-    if (m->mech[i].type == &gs_mech_transfer) k += ((const transfer_t *)m->mech[i].self)->k[comp];
-  return k;
-}
+    .name = "transfer",
+    .summary = "flow to the next compartment at rate k N; out of the last as product",
+    .create = transfer_create,
+    .rates = transfer_rates,
+    .free = transfer_free,
+    .outflow_rate = transfer_outflow,
+};

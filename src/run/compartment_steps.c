@@ -95,7 +95,7 @@ typedef struct {
 /* One thread's model view and scratch. */
 typedef struct worker {
   _Alignas(GS_APART) struct gs_comp_steps *s; /* threads write their own: pages apart */
-  gs_model m; /* a copy: its own view of one compartment, and slot */
+  gs_eval ev; /* its evaluation: one compartment on its local vector, its slot */
   /* the step being tried by its compartment: Z_H and its first two
    * derivatives at both ends, and the inflow state P' */
   double try_s, try_h;
@@ -118,6 +118,7 @@ typedef struct worker {
 
 struct gs_comp_steps {
   gs_model *m;
+  gs_eval base; /* the case's evaluation context (noise floor) */
   size_t ncomp, ncells, nflow; /* nflow: numbers and carried totals of one compartment */
   int nvol, dim, nq;
   size_t off_ledger, off_recv, off_z; /* in a compartment's local vector */
@@ -407,7 +408,6 @@ static int comp_rhs(void *ctx, double t, const double *y, double *f) {
   comp_t *cp = ctx;
   worker_t *w = cp->w;
   struct gs_comp_steps *s = cp->s;
-  gs_model *m = &w->m;
   const double start = now_seconds();
   if (w->stop) return 1; /* after a failure elsewhere */
   if (cp->comp && !inflow_state(w, t)) {
@@ -415,9 +415,9 @@ static int comp_rhs(void *ctx, double t, const double *y, double *f) {
     w->bad_t = t;
     return 1;
   }
-  m->in_integrator = 1;
-  gs_model_rhs(m, t, y, f, f + s->off_ledger);
-  m->in_integrator = 0;
+  w->ev.in_integrator = 1;
+  gs_model_rhs(s->m, &w->ev, t, y, f, f + s->off_ledger);
+  w->ev.in_integrator = 0;
   double *recv = f + s->off_recv;
   if (cp->comp) {
     volumes_of(s, w->halo, recv);
@@ -539,6 +539,7 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   struct gs_comp_steps *s = gs_calloc_apart(sizeof *s, err); /* its schedule: pages of its own */
   if (!s) return GS_ENOMEM;
   s->m = m;
+  s->base = c->eval;
   s->ncomp = m->grid.ncomp;
   s->ncells = m->grid.ncells;
   s->nq = m->ncarried;
@@ -634,18 +635,18 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
   return GS_OK;
 }
 
-/* Worker w's model evaluates compartment comp alone, on its local vector. */
+/* Worker w evaluates compartment comp alone, on its local vector. */
 static void view_one(worker_t *w, size_t comp, const gs_stretch *st) {
-  gs_model *m = &w->m;
-  *m = *w->s->m;
-  m->switch_lo = st->t0; /* windows decide once for the stretch (gs_window_on) */
-  m->switch_hi = st->t1;
-  m->comp_lo = comp;
-  m->comp_hi = comp + 1;
-  m->view_lo = comp;
-  m->view_carried = w->s->ncells;
-  m->halo = comp ? w->halo : NULL;
-  m->slot = (int)(w - w->s->workers);
+  gs_eval *ev = &w->ev;
+  *ev = w->s->base;
+  ev->switch_lo = st->t0; /* windows decide once for the stretch (gs_window_on) */
+  ev->switch_hi = st->t1;
+  ev->comp_lo = comp;
+  ev->comp_hi = comp + 1;
+  ev->view_lo = comp;
+  ev->view_carried = w->s->ncells;
+  ev->halo = comp ? w->halo : NULL;
+  ev->slot = (int)(w - w->s->workers);
 }
 
 static int check_coupling(struct gs_comp_steps *s, const comp_t *cp, size_t k, gs_error *err);

@@ -14,7 +14,7 @@
 
 static void *split_work_alloc(size_t n, int nr);
 
-int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err) {
+int gs_dist_init(gs_dist *d, const gs_model *m, gs_error *err) {
   memset(d, 0, sizeof *d);
   d->rank = gs_parallel_rank();
   d->size = gs_parallel_size();
@@ -49,21 +49,21 @@ int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err) {
     return GS_ENOMEM;
   }
   for (int r = 0; r <= d->size; r++) d->lo[r] = ncomp * (size_t)r / (size_t)d->size; /* contiguous, even */
-  gs_dist_resplit(d, m, d->lo);
+  gs_dist_resplit(d, d->lo);
   return GS_OK;
 }
 
-void gs_dist_resplit(gs_dist *d, gs_model *m, const size_t *lo) {
+void gs_dist_resplit(gs_dist *d, const size_t *lo) {
+  const gs_model *m = d->m;
   if (lo != d->lo) memcpy(d->lo, lo, ((size_t)d->size + 1) * sizeof *lo);
-  m->comp_lo = d->lo[d->rank];
-  m->comp_hi = d->lo[d->rank + 1];
+  const size_t comp_lo = d->lo[d->rank], comp_hi = d->lo[d->rank + 1];
   /* per compartment: ncells numbers, ncarried * ncells carried, 2 nvol ledger */
   const size_t unit[3] = {m->grid.ncells, (size_t)m->ncarried * m->grid.ncells, 2 * (size_t)m->nvol};
   const size_t base[3] = {0, m->nnum, m->nstate};
   d->nlocal = 0;
   for (int s = 0; s < 3; s++) {
-    d->off[s] = base[s] + m->comp_lo * unit[s];
-    d->len[s] = (m->comp_hi - m->comp_lo) * unit[s];
+    d->off[s] = base[s] + comp_lo * unit[s];
+    d->len[s] = (comp_hi - comp_lo) * unit[s];
     d->nlocal += d->len[s];
   }
 }
@@ -245,12 +245,13 @@ void gs_dist_free(gs_dist *d) {
 }
 
 #ifdef GRANSIM_HAVE_MPI
-/* Numbers and carried totals of compartment comp are separate runs of y:
- * packed, they travel as one message (each message costs ~1.5 µs here). */
-static void pack_comp(const gs_model *m, const double *y, size_t comp, double *buf) {
-  const size_t n = m->grid.ncells, nq = (size_t)m->ncarried * n;
-  memcpy(buf, gs_model_numbers_c(m, y, comp), n * sizeof(double));
-  if (nq) memcpy(buf + n, gs_model_carried_c(m, y, comp, 0), nq * sizeof(double));
+/* Numbers and carried totals of compartment comp are separate runs of the
+ * rank's packed vector yl: they travel as one message (fewer messages). */
+static void pack_comp(const gs_dist *d, const double *yl, size_t comp, double *buf) {
+  const gs_model *m = d->m;
+  const size_t n = m->grid.ncells, nq = (size_t)m->ncarried * n, at = comp - d->lo[d->rank];
+  memcpy(buf, yl + at * n, n * sizeof(double));
+  if (nq) memcpy(buf + n, yl + d->len[0] + at * nq, nq * sizeof(double));
 }
 
 /* The send does not wait for the message to arrive: Open MPI's blocking
@@ -267,7 +268,7 @@ static const double *exchange(gs_dist *d, const double *y, size_t send_comp, int
     MPI_Request *req = (MPI_Request *)d->requests + d->next_send;
     double *buf = d->sendbuf + (size_t)d->next_send * len;
     MPI_Wait(req, MPI_STATUS_IGNORE);
-    pack_comp(m, y, send_comp, buf);
+    pack_comp(d, y, send_comp, buf);
     MPI_Isend(buf, (int)len, MPI_DOUBLE, to, 0, MPI_COMM_WORLD, req);
     d->next_send = (d->next_send + 1) % GS_DIST_NSEND;
   }

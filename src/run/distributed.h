@@ -42,11 +42,11 @@ typedef struct {
  * compartments runs ahead by up to a step's evaluations (rkf45: 6 stages). */
 #define GS_DIST_NSEND 16
 
-/* Split the compartments of m evenly over the ranks and set m's
- * comp_lo/comp_hi. */
-int gs_dist_init(gs_dist *d, gs_model *m, gs_error *err);
+/* Split the compartments of m evenly over the ranks (this rank's block:
+ * [lo[rank], lo[rank + 1])). */
+int gs_dist_init(gs_dist *d, const gs_model *m, gs_error *err);
 /* Another split: rank r owns [lo[r], lo[r + 1]) (size + 1 entries). */
-void gs_dist_resplit(gs_dist *d, gs_model *m, const size_t *lo);
+void gs_dist_resplit(gs_dist *d, const size_t *lo);
 /* The contiguous split of n compartments of the given costs over nr <= n
  * ranks (lo: nr + 1 entries) that makes the largest block cheapest, block r
  * costing extra[r] (work of that rank alone, such as rank 0's outputs) plus
@@ -78,8 +78,8 @@ void gs_dist_pack(const gs_dist *d, const double *full, double *local);
 void gs_dist_unpack(const gs_dist *d, const double *local, double *full);
 /* Index in the full vector of entry i of the local vector. */
 size_t gs_dist_full_index(const gs_dist *d, size_t i);
-/* Send the last compartment of this block in y (numbers and carried
- * totals, found through the model's view, gs_model.view_lo) to the next
+/* Send the last compartment of this block in the packed local vector y
+ * (numbers and carried totals) to the next
  * rank without waiting for it to arrive; receive the compartment before the
  * block from the previous rank and return it (numbers, then carried: the
  * model's halo), NULL on rank 0 or without MPI. */

@@ -41,6 +41,7 @@ static void describe_cell(const gs_model *m, size_t comp, size_t cell, char *buf
 
 typedef struct {
   gs_case *c;
+  gs_eval ev;    /* the evaluation of this process's compartments */
   gs_dist *dist; /* the compartments of each MPI rank */
   double *Y; /* under MPI: the full state, this rank's part current after each advance */
   double bad_t;
@@ -117,33 +118,32 @@ static int check_rates(guard_t *gd, double t, const double *f, size_t n, const g
 /* Right-hand side with a guard against non-finite rates. */
 static int guarded_rhs(void *ctx, double t, const double *y, double *dydt) {
   guard_t *gd = ctx;
-  gs_model *m = &gd->c->model;
+  const gs_model *m = &gd->c->model;
   const double start = now_seconds();
-  m->in_integrator = 1;
-  gs_model_rhs(m, t, y, dydt, dydt + m->nstate);
-  m->in_integrator = 0;
+  gd->ev.in_integrator = 1;
+  gs_model_rhs(m, &gd->ev, t, y, dydt, dydt + m->nstate);
+  gd->ev.in_integrator = 0;
   gd->t_rhs += now_seconds() - start;
   return check_rates(gd, t, dydt, m->nstate + m->nledger, NULL);
 }
 
 /* The same on this MPI rank's packed part yl of the state: the model reads
- * and writes the packed vectors directly (gs_model.view_lo), with the
+ * and writes the packed vectors directly (gs_eval.view_lo), with the
  * previous rank's last compartment, which transfer brings in, as its halo. */
 static int local_rhs(void *ctx, double t, const double *yl, double *fl) {
   guard_t *gd = ctx;
-  gs_model *m = &gd->c->model;
+  const gs_model *m = &gd->c->model;
   gs_dist *d = gd->dist;
   const double start = now_seconds();
-  m->view_lo = m->comp_lo;
-  m->view_carried = d->len[0];
-  m->halo = gs_dist_sync(d, yl);
+  gs_eval *ev = &gd->ev;
+  ev->comp_lo = ev->view_lo = d->lo[d->rank];
+  ev->comp_hi = d->lo[d->rank + 1];
+  ev->view_carried = d->len[0];
+  ev->halo = gs_dist_sync(d, yl);
   const double synced = now_seconds();
-  m->in_integrator = 1;
-  gs_model_rhs(m, t, yl, fl, fl + d->len[0] + d->len[1]);
-  m->in_integrator = 0;
-  m->view_lo = 0; /* the full layout for everyone else */
-  m->view_carried = m->nnum;
-  m->halo = NULL;
+  ev->in_integrator = 1;
+  gs_model_rhs(m, ev, t, yl, fl, fl + d->len[0] + d->len[1]);
+  ev->in_integrator = 0;
   gd->t_exchange += synced - start;
   gd->t_rhs += now_seconds() - synced;
   gd->rhs_calls++;
@@ -154,12 +154,13 @@ static int local_rhs(void *ctx, double t, const double *yl, double *fl) {
 static int guarded_psolve(void *ctx, double t, const double *y, double gamma, const double *r,
                           double *z) {
   guard_t *gd = ctx;
-  return gd->c->ode.psolve(gd->c->ode.ctx, t, y, gamma, r, z);
+  gs_model_precondition(&gd->c->model, &gd->ev, t, y, gamma, r, z);
+  return 0;
 }
 
 static void guarded_hold(void *ctx, int on) {
   guard_t *gd = ctx;
-  gd->c->ode.hold(gd->c->ode.ctx, on);
+  gd->ev.hold = on;
 }
 
 /* One piece of a deferred output time (rank 0, waiting for the others at
@@ -368,8 +369,7 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
 
 /* Rebalancing, under MPI, between steps (gs_ode.between_steps).  The cost
  * of each compartment over a window of evaluations is what the model
- * measured of its content-dependent work (m->comp_seconds: aggregation's
- * pair loop, breakage), plus an even share of the rest of its rank's busy
+ * measured of each compartment's rates (gs_eval.comp_seconds), plus an even share of the rest of its rank's busy
  * seconds (rates and integrator work, not the waits for other ranks); rank
  * 0's seconds writing results count as work of rank 0 alone.  The ranks sum
  * these without waiting and decide one step later, on identical numbers,
@@ -406,10 +406,11 @@ static void rebalance_measure(gs_case *c, gs_dist *d, guard_t *g) {
   const double written = g->t_written + gs_deferred_output_seconds(g->deferred);
   const size_t own_lo = d->lo[d->rank], own_hi = d->lo[d->rank + 1];
   double measured = 0;
-  for (size_t j = own_lo; j < own_hi; j++) measured += m->comp_seconds[j];
+  double *comp_seconds = g->ev.comp_seconds;
+  for (size_t j = own_lo; j < own_hi; j++) measured += comp_seconds[j];
   const double rest = fmax(0.0, busy - g->busy_mark - measured) / (double)(own_hi - own_lo);
-  for (size_t j = own_lo; j < own_hi; j++) g->spent[j] = m->comp_seconds[j] + rest;
-  memset(m->comp_seconds, 0, ncomp * sizeof(double));
+  for (size_t j = own_lo; j < own_hi; j++) g->spent[j] = comp_seconds[j] + rest;
+  memset(comp_seconds, 0, ncomp * sizeof(double));
   g->spent[ncomp + (size_t)d->rank] = written - g->written_mark;
   g->busy_mark = busy;
   g->written_mark = written;
@@ -498,7 +499,7 @@ static int rebalance_move(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, doub
   free(old.scale);
   old.yl = old.scale = NULL;
   if (old.own.type->release) old.own.type->release(old.own.self);
-  gs_dist_resplit(d, m, g->split_lo);
+  gs_dist_resplit(d, g->split_lo);
   int rc = stepper_init(s, c, d, g, err);
   if (!rc) s->it->type->carry(s->it->self, old.own.self);
   stepper_free(&old);
@@ -517,29 +518,29 @@ static int rebalance_move(gs_case *c, gs_dist *d, stepper_t *s, guard_t *g, doub
  * counts as outputs). */
 enum { PH_RHS, PH_EXCHANGE, PH_INTEGRATOR, PH_WAITS, PH_OUTPUTS, PH_FINISH, PH_N };
 
-/* One rank: the rates of each compartment (aggregation's and breakage's
- * own clocks, the rest of the rates shared evenly, as the rebalancing
- * counts them), and what ranks owning contiguous blocks of compartments
+/* One rank: the rates of each compartment (the model's clock of each, the
+ * rest of the rate time shared evenly, as the rebalancing counts them), and what ranks owning contiguous blocks of compartments
  * could gain at most (gs_dist_speedup_bound), for 2-8 ranks and the powers
  * of two above, up to the compartments.  On several threads the clocks of
  * compartments run side by side and add up to more than the wall time:
  * nothing is printed then. */
-static void print_split_bounds(const gs_model *m, const double *mine, double total) {
+static void print_split_bounds(const gs_model *m, const double *comp_seconds, const double *mine,
+                               double total) {
   const size_t n = m->grid.ncomp;
-  if (!m->comp_seconds || n < 2) return;
+  if (!comp_seconds || n < 2) return;
   if (omp_get_max_threads() > 1) {
     fprintf(stderr, "  (the rates per compartment and what ranks could gain: with --threads 1)\n");
     return;
   }
   double measured = 0;
-  for (size_t j = 0; j < n; j++) measured += m->comp_seconds[j];
+  for (size_t j = 0; j < n; j++) measured += comp_seconds[j];
   const double rest = fmax(0.0, mine[PH_RHS] - measured) / (double)n;
   fprintf(stderr, "  rates per compartment (s):");
-  for (size_t j = 0; j < n; j++) fprintf(stderr, " %.4f", m->comp_seconds[j] + rest);
+  for (size_t j = 0; j < n; j++) fprintf(stderr, " %.4f", comp_seconds[j] + rest);
   fprintf(stderr, "\n  speed-up at most, compartments split over ranks (free messages):");
   for (int nr = 2; (size_t)nr <= n; nr = nr < 8 ? nr + 1 : 2 * nr) {
     double largest;
-    double bound = gs_dist_speedup_bound(m->comp_seconds, n, mine[PH_RHS], mine[PH_INTEGRATOR],
+    double bound = gs_dist_speedup_bound(comp_seconds, n, mine[PH_RHS], mine[PH_INTEGRATOR],
                                          mine[PH_FINISH], total, nr, &largest);
     fprintf(stderr, "%s %d ranks %.2fx", nr > 2 ? "," : "", nr, bound);
   }
@@ -775,6 +776,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   guard_t guard;
   memset(&guard, 0, sizeof guard);
   guard.c = c;
+  guard.ev = c->eval; /* the whole model, with the case's noise floor */
   guard.dist = &dist;
   guard.Y = Y;
   guard.M1_0 = M1_0;
@@ -786,14 +788,14 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   if (!rc) rc = agree(&dist, stepper_init(&step, c, &dist, &guard, err), err);
   /* the compartments' own costs, for the rebalancing */
   if (!rc && dist.size > 1 && c->rebalance >= 0 &&
-      (!(m->comp_seconds = gs_calloc(g->ncomp, sizeof(double), err)) ||
+      (!(guard.ev.comp_seconds = gs_calloc(g->ncomp, sizeof(double), err)) ||
        !(guard.spent = gs_calloc(g->ncomp + (size_t)dist.size, sizeof(double), err)) ||
        !(guard.split_lo = gs_calloc((size_t)dist.size + 1, sizeof(size_t), err))))
     rc = GS_ENOMEM;
   /* --timings on one rank: each compartment's own rates, for the bound on
    * what a split over ranks could gain (print_timings) */
   if (!rc && dist.size == 1 && opt && opt->timings && g->ncomp > 1 &&
-      !(m->comp_seconds = gs_calloc(g->ncomp, sizeof(double), err)))
+      !(guard.ev.comp_seconds = gs_calloc(g->ncomp, sizeof(double), err)))
     rc = GS_ENOMEM;
   guard.evals_needed = MIN_EVALS;
   if (!rc && step.it && !step.it->type->carry) { /* cvode: no rebalancing */
@@ -837,12 +839,12 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
     while (!rc && t < c->times[i]) {
       const double next_switch = gs_model_next_switch(m, t);
       const double stop = fmin(c->times[i], next_switch);
-      m->switch_lo = t; /* windows decide once for the interval (gs_window_on) */
-      m->switch_hi = stop;
+      guard.ev.switch_lo = t; /* windows decide once for the interval (gs_window_on) */
+      guard.ev.switch_hi = stop;
       step.ode.jumped = t == switch_reached;
       rc = stepper_advance(&step, &t, stop, Y, err);
-      m->switch_lo = 1;
-      m->switch_hi = 0;
+      guard.ev.switch_lo = 1;
+      guard.ev.switch_hi = 0;
       if (!rc && t == next_switch) switch_reached = t;
       if (!rc && guard.stop_code) rc = failed_at_output(out_rc, guard.stop_code, &out_err, err);
       if (!rc && guard.move_wanted) rc = rebalance_move(c, &dist, &step, &guard, Y, err);
@@ -905,7 +907,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   if (opt && opt->timings) {
     print_timings(&dist, phase);
     fprintf(stderr, "  page faults while it ran: %ld on rank %d\n", minor_faults() - faults_start, dist.rank);
-    if (dist.size == 1 && !step.cs) print_split_bounds(m, phase, now_seconds() - start);
+    if (dist.size == 1 && !step.cs) print_split_bounds(m, guard.ev.comp_seconds, phase, now_seconds() - start);
     if (step.cs) print_compartment_steps(step.cs, g->ncomp);
     if (step.cs) gs_comp_steps_print_threads(step.cs, stderr);
   }
@@ -913,12 +915,9 @@ int gs_case_run(gs_case *c, const gs_run_options *opt, double *yout, gs_run_repo
   if (step.cs) rep.worst_coupling = gs_comp_steps_worst_coupling(step.cs);
   stepper_free(&step);
   gs_deferred_output_free(guard.deferred);
-  free(m->comp_seconds);
-  m->comp_seconds = NULL;
+  free(guard.ev.comp_seconds);
   free(guard.spent);
   free(guard.split_lo);
-  m->comp_lo = 0; /* the model is whole again for whoever uses it next */
-  m->comp_hi = g->ncomp;
   gs_dist_free(&dist);
   rep.t_end = t;
   rep.stats = st;
