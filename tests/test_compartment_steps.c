@@ -65,7 +65,7 @@ static void test_example(void) {
   const size_t ncomp = m->grid.ncomp, n = m->nstate + m->nledger;
   const double F[2] = {fed_rate(&c, 0), fed_rate(&c, 1)};
   gs_comp_steps *cs = NULL;
-  CHECK(gs_comp_steps_create(&c, gs_cfg_get(gs_cfg_root(c.cfg), "solver"), &cs, &err) == GS_OK);
+  CHECK(gs_comp_steps_create(&c, &cs, &err) == GS_OK);
   double *y = malloc(n * sizeof(double)), t = c.t0, switched = NAN;
   memcpy(y, c.y0, n * sizeof(double));
   double worst_solid = 0, worst_liquid = 0, worst_ledger = 0, worst_lost = 0, most_negative = 0;

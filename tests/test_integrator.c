@@ -14,8 +14,13 @@
 static int make(const char *yaml, const gs_ode *ode, gs_integrator *it, gs_error *err) {
   gs_cfg *cfg = gs_cfg_load_string(yaml, "test.yaml", err);
   if (!cfg) return err->code;
-  int rc = gs_integrator_create(gs_cfg_get(gs_cfg_root(cfg), "solver"), ode, it, err);
-  gs_cfg_free(cfg); /* integrators must not keep pointers into the tree */
+  gs_cfg_node *solver = gs_cfg_get(gs_cfg_root(cfg), "solver");
+  gs_integrator_setup setup;
+  int rc = gs_integrator_setup_read(solver, &setup, err);
+  if (!rc && solver) rc = gs_cfg_check_unused(solver, err);
+  gs_cfg_free(cfg); /* neither settings nor integrators may keep pointers into the tree */
+  if (!rc) rc = gs_integrator_create(&setup, ode, it, err);
+  gs_integrator_setup_free(&setup);
   return rc;
 }
 
@@ -643,12 +648,20 @@ static void test_registry(void) {
   CHECK(count == 3);
   CHECK(gs_integrator_lookup("cvode") && gs_integrator_lookup("euler"));
   CHECK(gs_integrator_lookup("nope") == NULL);
+  /* capabilities the run driver and case reader consult instead of names */
+  const gs_integrator_type *rk = gs_integrator_lookup("rk"), *cv = gs_integrator_lookup("cvode"),
+                           *eu = gs_integrator_lookup("euler");
+  CHECK(rk->ranks && rk->per_compartment && rk->exact_invariants && rk->carry);
+  CHECK(eu->ranks && !eu->per_compartment && eu->exact_invariants && eu->carry);
+  CHECK(!cv->ranks && !cv->per_compartment && !cv->exact_invariants && !cv->carry);
   /* No solver map at all: rk with default settings. */
   decay_ctx c = {1.0, 0, HUGE_VAL};
   gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL};
   gs_integrator it;
   gs_error err = {0};
-  CHECK(gs_integrator_create(NULL, &ode, &it, &err) == GS_OK);
+  gs_integrator_setup setup;
+  CHECK(gs_integrator_setup_read(NULL, &setup, &err) == GS_OK);
+  CHECK(gs_integrator_create(&setup, &ode, &it, &err) == GS_OK);
   CHECK(it.type == gs_integrator_lookup("rk"));
   double t = 0, y = 1;
   CHECK(advance(&it, &ode, &t, 1.0, &y, &err) == GS_OK);
@@ -656,7 +669,8 @@ static void test_registry(void) {
   gs_integrator_free(&it);
   gs_integrator_free(&it); /* idempotent */
   gs_ode bad = {2, decay_f, &c, NULL, 3, NULL, NULL, NULL, 0, NULL, 0, NULL};
-  CHECK(gs_integrator_create(NULL, &bad, &it, &err) == GS_EINPUT);
+  CHECK(gs_integrator_create(&setup, &bad, &it, &err) == GS_EINPUT);
+  gs_integrator_setup_free(&setup);
 }
 
 int main(void) {

@@ -34,7 +34,8 @@ typedef struct gs_case {
   gs_ode ode;          /* the ODE system of the model (numbers + ledger), in eval */
   gs_eval eval;        /* the whole model's evaluation context (noise floor: solver.atol) */
   double *abs_scale;   /* error-control scale per component (ledger excluded) */
-  gs_integrator integrator;
+  gs_integrator_setup integrator_setup; /* solver.method and its keys, for more integrators */
+  gs_integrator integrator;            /* of ode */
   gs_checks checks;
   double checkpoint;   /* output.checkpoint: seconds of wall time between commits */
   /* solver.rebalance: under MPI, move compartments between ranks at output

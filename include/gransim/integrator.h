@@ -80,10 +80,13 @@ typedef struct gs_integrator_stats {
 typedef struct gs_integrator_type {
   const char *name;
   const char *summary;
-  /* Read settings from the solver map (keys other than `method`); must mark
-   * every key it reads.  Common keys all integrators accept: rtol, atol,
-   * initial_step, max_step, min_step. */
-  int (*create)(gs_cfg_node *solver, const gs_ode *ode, void **self, gs_error *err);
+  /* Read settings from the solver map (keys other than `method`) into one
+   * malloc'ed block (freed with free); must mark every key it reads.  Common
+   * keys all integrators accept: rtol, atol, initial_step, max_step,
+   * min_step, max_steps_per_output. */
+  int (*read)(gs_cfg_node *solver, void **settings, gs_error *err);
+  /* An integrator of the system ode with those settings. */
+  int (*create)(const void *settings, const gs_ode *ode, void **self, gs_error *err);
   /* Integrate from *t to t_out (exactly), updating y and *t.  On failure
    * returns GS_ENUMERIC with the time reached in the message. */
   int (*advance)(void *self, const gs_ode *ode, double *t, double t_out, double *y,
@@ -93,27 +96,47 @@ typedef struct gs_integrator_type {
   /* Optional: carry on where `from` (the same type, any n) stopped, with its
    * step size and counters, so that an integrator rebuilt on another part
    * of the state (MPI ranks taking over compartments) takes exactly the
-   * steps the old one would have.  NULL: the type keeps more history. */
+   * steps the old one would have.  NULL: the type keeps more history, and a
+   * run with it never moves compartments between ranks. */
   void (*carry)(void *to, const void *from);
   /* Optional, with carry: free the vectors of an integrator about to be
    * replaced, keeping what carry reads, so that its successor can reuse
-   * that memory (a move of compartments between MPI ranks had cost 3-5 ms
-   * of fresh pages and 3-4 ms of unmapping the old ones in the
-   * 32-compartment case).  After it only carry and free may be called. */
+   * that memory.  After it only carry and free may be called. */
   void (*release)(void *self);
+  /* Capabilities, which the run driver and the case reader consult instead
+   * of names: */
+  int ranks;            /* 1: integrates a state spread over MPI ranks (gs_ode.reduce_max) */
+  int per_compartment;  /* 1: serves per-compartment steps (calls gs_ode.trying; its steps
+                         * integrate a quadratic forcing exactly) */
+  int exact_invariants; /* 1: linear invariants such as the volume ledger hold to round-off
+                         * (0: implicit, Newton systems solved to a tolerance) */
 } gs_integrator_type;
 
 const gs_integrator_type *gs_integrator_lookup(const char *name);
 const gs_integrator_type *const *gs_integrator_types(void); /* NULL-terminated */
+
+/* An integrator type with its settings, read from a case's solver map: what
+ * a run driver needs to create integrators of any system, without reading
+ * the case file again. */
+typedef struct gs_integrator_setup {
+  const gs_integrator_type *type;
+  void *settings;
+} gs_integrator_setup;
+
+/* Read `method` (default "rk") then the type's keys from the solver map.
+ * Unknown keys are not checked here: the caller reads its own keys of the
+ * same map and then calls gs_cfg_check_unused.  solver may be NULL (all
+ * defaults). */
+int gs_integrator_setup_read(gs_cfg_node *solver, gs_integrator_setup *out, gs_error *err);
+void gs_integrator_setup_free(gs_integrator_setup *setup);
 
 typedef struct gs_integrator {
   const gs_integrator_type *type;
   void *self;
 } gs_integrator;
 
-/* Create from a solver map: reads `method` (default "rk") then the type's keys,
- * then checks for unknown keys.  solver may be NULL (all defaults). */
-int gs_integrator_create(gs_cfg_node *solver, const gs_ode *ode, gs_integrator *out,
+/* An integrator of the system ode from a setup. */
+int gs_integrator_create(const gs_integrator_setup *setup, const gs_ode *ode, gs_integrator *out,
                          gs_error *err);
 void gs_integrator_free(gs_integrator *it);
 

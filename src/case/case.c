@@ -330,8 +330,10 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
   if (rb && gs_cfg_scalar(rb) && !strcmp(gs_cfg_scalar(rb), "none")) c->rebalance = -1;
   else if (rb && (gs_cfg_node_double(rb, &c->rebalance, err) || !(c->rebalance >= 0 && c->rebalance < 1)))
     return gs_cfg_fail(rb, err, "expected a fraction in [0, 1) or 'none'");
-  int rc = gs_integrator_create(solver, &c->ode, &c->integrator, err);
-  if (!rc && c->per_compartment && strcmp(c->integrator.type->name, "rk"))
+  int rc = gs_integrator_setup_read(solver, &c->integrator_setup, err);
+  if (!rc && solver) rc = gs_cfg_check_unused(solver, err);
+  if (!rc) rc = gs_integrator_create(&c->integrator_setup, &c->ode, &c->integrator, err);
+  if (!rc && c->per_compartment && !c->integrator.type->per_compartment)
     return gs_cfg_fail(gs_cfg_get(solver, "steps"), err,
                        "per_compartment steps need method rk (the coupling of the compartments "
                        "relies on the exact quadrature of its Runge-Kutta steps), not %s",
@@ -346,7 +348,7 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
  * mechanism that leaks mass faster than the solver tolerance. */
 static void implicit_mass_tolerance(gs_cfg_node *root, gs_case *c) {
   gs_cfg_node *checks = gs_cfg_get(root, "checks");
-  if (strcmp(c->integrator.type->name, "cvode") || (checks && gs_cfg_get(checks, "mass_tolerance")))
+  if (c->integrator.type->exact_invariants || (checks && gs_cfg_get(checks, "mass_tolerance")))
     return;
   gs_cfg_node *solver = gs_cfg_get(root, "solver");
   gs_cfg_node *rn = solver ? gs_cfg_get(solver, "rtol") : NULL;
@@ -421,6 +423,7 @@ int gs_case_load(const char *path, gs_case *c, gs_error *err) {
 
 void gs_case_free(gs_case *c) {
   gs_integrator_free(&c->integrator);
+  gs_integrator_setup_free(&c->integrator_setup);
   gs_model_free(&c->model);
   free(c->y0);
   free(c->times);

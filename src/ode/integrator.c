@@ -19,6 +19,7 @@
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "gransim/integrator.h"
@@ -118,23 +119,34 @@ static int gs_check_ode(const gs_ode *ode, gs_error *err) {
   return GS_OK;
 }
 
-int gs_integrator_create(gs_cfg_node *solver, const gs_ode *ode, gs_integrator *out,
+int gs_integrator_setup_read(gs_cfg_node *solver, gs_integrator_setup *out, gs_error *err) {
+  out->type = NULL;
+  out->settings = NULL;
+  int rc = solver ? gs_cfg_require_kind(solver, GS_CFG_MAP, err) : GS_OK;
+  const gs_integrator_type *type = NULL;
+  if (!rc) rc = gs_pick_method(solver, &type, err);
+  if (!rc) rc = type->read(solver, &out->settings, err);
+  if (!rc) out->type = type;
+  return rc;
+}
+
+void gs_integrator_setup_free(gs_integrator_setup *setup) {
+  free(setup->settings);
+  setup->settings = NULL;
+  setup->type = NULL;
+}
+
+int gs_integrator_create(const gs_integrator_setup *setup, const gs_ode *ode, gs_integrator *out,
                          gs_error *err) {
   out->type = NULL;
   out->self = NULL;
   int rc = gs_check_ode(ode, err);
-  if (!rc && solver) rc = gs_cfg_require_kind(solver, GS_CFG_MAP, err);
-  const gs_integrator_type *type = NULL;
-  if (!rc) rc = gs_pick_method(solver, &type, err);
+  if (!rc && !setup->type)
+    rc = gs_error_set(err, GS_EINPUT, "integrator: no method was read for this system");
   void *self = NULL;
-  if (!rc) rc = type->create(solver, ode, &self, err);
+  if (!rc) rc = setup->type->create(setup->settings, ode, &self, err);
   if (rc) return rc;
-  rc = gs_cfg_check_unused(solver, err);
-  if (rc) {
-    type->free(self);
-    return rc;
-  }
-  out->type = type;
+  out->type = setup->type;
   out->self = self;
   return GS_OK;
 }

@@ -115,7 +115,11 @@ static void gs_cvode_free(void *vself) {
   free(self);
 }
 
-static int gs_cvode_read(gs_cvode *self, gs_cfg_node *solver, gs_error *err) {
+/* The settings: a gs_cvode with its keys filled in and nothing allocated
+ * (gmres holds the linear_solver key until create resolves auto by n). */
+static int gs_cvode_read(gs_cfg_node *solver, void **out, gs_error *err) {
+  gs_cvode *self = gs_calloc(1, sizeof *self, err);
+  if (!self) return GS_ENOMEM;
   int solver_kind = GS_CVODE_AUTO;
   int rc = gs_integrator_common_keys(solver, &self->rtol, &self->atol, &self->h_init,
                                      &self->h_min, &self->h_max, &self->max_steps, err);
@@ -127,9 +131,13 @@ static int gs_cvode_read(gs_cvode *self, gs_cfg_node *solver, gs_error *err) {
   int pre = 0;
   if (!rc) rc = gs_cfg_enum_opt(solver, "preconditioner", preconditioners, 0, &pre, err);
   self->precondition = pre == 0;
-  self->gmres = solver_kind == GS_CVODE_GMRES ||
-                (solver_kind == GS_CVODE_AUTO && self->n > GS_CVODE_DENSE_MAX_N);
-  return rc;
+  self->gmres = solver_kind;
+  if (rc) {
+    free(self);
+    return rc;
+  }
+  *out = self;
+  return GS_OK;
 }
 
 static int gs_cvode_vectors(gs_cvode *self, const gs_ode *ode, gs_error *err) {
@@ -246,12 +254,14 @@ static int gs_cvode_setup(gs_cvode *self, const gs_ode *ode, gs_error *err) {
   return rc;
 }
 
-static int gs_cvode_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_error *err) {
-  gs_cvode *self = gs_calloc(1, sizeof *self, err);
+static int gs_cvode_create(const void *settings, const gs_ode *ode, void **out, gs_error *err) {
+  gs_cvode *self = gs_malloc(sizeof *self, err);
   if (!self) return GS_ENOMEM;
+  *self = *(const gs_cvode *)settings;
   self->n = ode->n;
-  int rc = gs_cvode_read(self, solver, err);
-  if (!rc) rc = gs_cvode_setup(self, ode, err);
+  self->gmres = self->gmres == GS_CVODE_GMRES ||
+                (self->gmres == GS_CVODE_AUTO && self->n > GS_CVODE_DENSE_MAX_N);
+  int rc = gs_cvode_setup(self, ode, err);
   if (rc) {
     gs_cvode_free(self);
     return rc;
@@ -361,5 +371,11 @@ static void gs_cvode_stats(const void *vself, gs_integrator_stats *stats) {
 }
 
 const gs_integrator_type gs_integrator_cvode = {
-    "cvode", "SUNDIALS CVODE BDF for stiff cases, linear_solver dense | gmres | auto",
-    gs_cvode_create, gs_cvode_advance, gs_cvode_stats, gs_cvode_free, NULL, NULL};
+    .name = "cvode",
+    .summary = "SUNDIALS CVODE BDF for stiff cases, linear_solver dense | gmres | auto",
+    .read = gs_cvode_read,
+    .create = gs_cvode_create,
+    .advance = gs_cvode_advance,
+    .get_stats = gs_cvode_stats,
+    .free = gs_cvode_free,
+};

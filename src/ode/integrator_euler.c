@@ -54,19 +54,31 @@ static void gs_euler_free(void *vself) {
   free(vself);
 }
 
-static int gs_euler_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_error *err) {
-  gs_euler *self = gs_calloc(1, sizeof *self, err);
+/* The settings: a gs_euler with its keys filled in and nothing allocated. */
+static int gs_euler_read(gs_cfg_node *solver, void **out, gs_error *err) {
+  gs_euler *set = gs_calloc(1, sizeof *set, err);
+  if (!set) return GS_ENOMEM;
+  double rtol, atol;
+  int rc = gs_integrator_common_keys(solver, &rtol, &atol, &set->h_init, &set->h_min,
+                                     &set->h_max, &set->max_steps, err);
+  if (!rc) rc = gs_cfg_double_range(solver, "safety", 0, 0.1, 0, 1, HUGE_VAL, 0, &set->safety, err);
+  if (rc) {
+    free(set);
+    return rc;
+  }
+  *out = set;
+  return GS_OK;
+}
+
+static int gs_euler_create(const void *settings, const gs_ode *ode, void **out, gs_error *err) {
+  gs_euler *self = gs_malloc(sizeof *self, err);
   if (!self) return GS_ENOMEM;
+  *self = *(const gs_euler *)settings;
   self->n = ode->n;
   gs_interval_init(&self->interval);
-  double rtol, atol;
-  int rc = gs_integrator_common_keys(solver, &rtol, &atol, &self->h_init, &self->h_min,
-                                     &self->h_max, &self->max_steps, err);
-  if (!rc) rc = gs_cfg_double_range(solver, "safety", 0, 0.1, 0, 1, HUGE_VAL, 0, &self->safety, err);
-  if (!rc && !(self->f = gs_malloc(self->n * sizeof *self->f, err))) rc = GS_ENOMEM;
-  if (rc) {
+  if (!(self->f = gs_malloc(self->n * sizeof *self->f, err))) {
     gs_euler_free(self);
-    return rc;
+    return GS_ENOMEM;
   }
   *out = self;
   return GS_OK;
@@ -192,6 +204,15 @@ static void gs_euler_carry(void *vto, const void *vfrom) {
 }
 
 const gs_integrator_type gs_integrator_euler = {
-    "euler", "adaptive explicit Euler of seed 000, dt kept below safety / max(-f_i / y_i)",
-    gs_euler_create, gs_euler_advance, gs_euler_stats, gs_euler_free, gs_euler_carry,
-    gs_euler_release};
+    .name = "euler",
+    .summary = "adaptive explicit Euler of seed 000, dt kept below safety / max(-f_i / y_i)",
+    .read = gs_euler_read,
+    .create = gs_euler_create,
+    .advance = gs_euler_advance,
+    .get_stats = gs_euler_stats,
+    .free = gs_euler_free,
+    .carry = gs_euler_carry,
+    .release = gs_euler_release,
+    .ranks = 1,
+    .exact_invariants = 1,
+};

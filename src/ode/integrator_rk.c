@@ -265,25 +265,40 @@ static int gs_rk_alloc_gsl(gs_rk *self, int variant, const gs_ode *ode, gs_error
   return GS_OK;
 }
 
-static int gs_rk_create(gs_cfg_node *solver, const gs_ode *ode, void **out, gs_error *err) {
-  gs_rk *self = gs_calloc(1, sizeof *self, err);
-  if (!self) return GS_ENOMEM;
-  self->n = ode->n;
-  gs_interval_init(&self->interval);
+/* The settings: a gs_rk with its keys filled in and nothing allocated. */
+static int gs_rk_read(gs_cfg_node *solver, void **out, gs_error *err) {
+  gs_rk *set = gs_calloc(1, sizeof *set, err);
+  if (!set) return GS_ENOMEM;
   double h0;
   int variant = 1;
-  int rc = gs_integrator_common_keys(solver, &self->rtol, &self->atol, &h0, &self->h_min,
-                                     &self->h_max, &self->max_steps, err);
+  int rc = gs_integrator_common_keys(solver, &set->rtol, &set->atol, &h0, &set->h_min,
+                                     &set->h_max, &set->max_steps, err);
   if (!rc) rc = gs_cfg_enum_opt(solver, "variant", gs_rk_variants, 1, &variant, err);
-  if (!rc) rc = gs_rk_alloc_gsl(self, variant, ode, err);
+  if (rc) {
+    free(set);
+    return rc;
+  }
+  set->variant = gs_rk_variants[variant];
+  set->h = isnan(h0) ? 0.0 : h0;
+  if (isnan(set->h_min)) set->h_min = 0.0;
+  if (isnan(set->h_max)) set->h_max = HUGE_VAL;
+  *out = set;
+  return GS_OK;
+}
+
+static int gs_rk_create(const void *settings, const gs_ode *ode, void **out, gs_error *err) {
+  gs_rk *self = gs_malloc(sizeof *self, err);
+  if (!self) return GS_ENOMEM;
+  *self = *(const gs_rk *)settings;
+  self->n = ode->n;
+  gs_interval_init(&self->interval);
+  int variant = 0;
+  while (strcmp(gs_rk_variants[variant], self->variant)) variant++;
+  int rc = gs_rk_alloc_gsl(self, variant, ode, err);
   if (rc) {
     gs_rk_free(self);
     return rc;
   }
-  self->variant = gs_rk_variants[variant];
-  self->h = isnan(h0) ? 0.0 : h0;
-  if (isnan(self->h_min)) self->h_min = 0.0;
-  if (isnan(self->h_max)) self->h_max = HUGE_VAL;
   *out = self;
   return GS_OK;
 }
@@ -465,5 +480,16 @@ static void gs_rk_carry(void *vto, const void *vfrom) {
 }
 
 const gs_integrator_type gs_integrator_rk = {
-    "rk", "adaptive embedded Runge-Kutta from GSL, variant rkf45 | rkck | rk8pd",
-    gs_rk_create, gs_rk_advance, gs_rk_stats, gs_rk_free, gs_rk_carry, gs_rk_release};
+    .name = "rk",
+    .summary = "adaptive embedded Runge-Kutta from GSL, variant rkf45 | rkck | rk8pd",
+    .read = gs_rk_read,
+    .create = gs_rk_create,
+    .advance = gs_rk_advance,
+    .get_stats = gs_rk_stats,
+    .free = gs_rk_free,
+    .carry = gs_rk_carry,
+    .release = gs_rk_release,
+    .ranks = 1,
+    .per_compartment = 1,
+    .exact_invariants = 1,
+};

@@ -533,7 +533,7 @@ static int worker_init(struct gs_comp_steps *s, worker_t *w, gs_error *err) {
   return GS_OK;
 }
 
-int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, gs_error *err) {
+int gs_comp_steps_create(gs_case *c, gs_comp_steps **out, gs_error *err) {
   gs_model *m = &c->model;
   *out = NULL;
   struct gs_comp_steps *s = gs_calloc_apart(sizeof *s, err); /* its schedule: pages of its own */
@@ -622,15 +622,21 @@ int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, g
       atomic_init(&L->done, 0);
     }
     pack(s, comp, c->abs_scale, cp->scale);
-    cp->ode = (gs_ode){cp->n, comp_rhs, cp, cp->scale, s->nflow, NULL, NULL, NULL, 1,
-                       comp_step_done, 0, comp_trying};
-    int rc = gs_integrator_create(solver, &cp->ode, &cp->it, err);
-    if (rc) return rc;
-    if (strcmp(cp->it.type->name, "rk"))
+    cp->ode = (gs_ode){.n = cp->n,
+                       .f = comp_rhs,
+                       .ctx = cp,
+                       .abs_scale = cp->scale,
+                       .npositive = s->nflow,
+                       .rates_checked = 1,
+                       .between_steps = comp_step_done,
+                       .trying = comp_trying};
+    if (!c->integrator_setup.type->per_compartment)
       return gs_error_set(err, GS_EINPUT,
                           "solver.steps: per_compartment needs method rk (its coupling uses the "
                           "Runge-Kutta steps' exact quadrature), not %s",
-                          cp->it.type->name);
+                          c->integrator_setup.type->name);
+    int rc = gs_integrator_create(&c->integrator_setup, &cp->ode, &cp->it, err);
+    if (rc) return rc;
   }
   return GS_OK;
 }

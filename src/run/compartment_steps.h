@@ -43,9 +43,9 @@
 
 typedef struct gs_comp_steps gs_comp_steps;
 
-/* One integrator per compartment of the case (solver map `solver`, method
+/* One integrator per compartment of the case (the case's integrator setup, method
  * rk), each on its own packed vector. */
-int gs_comp_steps_create(gs_case *c, gs_cfg_node *solver, gs_comp_steps **out, gs_error *err);
+int gs_comp_steps_create(gs_case *c, gs_comp_steps **out, gs_error *err);
 /* A stretch of time without a rate switch inside: [t0, t1]; jumped: f
  * jumps at t0 (gs_ode.jumped). */
 typedef struct {

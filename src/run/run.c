@@ -214,7 +214,7 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
                           "take their own steps one after the other); run it without mpirun, or "
                           "use steps: shared on %d MPI ranks",
                           d->size);
-    return gs_comp_steps_create(c, gs_cfg_get(gs_cfg_root(c->cfg), "solver"), &s->cs, err);
+    return gs_comp_steps_create(c, &s->cs, err);
   }
   if (d->size < 2) {
     s->it = &c->integrator;
@@ -231,7 +231,7 @@ static int stepper_init(stepper_t *s, gs_case *c, gs_dist *d, guard_t *guard, gs
   /* numbers and carried volumes come first in the packed vector too */
   s->ode = (gs_ode){d->nlocal, local_rhs, guard, s->scale, d->len[0] + d->len[1], NULL, NULL, guarded_max, 1, between_steps, 0, NULL};
   s->it = &s->own;
-  return gs_integrator_create(gs_cfg_get(gs_cfg_root(c->cfg), "solver"), &s->ode, &s->own, err);
+  return gs_integrator_create(&c->integrator_setup, &s->ode, &s->own, err);
 }
 
 static int stepper_advance(stepper_t *s, double *t, double t_out, double *Y, gs_error *err) {
