@@ -9,8 +9,8 @@
  *   bench_swa sieve CASE [--ref FILE] [--save FILE]
  *     Runs CASE (all its runs, on the OpenMP threads) and prints one line:
  *     cpu_s wall_s jumps cbar sse, where cbar is the mean 90 % CI half-width of
- *     the sieve mass fractions of the last compartment at the last time (seed
- *     001 eq. 66) and sse the squared distance of their mean to the fractions
+ *     the sieve mass fractions of the last compartment at the last time (McGuire et al.
+ *     2018, eq. 66) and sse the squared distance of their mean to the fractions
  *     in FILE (eq. 67; nan without --ref).  --save writes the mean fractions
  *     (the high-precision solution for later --ref).  A run that fails (e.g.
  *     the nucleation instability at small N_max) prints "unstable: reason". */

@@ -133,7 +133,7 @@ no_result_files "$WORK/full"
 run_rc 1 "$BIN" run "$ok" --out "$WORK/empty-dir" --resume --threads 1
 stderr_has "nothing to resume"
 
-# ---- the seed-000 example with wet "either": its whole run keeps the volume
+# ---- the CoriMix example with wet "either": its whole run keeps the volume
 # balance to round-off (the dry pass's clamped births at the last pivot had
 # been booked as lost with the wrong sign: 1.2e-9 at t = 38, a failed run) ---
 either="$WORK/either.yaml"

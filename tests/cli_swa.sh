@@ -87,7 +87,7 @@ output: {end: 1}")
 run_rc 1 "$BIN" check "$empty"
 stderr_has "set solver.reference_number"
 
-# the bundled twin-screw example (seed 001) is valid and runs
+# the bundled twin-screw example (McGuire et al. 2018) is valid and runs
 run_rc 0 "$BIN" check "$SRC/examples/twin-screw.yaml"
 stdout_has "valid. swa solver, 4 coordinates, 3 compartments, 6 mechanisms"
 run_rc 0 "$BIN" run "$SRC/examples/twin-screw.yaml" --out "$WORK/ts" --quiet

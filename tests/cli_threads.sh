@@ -53,7 +53,7 @@ else
   echo "cli_threads: h5dump not found (install hdf5-tools); compared summary.csv only" >&2
 fi
 
-# The seed-000 granulator (4 compartments, carried liquid and gas, wet switch),
+# The CoriMix granulator (4 compartments, carried liquid and gas, wet switch),
 # with its own steps per compartment: on 2 threads the compartments run at
 # once, and the files are those of one thread byte for byte.
 run_rc 0 "$BIN" run "$SRC/examples/corimix-continuous.yaml" --out "$WORK/c1" --threads 1 --quiet

@@ -1,14 +1,14 @@
 # gransim run of sectional cases on MPI ranks (built with -DGRANSIM_MPI=ON): each
 # rank owns a contiguous block of compartments; the results must not depend on
-# the number of ranks or threads.  Checks: the seed-000 example (rk) on 1, 2 and
+# the number of ranks or threads.  Checks: the CoriMix example (rk) on 1, 2 and
 # 3 ranks (blocks 2+2 and 1+1+2), on 2 ranks x 2 threads, and on 2 and 3 ranks
 # with compartments moved between ranks between steps (solver.rebalance)
 # gives the same
 # summary.csv and the same numbers, carried volumes and ledger in result.h5 to
 # 1e-12 relative (they are identical in practice; on 2 ranks, where rank 0
 # writes while it waits, the whole result.h5 and summary.csv are checked
-# identical to the serial run's); a 2-D case with the seed's
-# adaptive Euler the same; only rank 0 prints; cvode and more ranks than
+# identical to the serial run's); a 2-D case with the
+# adaptive Euler of Sampat et al. (2018) the same; only rank 0 prints; cvode and more ranks than
 # compartments are refused with a message; an Euler step that goes negative on
 # rank 1 only stops every rank with status 1 and rank 1's message, without
 # hanging; so does a non-finite rate on rank 1 only under rk, and a result
@@ -130,7 +130,7 @@ for ds in /number /ledger; do
     { cat "$WORK/h5diff.out" >&2; fail "threads on moving ranks changed $ds"; }
 done
 
-# the adaptive Euler of seed 000: one step size agreed by all ranks
+# the adaptive Euler of Sampat et al. (2018): one step size agreed by all ranks
 c=$(write_case euler.yaml "title: Euler on ranks (2-D, four compartments, feed, transfer)
 $(grid_2d 4 20)
 initial: {type: exponential, number: 1, mean: [0.05, 0.02]}

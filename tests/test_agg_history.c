@@ -21,7 +21,7 @@
  * Every evaluation also keeps each volume coordinate: what the rates move
  * plus what the ledger books as lost is zero to round-off, also when pooled
  * births are clamped at the last pivot in the subtracted dry pass (their
- * clamped volume had been booked with the wrong sign: the seed-000 example
+ * clamped volume had been booked with the wrong sign: the CoriMix example
  * with "either" broke its volume balance by 1.2e-9 at t = 38). */
 #include <omp.h>
 

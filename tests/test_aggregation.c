@@ -1,5 +1,5 @@
 /* Aggregation against the analytical solutions T1, T2, T3 and T7 of
- * /work/shared/reference/analytic-solutions.md, for both redistribution
+ * docs/validation.md (sources in docs/references.md), for both redistribution
  * schemes (cell average, fixed pivot), through full runs (gs_case_run with
  * its balance checks on).
  *

@@ -10,7 +10,7 @@
 #include "check.h"
 #include "core/block_pool.h"
 
-#define BLOCK 55320 /* a record block of the seed-000 example: 3 nodes of 2305 doubles */
+#define BLOCK 55320 /* a record block of the CoriMix example: 3 nodes of 2305 doubles */
 
 static int cmp_ptr(const void *a, const void *b) {
   const uintptr_t x = (uintptr_t) * (void *const *)a, y = (uintptr_t) * (void *const *)b;

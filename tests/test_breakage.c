@@ -251,7 +251,7 @@ static void test_daughters_run(void) {
 }
 
 
-/* ---- DEM impact selection (seed 000 eq. 12) ---------------------------------------------- */
+/* ---- DEM impact selection (Sampat et al. 2018, eq. 12) ----------------------------- */
 /* S = scale f(class) P(U > U_break(d)) with U_break = (2 St/rho)(9/8)((1-e)^2/e^2)(9/16)(mu/d):
  * a table with two classes written here, the rate of each cell (from the
  * death rate of a one-cell state) against the formula evaluated here with

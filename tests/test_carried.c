@@ -1,4 +1,4 @@
-/* Carried quantities (liquid and gas lumped per solid bin, seed 000):
+/* Carried quantities (liquid and gas lumped per solid bin, Sampat et al. 2018):
  *  - aggregation moves them with the particles: every carried total is
  *    conserved to round-off (whole events, pooled loads spread with the
  *    particles), and the wet switch (both / either partners) selects exactly

@@ -1,6 +1,6 @@
 /* Per-compartment time steps (solver.steps: per_compartment,
  * src/run/compartment_steps.c).
- *  1. The seed-000 example (which takes its own steps in each compartment), checked
+ *  1. The CoriMix example (which takes its own steps in each compartment), checked
  *     at every output time against the closed forms of test_seed000.c
  *     (solids: tanks in series, V_n = F/k P(n, k t); sprayed liquid), scaled
  *     by the steady state F/k (a compartment that still holds almost nothing

@@ -2,7 +2,7 @@
  * time against an independent integration, a synthetic dump with known
  * contacts and impacts (exact C_ij, rates, fits), the bundled CoriMix dumps
  * against the independent integer tables of
- * shared/reference/000-reference-implementation.md section 6, the kernel-table
+ * the reference code's reading notes (section 6), the kernel-table
  * round trip, and bad input. */
 #include <dirent.h>
 #include <gsl/gsl_cdf.h>

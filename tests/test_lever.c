@@ -114,7 +114,7 @@ static void check_grid(const char *name, gs_grid *g, tl_rng *r) {
 int main(void) {
   tl_rng r = {20261124};
   gs_error err;
-  /* the seed-000 grid: 16 x 16 geometric bins of ratio 3 */
+  /* the CoriMix grid: 16 x 16 geometric bins of ratio 3 */
   gs_axis ax[2];
   CHECK(!gs_axis_geometric(&ax[0], "api", 2.88675e-16, 3, 16, 0, &err));
   CHECK(!gs_axis_geometric(&ax[1], "excipient", 2.88675e-16, 3, 16, 0, &err));

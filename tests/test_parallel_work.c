@@ -96,7 +96,7 @@ static int split_trial(unsigned *seed, int trial, size_t n, int nr, int report) 
 
 static void split_is_optimal(void) {
   random_trials(12345, 4000, split_trial);
-  /* the seed-000 example's shape: costs growing downstream, rank 0 writing */
+  /* the CoriMix example's shape: costs growing downstream, rank 0 writing */
   const double cost[4] = {16, 20.5, 21.2, 21.3}, extra[2] = {10, 0};
   size_t lo[3];
   CHECK_REL(gs_dist_balanced_split(cost, 4, extra, 2, lo), 46.5, 1e-12);

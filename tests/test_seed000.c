@@ -1,4 +1,4 @@
-/* The seed-000 granulator as shipped (examples/corimix-continuous.yaml: 4
+/* The CoriMix granulator of Sampat et al. (2018) as shipped (examples/corimix-continuous.yaml: 4
  * compartments x 16 x 16 bins, liquid and gas carried, feed, spray, pore
  * consolidation, DEM aggregation with the wet switch, DEM-impact breakage,
  * transfer), integrated over its whole 85 s with checks at EVERY right-hand
@@ -187,7 +187,7 @@ int main(void) {
     }
   }
 done:
-  printf("seed 000 example: %ld right-hand sides checked (%ld compartment evaluations with events)\n", p.evals,
+  printf("CoriMix example: %ld right-hand sides checked (%ld compartment evaluations with events)\n", p.evals,
          p.with_events);
   printf("  worst |birth/death - 1/2| / (1/2) aggregation %.3g, |birth/death - 2| / 2 breakage %.3g\n",
          p.worst_ratio_agg, p.worst_ratio_brk);

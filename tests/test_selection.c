@@ -1,10 +1,10 @@
 /* Breakage selection functions (src/kernel/selection.c) on their own:
- *  - `shear`, seed 002 eq. 2.7 (after Soos et al. 2006):
+ *  - `shear`, Chaudhury (2015) eq. 2.7 (after Soos et al. 2006):
  *        S = sqrt(4/(15 pi)) G exp(-B / (G^2 R)),
  *    R the volume-equivalent radius of the size v (sum of the chosen axes),
  *    compared cell by cell with the formula evaluated here from the axis
  *    pivots, for several grids and parameters; against the sanity numbers of
- *    ../shared/reference/002a-chaudhury-ch1-3.md (G = 64 1/s, B = 10:
+ *    the project's reading notes on Chaudhury (2015) (G = 64 1/s, B = 10:
  *    S = 4.7e-10, 9.3e-5, 0.141, 1.62 1/s at R = 100 um, 200 um, 500 um, 1 mm);
  *    its limits (B = 0: the constant sqrt(4/(15 pi)) G; monotone in R);
  *    `axes` and `min_volume`;

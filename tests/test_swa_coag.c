@@ -150,8 +150,8 @@ static void ci_scaling(void) {
   CHECK(ci[0] / ci[1] > 2.5 && ci[0] / ci[1] < 6.5);
 }
 
-/* At fixed N the CI half-width of M0 shrinks like 1/sqrt(runs).  With the
- * seed's eq. 65, c = 1.64 sqrt(sum_r (M_r - mean)^2) / R, the expectation of
+/* At fixed N the CI half-width of M0 shrinks like 1/sqrt(runs).  With
+ * McGuire et al. (2018) eq. 65, c = 1.64 sqrt(sum_r (M_r - mean)^2) / R, the expectation of
  * c^2 is 1.64^2 sigma^2 (R - 1) / R^2 for R independent runs of variance
  * sigma^2, so q_R = sqrt(mean of c^2) R / sqrt(R - 1) estimates 1.64 sigma for
  * every R (the exact small-sample form of c ~ 1/sqrt(R): at R = 4 the factor

@@ -1,8 +1,8 @@
 /* SWA processes one jump at a time: exact mass conservation of every
  * coagulation (with compaction), breakage, nucleation and transfer jump,
  * contractions of full compartments included;
- * the single immersion-nucleation event of seed 001 (reference section 7,
- * case 5); compaction reaching the target porosity; the closed-form
+ * the single immersion-nucleation event of McGuire et al. (2018) (case 5 of section 7
+ * of the project's reading notes on it); compaction reaching the target porosity; the closed-form
  * penetration against an ODE solver; inception unbiased for EWI and VWI;
  * breakage number growth; inception + transport steady state (c_z = R tau);
  * doubling and contraction (merge: mass exact; merge and drop: unbiased, the
@@ -112,7 +112,7 @@ static void mass_per_jump(void) {
   gs_swa_case_free(&c);
 }
 
-/* Seed 001, reference section 7 case 5: one nucleation event on dry primaries. */
+/* McGuire et al. (2018), case 5 of the reading notes' section 7: one nucleation event on dry primaries. */
 static void nucleation_event(void) {
   double d = 2e-4, vdrop = M_PI / 6 * d * d * d, wdrop = 0.01, phimax = 1.08;
   gs_swa_case c;
@@ -197,7 +197,7 @@ static void penetration_closed_form(void) {
  * EWI and VWI, but each scheme estimates one of them well: with EWI the mass
  * sits in sizes drawn about once in 1e7 particles, with VWI (uniform in d)
  * the number sits in the first section, drawn 0.3 % of the time.  So EWI
- * is checked on number, VWI on mass (the seed's point: the mass PSD is the
+ * is checked on number, VWI on mass (the point of McGuire et al. 2018: the mass PSD is the
  * product quality measure). */
 /* mean particle volume of the case's feed: rate = mass_rate / (rho vmean) */
 static double feed_vmean(const gs_swa_case *c) {

@@ -1,4 +1,4 @@
-/* The bundled twin-screw example (examples/twin-screw.yaml, seed 001) as
+/* The bundled twin-screw example (examples/twin-screw.yaml, McGuire et al. 2018) as
  * shipped: liquid penetration is active in it.  Penetration moves external
  * liquid into the empty pores at r = k l_e (p - l_i) (eqs. 23-24).  With the
  * nucleus pore saturation s* = 1 the pores of every particle equal its
@@ -9,7 +9,7 @@
  * liquid k sum w l_e (p - l_i) dt (to first order) out of the external into
  * the internal liquid, and its size is the figure docs/models.md quotes;
  * and the same case with s* = 1 has p = l_i in every particle (zero rate).
- * EWI vs VWI at t = 0: seed 001 "modified" w_drop for EWI so that the process
+ * EWI vs VWI at t = 0: McGuire et al. (2018) "modified" w_drop for EWI so that the process
  * rates match VWI's at t = 0; here they match with the same w_drop
  * (docs/models.md): feed, nucleation and transfer rates are equal exactly,
  * breakage is 0 (dry primaries), coagulation is equal in expectation. */

@@ -39,11 +39,10 @@ void *gs_calloc(size_t count, size_t size, gs_error *err);
 /* Data that different threads write must lie whole 4 KiB pages apart, not
  * just whole cache lines: the cores' prefetchers fetch the lines next to
  * those they miss (never across a 4 KiB page), and a neighbouring line that
- * another core is writing then moves between the cores at every write.  On
- * the project's VM, whose two vCPUs sit on different core complexes in most
- * periods (~500 ns per cache-line round trip), lines apart but pages shared
- * made every rate evaluation of the seed-000 example 10-20 % slower on two
- * threads than on one (docs/performance.md, eleventh session). */
+ * another core is writing then moves between the cores at every write.  The
+ * cost is largest where the cores sit on different core complexes, where
+ * two threads can end up slower than one (measurements: docs/performance.md,
+ * "Eleventh session: pages, not lines"). */
 #define GS_APART ((size_t)4096)
 /* Zeroed memory on a page boundary, in whole pages, for arrays that threads
  * write in separate parts (free with free()); and a count of doubles rounded

@@ -36,7 +36,7 @@ typedef struct gs_axis {
  * geometric: edges lo*ratio^k, k = 0..n (lo > 0, ratio > 1); if zero_first,
  *            an extra first cell [0, lo] is prepended (n+1 cells in total).
  * edges:     explicit edges; pivots NULL = midpoints, else explicit pivots.
- * Pivots default to cell midpoints (as in the seeds' nonlinear-grid CAT). */
+ * Pivots default to cell midpoints (as in the nonlinear-grid cell average of Chaudhury 2015). */
 int gs_axis_linear(gs_axis *ax, const char *name, double lo, double hi, size_t n, gs_error *err);
 int gs_axis_geometric(gs_axis *ax, const char *name, double lo, double ratio, size_t n,
                       int zero_first, gs_error *err);

@@ -42,8 +42,8 @@ int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
                     const double *ledger, gs_error *err);
 /* The same in gs_output_parts(o) pieces, for a caller that fills idle
  * moments (an MPI rank waiting for the others): a compartment's summary and
- * CSV row, one large series' row (tens of µs for the seed-000 example, ~1 ms
- * for a deflated row of 32 compartments x 32 x 32 cells), then the small
+ * CSV row, one large series' row (the largest piece: deflating it takes the
+ * longest, so it stands alone to keep the pieces short), then the small
  * series' rows with the commit when it is due (gs_output_set_checkpoint).
  * Parts 0, 1, ... in order, with the same t, y and ledger, none of another
  * output time in between (refused otherwise); gs_output_finish refuses to

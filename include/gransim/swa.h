@@ -1,4 +1,4 @@
-/* gransim — the stochastic weighted-particle solver (SWA, seed 001).
+/* gransim — the stochastic weighted-particle solver (SWA, McGuire et al. 2018).
  *
  * A run is a Markov jump process on computational particles.  Particle i of
  * compartment z has a type-space vector x_i (one value per coordinate, e.g.
@@ -18,7 +18,7 @@
  *
  * Independent runs (per-run GSL seeds) run in parallel with OpenMP; the
  * ensemble mean and the 90 % confidence half-width 1.64 sqrt(sum (M_r - mean)^2)
- * / n_runs (seed 001 eq. 65) of every output are written like the sectional
+ * / n_runs (McGuire et al. 2018, eq. 65) of every output are written like the sectional
  * outputs (summary.csv with ci_* columns, result.h5). */
 #ifndef GRANSIM_SWA_H
 #define GRANSIM_SWA_H

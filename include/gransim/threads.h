@@ -1,10 +1,10 @@
 /* gransim — when a loop is worth an OpenMP team.
  *
- * Entering a parallel region costs about 2.4 µs on the project's VM even
- * with one thread (libgomp builds a team and wakes a futex at its end; an
- * `if (0)` clause does not avoid it), more than a 16 x 16 compartment's
- * transfer or spray takes.  The seed-000 example entered 6.8 regions per
- * right-hand side, 19 % of its run.  Loops therefore ask here first and run
+ * Entering a parallel region has a fixed cost even with one thread (libgomp
+ * builds a team and wakes a futex at its end; an `if (0)` clause does not
+ * avoid it), and it can exceed the work of a small loop such as a 16 x 16
+ * compartment's transfer or spray (measured in docs/performance.md, "OpenMP
+ * regions that were not needed").  Loops therefore ask here first and run
  * plain C when the answer is 1. */
 #ifndef GRANSIM_THREADS_H
 #define GRANSIM_THREADS_H

@@ -170,7 +170,7 @@ static int cmd_list(void) {
  * move in the 32-compartment case).  The heap also grows 64 MiB at a time
  * (address space only) and asks for transparent huge pages there, where a
  * first touch costs ~0.15 ms per 2 MiB instead of ~13 µs per 4 KiB (the
- * seed-000 example took ~1 900 page faults, ~25 ms, of which ~190 while it
+ * CoriMix example took ~1 900 page faults, ~25 ms, of which ~190 while it
  * ran); all threads share that heap (one malloc arena: gransim's loops do
  * not allocate).  glibc and Linux only; elsewhere a no-op. */
 static void keep_freed_memory(void) {

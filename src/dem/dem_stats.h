@@ -29,7 +29,7 @@ void gs_dem_stats_free(gs_dem_stats *s);
 /* Forget everything and restart the window at time t (also resets the
  * engine's event counters and discards the particles removed before t). */
 void gs_dem_stats_reset(gs_dem_stats *s, gs_dem_case *c, double t);
-/* The steady-state detector (seed 000): 1 when, over the last w of the n
+/* The steady-state detector (Sampat et al. 2018): 1 when, over the last w of the n
  * samples, both series a (hold-up mass) and b (collision rate) stay within
  * tol * mean of their window means, and both means are > 0. */
 int gs_dem_is_steady(const double *a, const double *b, long n, long w, double tol);

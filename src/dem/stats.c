@@ -4,7 +4,7 @@
  * (length dt, from t0 to the end):  C_ij = N_coll,ij / (N_i N_j dt), with
  * N_coll,ij the collision events (contacts that began) between the classes
  * and N_i the mean number of class-i particles over the samples, as in
- * seed 000 eq. (9).  collision_kernel.csv holds C in the format of the PBM's
+ * Sampat et al. (2018) eq. (9).  collision_kernel.csv holds C in the format of the PBM's
  * `table` kernel (src/kernel/kernel_table.c) with class edges in particle
  * diameter (use `measure: diameter` there); impact_table.csv holds the wall
  * impacts in the format of the `dem_impact` breakage selection

@@ -5,7 +5,7 @@
  * Why: the result file's large series (/number, /carried) are chunked by up
  * to 64 KiB of output times, and every commit writes whole rows.  Through
  * H5Dwrite, HDF5 iterates the selections and runs its filter pipeline chunk
- * by chunk, which cost ~10 ms per MB here (seed-000 example: 16 ms of a
+ * by chunk, which cost ~10 ms per MB here (CoriMix example: 16 ms of a
  * 0.15 s run for 2 MB; zlib's per-chunk set-up inside the deflate filter had
  * cost more still).
  * Written directly, a chunk is one pwrite plus an index entry, and one zlib

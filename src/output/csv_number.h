@@ -1,7 +1,7 @@
 /* A number of summary.csv: the text printf's "%.10g" gives, written ~3.5x
  * faster (56 against 200 ns here).  Rank 0 formats 16 numbers per
  * compartment at every output time; through fprintf that was ~12 µs of the
- * ~75 µs an output time of the seed-000 example costs it, on the other
+ * ~75 µs an output time of the CoriMix example costs it, on the other
  * ranks' path under MPI. */
 #ifndef GRANSIM_IO_CSV_NUMBER_H
 #define GRANSIM_IO_CSV_NUMBER_H

@@ -1,7 +1,7 @@
 /* Output times written later, piece by piece.
  *
  * Under MPI, rank 0 alone writes the result files, and while it wrote, the
- * other ranks waited for it (10 % of the seed-000 example's run).  Rank 0
+ * other ranks waited for it (10 % of the CoriMix example's run).  Rank 0
  * also waits for them: with its cheaper compartments it reaches each step's
  * agreement early.  A deferred output keeps copies of the states of the last
  * few output times and writes them in pieces of tens of µs

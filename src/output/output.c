@@ -23,7 +23,7 @@
  * rows) once `checkpoint` seconds of
  * wall time have passed since the last commit, when the buffer is full
  * (PENDING_BYTES) and at the end: per-time writes and flushes cost more than
- * the integration of small cases (seed-000 example: 0.4 ms per output time,
+ * the integration of small cases (CoriMix example: 0.4 ms per output time,
  * 86 of them in a 0.17 s run).  A killed run loses at most the last interval,
  * which --resume recomputes.  checkpoint = 0 commits every output time.
  * The small series are kept in memory until the commit (one write of several
@@ -343,12 +343,12 @@ static int deflate_usable(void) {
  * chunked by up to 64 KiB of output times (chunk_rows), the rest by 64 rows.
  * Only rows of at least COMPRESS_MIN_VALUES are deflated: zlib sets up
  * ~256 KiB of state per chunk, which on small grids cost more than the
- * integration (seed-000 example: 45 % of the run for 8 KiB chunks). */
+ * integration (CoriMix example: 45 % of the run for 8 KiB chunks). */
 #define COMPRESS_MIN_VALUES 8192
 /* A large series' chunk holds as many output times as fit in
  * BIG_CHUNK_BYTES, at least one; only a row of COMPRESS_MIN_VALUES or more,
  * a chunk of its own, is deflated.  With a chunk per output time, the
- * seed-000 example's 8 and 16 KiB rows made 86 chunks per series: writing
+ * CoriMix example's 8 and 16 KiB rows made 86 chunks per series: writing
  * each cost ~6 µs more, and rank 0's 65th chunk of both (probably where
  * their index, a B-tree of up to 64 entries a node, splits one) stalled the
  * other rank by ~250 µs, every run. */
@@ -671,7 +671,7 @@ static double wall_seconds(void) {
 
 /* Room for one more pending output time: the block starts small and doubles
  * up to PENDING_BYTES.  Sized for PENDING_BYTES at once it was a 64 MiB
- * mapping whose pages each series touched in its own region: the seed-000
+ * mapping whose pages each series touched in its own region: the CoriMix
  * example paid ~40 fresh pages during the run and 2 ms to unmap the block in
  * its final commit, after the last step (a third of its serial tail). */
 static int pending_reserve(gs_output *o, gs_error *err) {
