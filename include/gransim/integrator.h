@@ -5,7 +5,7 @@
  *   "rk"     adaptive embedded Runge–Kutta from GSL odeiv2 (default; variant
  *            rkf45 | rkck | rk8pd, key `variant`, default rkck)
  *   "cvode"  SUNDIALS CVODE BDF for stiff cases (linear solver dense or gmres)
- *   "euler"  the adaptive explicit Euler of seed 000: dt doubled or halved so
+ *   "euler"  the adaptive explicit Euler of Sampat et al. (2018): dt doubled or halved so
  *            that dt * max(-f_i / y_i) stays below `safety` (default 0.1),
  *            within [min_step, max_step].
  * Components i with abs_scale[i] = 0 take part in the integration but not in

@@ -90,7 +90,7 @@ const gs_mech_type *const *gs_mech_types(void);
 /* ---- the model ----------------------------------------------------------- */
 /* Carried quantities: besides the number N of every cell, the state may hold
  * the total volume of some quantity carried by the particles of the cell
- * (seed 000: liquid and gas per solid bin), so a particle of cell c carries
+ * (Sampat et al. 2018: liquid and gas per solid bin), so a particle of cell c carries
  * Q_q[c] / N[c].  Every mechanism moves them with the particles. */
 #define GS_MAX_CARRIED 2
 #define GS_MAX_VOL (GS_MAX_DIM + GS_MAX_CARRIED)

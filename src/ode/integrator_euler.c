@@ -1,4 +1,4 @@
-/* Integrator "euler": the adaptive explicit Euler of seed 000, kept so that
+/* Integrator "euler": the adaptive explicit Euler of Sampat et al. (2018), kept so that
  * old results can be reproduced and as a first-order reference.
  *
  * Each step evaluates f once and picks dt from the fastest relative
@@ -205,7 +205,7 @@ static void gs_euler_carry(void *vto, const void *vfrom) {
 
 const gs_integrator_type gs_integrator_euler = {
     .name = "euler",
-    .summary = "adaptive explicit Euler of seed 000, dt kept below safety / max(-f_i / y_i)",
+    .summary = "adaptive explicit Euler of Sampat et al. (2018), dt kept below safety / max(-f_i / y_i)",
     .read = gs_euler_read,
     .create = gs_euler_create,
     .advance = gs_euler_advance,

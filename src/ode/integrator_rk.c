@@ -174,7 +174,7 @@ static int gs_rk_control_hadjust(void *state, size_t dim, unsigned int ord, cons
    * for it (error ~ h^ord): f is not smooth there.  Where a cell's wetness
    * switches aggregation on, the error of a step jumps by 1e6-1e10 once the
    * step reaches the switch; growing by 5 after each retry made the steps
-   * alternate between rejected and accepted up to it (the seed-000 example:
+   * alternate between rejected and accepted up to it (the CoriMix example:
    * 81 of 271 steps rejected).  After every rejection (Hairer-Nørsett-Wanner's
    * facmax = 1) it would also have held back the steps of the smooth
    * 32-compartment case (+15 % evaluations). */

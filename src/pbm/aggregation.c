@@ -22,12 +22,12 @@
  * and 3-D.  The pair loop is parallel over OpenMP threads with per-thread
  * accumulators.
  *
- * Carried quantities (liquid and gas lumped per solid bin, seed 000): each
+ * Carried quantities (liquid and gas lumped per solid bin, Sampat et al. 2018): each
  * particle of cell c carries Q_q[c] / N[c]; an event removes both partners'
  * loads from their cells and gives their sum to the product; the pooled
  * loads of a target cell are spread over the same nodes, with the same
  * weights, as its particles, so every carried volume is conserved exactly.
- * `wet` makes aggregation need liquid (seed 000 eq. 10): a particle is wet
+ * `wet` makes aggregation need liquid (Sampat et al. 2018, eq. 10): a particle is wet
  * when its liquid / solid volume ratio reaches min_content; pairs need both
  * partners wet, or either (then the dry-dry pairs are subtracted from a pass
  * over all pairs, which keeps every event whole). */
@@ -86,7 +86,7 @@ typedef struct {
   size_t pcar_len, masked_len; /* per-slot strides, whole pages (GS_APART) */
   int wet, wet_liquid;   /* WET_*; carried index of the liquid */
   double wet_min;        /* liquid / solid volume ratio that makes a particle wet */
-  double wet_ramp;       /* relative width of the switch (0: a step, as in seed 000) */
+  double wet_ramp;       /* relative width of the switch (0: a step, as in Sampat et al. 2018) */
   double *wet_ok;        /* ncomp * ncells: wetness psi in [0, 1], chosen once per time value */
   double *masked;        /* ncells: numbers of the wet (or dry) cells for a pass */
   int nthreads;

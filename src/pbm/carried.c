@@ -1,5 +1,5 @@
 /* Mechanisms that act on carried quantities (gs_model.carried), the lumped
- * liquid and gas per solid bin of seed 000:
+ * liquid and gas per solid bin of Sampat et al. (2018):
  *   spray               dL_c/dt = Q(comp) N_c s_c / sum(N s) during [start, end):
  *                       the spray shared in proportion to solid volume (eq. 5)
  *   pore_consolidation  per particle dg/dt = -k V (1 - e_min)/s max(0, g + l - s e_min/(1 - e_min))
@@ -136,7 +136,7 @@ static double spray_switch(void *self, double t) {
 
 const gs_mech_type gs_mech_spray = {
     .name = "spray",
-    .summary = "liquid sprayed onto the carried liquid, shared in proportion to solid volume (seed 000 eq. 5)",
+    .summary = "liquid sprayed onto the carried liquid, shared in proportion to solid volume (Sampat et al. 2018, eq. 5)",
     .create = spray_create,
     .rates = spray_rates,
     .free = carried_free,
@@ -144,7 +144,7 @@ const gs_mech_type gs_mech_spray = {
 };
 const gs_mech_type gs_mech_pore_consolidation = {
     .name = "pore_consolidation",
-    .summary = "loss of carried gas down to a minimum porosity (seed 000 eq. 13, sign of a loss)",
+    .summary = "loss of carried gas down to a minimum porosity (Sampat et al. 2018, eq. 13, sign of a loss)",
     .create = pore_create,
     .rates = consolidation_rates,
     .free = carried_free,

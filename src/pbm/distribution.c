@@ -141,7 +141,7 @@ static int add_cell(gs_cfg_node *node, const gs_grid *g, double number, double *
 
 /* cells: `indices` (a list of 1-based cell indices, one list per cell) and
  * `weights` (one per cell, >= 0): `number` shared in proportion to weights
- * (seed 000's inlet: given numbers on the diagonal of the solid bins). */
+ * (the inlet of Sampat et al. (2018): given numbers on the diagonal of the solid bins). */
 static int add_cells(gs_cfg_node *node, const gs_grid *g, double number, double *dst,
                      gs_error *err) {
   gs_cfg_node *list = NULL;

@@ -2,9 +2,9 @@
  * growth_scheme.h:
  *   growth          G = G0 + sigma * x_axis                (keys axis, constant, linear)
  *   liquid_addition G_l = Q(comp) s / sum(N s)             spray shared in proportion to solid
- *                                                          volume (seed 000 eq. 5), in [start, end)
+ *                                                          volume (Sampat et al. 2018, eq. 5), in [start, end)
  *   consolidation   G_g = -c (s+l+g)(1-e_min)/s * max(0, l + g - e_min s/(1-e_min))
- *                   (seed 002 eq. 2.12 with the sign of "negative growth"; see docs/models.md) */
+ *                   (Chaudhury 2015, eq. 2.12 with the sign of "negative growth"; see docs/models.md) */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -219,7 +219,7 @@ const gs_mech_type gs_mech_growth = {
 };
 const gs_mech_type gs_mech_liquid_addition = {
     .name = "liquid_addition",
-    .summary = "liquid spray shared in proportion to solid volume (seed 000 eq. 5)",
+    .summary = "liquid spray shared in proportion to solid volume (Sampat et al. 2018, eq. 5)",
     .create = liquid_create,
     .rates = grow_rates,
     .free = grow_free,
@@ -228,7 +228,7 @@ const gs_mech_type gs_mech_liquid_addition = {
 };
 const gs_mech_type gs_mech_consolidation = {
     .name = "consolidation",
-    .summary = "loss of gas down to a minimum porosity (seed 002 eq. 2.12, corrected sign)",
+    .summary = "loss of gas down to a minimum porosity (Chaudhury 2015, eq. 2.12, corrected sign)",
     .create = consol_create,
     .rates = grow_rates,
     .free = grow_free,

@@ -7,7 +7,7 @@ int gs_lever_place(const gs_grid *g, size_t cell, const double *v, double count,
 }
 
 /* Two axes, a known cell, no clamping (the births and fragments of the
- * seed-000 grids): the four nodes and their factors found once for the
+ * CoriMix grids): the four nodes and their factors found once for the
  * particles and every carried quantity.  Each amount is multiplied by the
  * factors in the order gs_lever_spread uses, so the results are the same bit
  * for bit (as built here, without contraction into fused multiply-adds,

@@ -50,7 +50,7 @@ void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s
   const double *N = gs_model_numbers_c(m, y, comp);
   memset(s, 0, sizeof *s);
   /* granule volume per cell: the size axes, plus what a particle carries
-   * (liquid and gas fill the pores of the granule: seed 000's external volume) */
+   * (liquid and gas fill the pores of the granule: the external volume of Sampat et al. (2018)) */
   double *vol = m->ncarried ? malloc(g->ncells * sizeof *vol) : NULL;
   const double *size = vol ? vol : m->size_volume;
   for (size_t c = 0; vol && c < g->ncells; c++) {

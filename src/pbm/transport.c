@@ -5,7 +5,7 @@
  *   transfer: each compartment c loses particles at rate k_c N to compartment
  *             c+1; the last one discharges them as product.  k_c is `rate`
  *             (1/s), 1/`residence_time`, or `velocity`/`length` (the v dt / d
- *             of seed 000), each a number or one value per compartment.
+ *             of Sampat et al. 2018), each a number or one value per compartment.
  * Both book the volume they move in the ledger of the compartments involved,
  * so the balance held = fed - discharged is checked per compartment.
  * Carried quantities (gs_model.carried) move with the particles: transfer

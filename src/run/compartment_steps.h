@@ -6,7 +6,7 @@
  * own, with its own adaptive steps, once the one before it has been: the
  * dynamic sequential-modular scheme of flowsheet simulators.  A compartment
  * whose contents barely change takes long steps instead of the shortest
- * steps any compartment needs (the seed-000 example: 3 414 compartment
+ * steps any compartment needs (the CoriMix example: 3 414 compartment
  * evaluations instead of 4 x 1 239).
  *
  * Conservation stays exact (to round-off) although the steps differ: each

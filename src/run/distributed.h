@@ -1,4 +1,4 @@
-/* Compartments distributed over MPI ranks (seed 000's parallel scheme,
+/* Compartments distributed over MPI ranks (the parallel scheme of Sampat et al. (2018),
  * without its master bottleneck): each rank owns a contiguous block of
  * compartments, integrates only its own part of the state (its numbers,
  * carried volumes and ledger: three contiguous segments of the full state

@@ -268,7 +268,7 @@ static int check_state(const gs_case *c, const double *Y, const double *M1_0, do
   double ymax = *ymax_seen; /* largest number seen so far in the run */
   /* the vectorised test, and the search for the culprit only when it fails
    * (isfinite and a libm fmax call per value: ~2-3 µs more per output time
-   * of the seed-000 example, rank 0's work under MPI) */
+   * of the CoriMix example, rank 0's work under MPI) */
   const int finite = gs_all_finite(Y, m->nstate);
   for (size_t i = 0; !finite && i < m->nstate; i++)
     if (!isfinite(Y[i])) {
@@ -419,7 +419,7 @@ static void rebalance_measure(gs_case *c, gs_dist *d, guard_t *g) {
 
 /* The decision on the last window, into g->split_lo; 1 for a move.  The
  * next window is sized to hold WINDOW_SECONDS of the slowest rank's work:
- * shorter ones are mostly timing noise on a shared machine (the seed-000
+ * shorter ones are mostly timing noise on a shared machine (the CoriMix
  * example's output intervals hold ~1 ms of rates each; deciding on each had
  * moved compartments back and forth up to 11 times). */
 static int rebalance_decide(gs_case *c, gs_dist *d, guard_t *g) {
