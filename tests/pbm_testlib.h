@@ -16,6 +16,7 @@
 
 #include "check.h"
 #include "gransim/case.h"
+#include "gransim/run.h"
 
 /* every helper is static; not every test uses every helper */
 #define TL_FN static __attribute__((unused))
@@ -64,7 +65,7 @@ TL_FN double *tl_run(gs_case *c, gs_run_report *rep, int *rc_out, gs_error *err_
   size_t n = c->model.nstate + c->model.nledger;
   double *y = calloc(n, sizeof(double));
   gs_run_report r;
-  gs_run_options opt = {NULL, 0, 0, 0};
+  gs_run_options opt = {0};
   int rc = gs_case_run(c, &opt, y, &r, &err);
   if (rep) *rep = r;
   if (err_out) *err_out = err;

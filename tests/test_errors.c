@@ -185,7 +185,7 @@ static void test_run_errors(void) {
   CHECK(mkdtemp(dir) != NULL);
   char out[300];
   snprintf(out, sizeof out, "%s/out", dir);
-  gs_run_options opt = {out, 0, 0, 0};
+  gs_run_options opt = {.out_dir = out};
   EXPECT_RUN("grid: {axes: [{name: solid, type: linear, min: 0, max: 10, cells: 20}]}\n"
              "initial: {type: point, number: 1, at: [1.25]}\n"
              "mechanisms:\n  - {type: aggregation, kernel: {type: constant, beta0: 1}}\n"

@@ -30,7 +30,7 @@ static void compare(const char *body, const char *what) {
   {
     size_t t = nt - 1;
     gs_error err = {0};
-    gs_run_options opt = {NULL, 0, 0, 0};
+    gs_run_options opt = {0};
     gs_run_report rep;
     if (gs_case_run(&sc, &opt, y, &rep, &err)) {
       fprintf(stderr, "sectional run failed: %s\n", err.msg);

@@ -59,37 +59,6 @@ int gs_case_read_grid(gs_cfg_node *root, gs_model *m, gs_error *err);
 int gs_case_read_times(gs_cfg_node *root, double *t0, double **times, size_t *ntimes,
                        gs_error *err);
 
-/* ---- running ------------------------------------------------------------ */
-typedef struct gs_run_options {
-  const char *out_dir; /* where result.h5 and summary.csv go (NULL: no files) */
-  int resume;          /* continue an interrupted run from its partial files */
-  int progress;        /* -1 auto (when stderr is a terminal), 0 off, 1 on */
-  int timings;         /* 1: print where each (MPI) rank spent its time, at the end */
-} gs_run_options;
-
-typedef struct gs_run_report {
-  double t_end;
-  gs_integrator_stats stats;
-  double wall_seconds;
-  double max_balance_error; /* largest relative volume-balance error seen */
-  double max_loss;          /* largest fraction of volume lost through boundaries */
-  long rebalanced;          /* under MPI: times the compartments moved between ranks */
-  /* solver.steps: per_compartment (stats then sum the compartments' own
-   * steps and evaluations, an evaluation being one compartment's rates), and
-   * the largest relative mismatch between what a compartment discharged and
-   * the next received in a stretch */
-  int per_compartment;
-  double worst_coupling;
-} gs_run_report;
-
-/* Integrate the case over its output times, checking after every output time
- * for non-finite or negative numbers, the volume balance of every axis and
- * the loss through grid boundaries, and writing outputs.  On failure returns
- * GS_ENUMERIC (or GS_EIO) with a message naming the time, compartment and
- * cell, and leaves no result files.  y (may be NULL) receives the final state. */
-int gs_case_run(gs_case *c, const gs_run_options *opt, double *y, gs_run_report *report,
-                gs_error *err);
-
 #ifdef __cplusplus
 }
 #endif

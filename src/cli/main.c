@@ -12,6 +12,7 @@
 
 #include "cli/commands.h"
 #include "gransim/case.h"
+#include "gransim/run.h"
 #include "gransim/kernel.h"
 #include "gransim/parallel.h"
 #include "gransim/swa.h"
@@ -41,7 +42,7 @@ static void usage(FILE *fp) {
 
 static int cmd_run(int argc, char **argv) {
   const char *path = NULL, *out = NULL;
-  gs_run_options opt = {NULL, 0, -1, 0};
+  gs_run_options opt = {.progress = -1};
   for (int i = 0; i < argc; i++) {
     if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
       printf("usage: gransim run CASE --out DIR [--resume] [--quiet] [--threads N] [--timings]\n\n"

@@ -21,6 +21,7 @@
 
 #include "cli/commands.h"
 #include "gransim/case.h"
+#include "gransim/run.h"
 
 #define MAXMOM 10
 #define MAXCELLS 5

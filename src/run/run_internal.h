@@ -1,0 +1,82 @@
+/* The run in progress, shared by the driver (driver.c), its stepping
+ * strategies (step_*.c) and its built-in observers (observe_*.c). */
+#ifndef GRANSIM_RUN_INTERNAL_H
+#define GRANSIM_RUN_INTERNAL_H
+
+#include <stdio.h>
+
+#include "gransim/run.h"
+#include "run/distributed.h"
+
+/* --timings phases of one rank (integrator = advance minus rates, exchange
+ * and step agreements, i.e. the integrator's own vector work, packing and
+ * rate checks; waits = step agreements, less the observers' idle work,
+ * which counts as outputs). */
+enum { GS_PH_RHS, GS_PH_EXCHANGE, GS_PH_INTEGRATOR, GS_PH_WAITS, GS_PH_OUTPUTS, GS_PH_FINISH, GS_PH_N };
+
+/* A stepping strategy: how the state advances through the output times. */
+typedef struct gs_strategy_type {
+  const char *name;
+  int (*create)(gs_run *run, void **self, gs_error *err);
+  /* Advance run->Y from run->t through every output time after it, calling
+   * gs_run_output_time with the state at each (on rank 0 under MPI, which
+   * may do so later, while the next steps run).  Returns at the last output
+   * time, at the first failure, or at the output time an observer stopped
+   * the run at (run->stop); run->t and run->Y are then that time's. */
+  int (*advance)(void *self, gs_run *run, gs_error *err);
+  /* Steps, rejections and evaluations so far. */
+  void (*stats)(const void *self, gs_integrator_stats *st);
+  /* Optional: its part of --timings (after the phase table). */
+  void (*print_timings)(const void *self, const gs_run *run, FILE *f);
+  void (*free)(void *self);
+} gs_strategy_type;
+
+extern const gs_strategy_type gs_step_shared, gs_step_ranks, gs_step_compartments;
+
+struct gs_run {
+  gs_case *c;
+  const gs_run_options *opt;
+  gs_run_report *rep;
+  gs_dist dist;    /* the compartments of each MPI rank (one rank without MPI) */
+  double *Y;       /* the full state (under MPI current in this rank's block, and on rank 0
+                    * at output times) */
+  double t;        /* the time Y holds */
+  gs_eval ev;      /* the evaluation of this process's compartments */
+  double start;    /* wall clock at the start */
+  const gs_strategy_type *strategy;
+  void *strategy_self;
+  gs_observer *obs; /* this process's observers (none on ranks other than 0) */
+  size_t nobs, nown; /* nown: the first ones, built in, freed by the run */
+  gs_run_view view;
+  int stop;          /* an observer ended the run at the last output time */
+  double phase[GS_PH_N];
+  long faults_start; /* page faults before the run */
+};
+
+/* Every observer at output time t (in order); sets run->stop when one asks. */
+int gs_run_output_time(gs_run *run, double t, const double *Y, gs_error *err);
+/* A piece of the observers' idle work; 1 while more is left. */
+int gs_run_idle(gs_run *run);
+/* Steps so far, through the strategy. */
+void gs_run_stats(const gs_run *run, gs_integrator_stats *st);
+
+/* "compartment 2, cell (3, 5) [solid = ..., ...]" for messages. */
+void gs_run_describe_cell(const gs_model *m, size_t comp, size_t cell, char *buf, size_t len);
+/* The message for a rate that was not finite at time t, entry index of the
+ * full state vector (numbers, carried, ledger). */
+int gs_run_rate_failure(const gs_model *m, double t, size_t index, gs_error *err);
+/* Index of the first non-finite entry of f (n entries), or n. */
+size_t gs_run_first_nonfinite(const double *f, size_t n);
+double gs_run_now(void);
+/* Every rank leaves together: when another rank failed, say so here. */
+int gs_run_agree(gs_dist *d, int rc, gs_error *err);
+
+/* The built-in observers. */
+extern const gs_observer_type gs_observe_checks, gs_observe_output, gs_observe_progress,
+    gs_observe_timings;
+int gs_observe_checks_create(gs_run *run, void **self, gs_error *err);
+int gs_observe_output_create(gs_run *run, void **self, gs_error *err);
+int gs_observe_progress_create(gs_run *run, void **self, gs_error *err);
+int gs_observe_timings_create(gs_run *run, void **self, gs_error *err);
+
+#endif

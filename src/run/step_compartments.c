@@ -1,0 +1,154 @@
+/* Stepping strategy "per_compartment": every compartment takes its own
+ * steps (compartment_steps.h), the threads sharing (compartment, stretch)
+ * tasks.  The run is cut into stretches between output times and rate
+ * switches; the threads reach the output times one after the other while
+ * others advance later stretches, and the thread that completes a stretch
+ * ending at an output time hands its state to the observers. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "run/compartment_steps.h"
+#include "run/run_internal.h"
+
+/* done_fn's answer when an observer ended the run: the stretches after it
+ * stop like after a failure, without being one. */
+#define STOPPED (-1)
+
+typedef struct {
+  gs_run *run;
+  gs_comp_steps *cs;
+  gs_stretch *st; /* the run's stretches */
+  int *is_output; /* per stretch: its end is an output time */
+  size_t nst;
+  int running;    /* counters are being written by the threads */
+} comps_t;
+
+static int comps_create(gs_run *run, void **self, gs_error *err) {
+  if (run->dist.size > 1)
+    return gs_error_set(err, GS_EINPUT,
+                        "solver.steps: per_compartment runs in one process (its compartments "
+                        "take their own steps one after the other); run it without mpirun, or "
+                        "use steps: shared on %d MPI ranks",
+                        run->dist.size);
+  comps_t *s = gs_calloc(1, sizeof *s, err);
+  if (!s) return GS_ENOMEM;
+  s->run = run;
+  *self = s;
+  return gs_comp_steps_create(run->c, &s->cs, err);
+}
+
+/* The stretches from run->t to the last output time. */
+static int cut_stretches(comps_t *s, gs_error *err) {
+  const gs_case *c = s->run->c;
+  size_t cap = 64;
+  s->st = gs_malloc(cap * sizeof *s->st, err);
+  s->is_output = gs_malloc(cap * sizeof *s->is_output, err);
+  if (!s->st || !s->is_output) return GS_ENOMEM;
+  double at = s->run->t, switch_reached = NAN;
+  for (size_t i = 0; i < c->ntimes; i++) {
+    if (c->times[i] <= at) continue;
+    while (at < c->times[i]) {
+      const double next_switch = gs_model_next_switch(&c->model, at);
+      const double stop = fmin(c->times[i], next_switch);
+      if (s->nst == cap) {
+        cap *= 2;
+        gs_stretch *s2 = realloc(s->st, cap * sizeof *s->st);
+        if (s2) s->st = s2;
+        int *o2 = s2 ? realloc(s->is_output, cap * sizeof *s->is_output) : NULL;
+        if (o2) s->is_output = o2;
+        if (!o2) return gs_error_set(err, GS_ENOMEM, "out of memory for the run's stretches");
+      }
+      s->st[s->nst] = (gs_stretch){at, stop, at == switch_reached};
+      s->is_output[s->nst++] = stop == c->times[i];
+      if (stop == next_switch) switch_reached = stop;
+      at = stop;
+    }
+  }
+  return GS_OK;
+}
+
+static int stretch_done(void *ctx, size_t k, double t, const double *Y, gs_error *err) {
+  comps_t *s = ctx;
+  gs_run *run = s->run;
+  if (!s->is_output[k]) return GS_OK;
+  const double start = gs_run_now();
+  int rc = gs_run_output_time(run, t, Y, err);
+  run->phase[GS_PH_OUTPUTS] += gs_run_now() - start;
+  if (!rc && run->stop) { /* the state of this output time is the run's end */
+    memcpy(run->Y, Y, run->c->ode.n * sizeof(double));
+    run->t = t;
+    return STOPPED;
+  }
+  return rc;
+}
+
+static int comps_advance(void *self, gs_run *run, gs_error *err) {
+  comps_t *s = self;
+  int rc = cut_stretches(s, err);
+  if (rc || !s->nst) return rc;
+  const double start = gs_run_now(), outputs = run->phase[GS_PH_OUTPUTS];
+  s->running = 1;
+  rc = gs_comp_steps_run(s->cs, s->st, s->nst, run->Y, stretch_done, s, err);
+  s->running = 0;
+  const double rhs = gs_comp_steps_rhs_seconds(s->cs);
+  run->phase[GS_PH_RHS] = rhs;
+  run->phase[GS_PH_INTEGRATOR] = gs_run_now() - start - (run->phase[GS_PH_OUTPUTS] - outputs) - rhs;
+  if (rc == STOPPED) return GS_OK; /* run->t and Y: stretch_done's */
+  double bad_t;
+  size_t bad_index;
+  if (rc && gs_comp_steps_bad_rate(s->cs, &bad_t, &bad_index))
+    return gs_run_rate_failure(&run->c->model, bad_t, bad_index, err);
+  if (!rc) run->t = s->st[s->nst - 1].t1;
+  return rc;
+}
+
+static void comps_stats(const void *self, gs_integrator_stats *st) {
+  const comps_t *s = self;
+  memset(st, 0, sizeof *st);
+  if (s->running) { /* the threads write the counters: none to read */
+    st->steps = -1;
+    return;
+  }
+  gs_comp_steps_stats(s->cs, st);
+}
+
+static void comps_print_timings(const void *self, const gs_run *run, FILE *f) {
+  const comps_t *s = self;
+  const size_t ncomp = run->c->model.grid.ncomp;
+  fprintf(f, "  per-compartment steps (steps / rejected / evaluations / ms in rates / ms in tasks):");
+  for (size_t comp = 0; comp < ncomp; comp++) {
+    gs_integrator_stats st;
+    gs_comp_steps_comp_stats(s->cs, comp, &st);
+    double rates, tasks;
+    gs_comp_steps_comp_seconds(s->cs, comp, &rates, &tasks);
+    fprintf(f, "%s %ld/%ld/%ld/%.1f/%.1f", comp ? "," : "", st.steps, st.rejected, st.rhs_evals,
+            1e3 * rates, 1e3 * tasks);
+  }
+  fprintf(f, "; largest coupling mismatch %.2g; %d thread%s, waiting %.4f s in all\n",
+          gs_comp_steps_worst_coupling(s->cs), gs_comp_steps_threads(s->cs),
+          gs_comp_steps_threads(s->cs) == 1 ? "" : "s", gs_comp_steps_wait_seconds(s->cs));
+  gs_comp_steps_print_threads(s->cs, f);
+}
+
+static void comps_free(void *self) {
+  comps_t *s = self;
+  if (!s) return;
+  if (s->cs) {
+    s->run->rep->per_compartment = 1;
+    s->run->rep->worst_coupling = gs_comp_steps_worst_coupling(s->cs);
+  }
+  gs_comp_steps_free(s->cs);
+  free(s->st);
+  free(s->is_output);
+  free(s);
+}
+
+const gs_strategy_type gs_step_compartments = {
+    .name = "per_compartment",
+    .create = comps_create,
+    .advance = comps_advance,
+    .stats = comps_stats,
+    .print_timings = comps_print_timings,
+    .free = comps_free,
+};
