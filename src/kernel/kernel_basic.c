@@ -65,9 +65,24 @@ static void product_row(const void *self, size_t comp, size_t a, size_t b0, size
   for (size_t b = b0; b < b1; b++) out[b - b0] = k->beta0 * k->size[a] * k->size[b];
 }
 
-const gs_kernel_type gs_kernel_constant = {"constant", "beta = beta0", constant_create,
-                                           constant_row, basic_free, NULL};
-const gs_kernel_type gs_kernel_sum = {"sum", "beta = beta0 (u + v) (Golovin)", sized_create,
-                                      sum_row, basic_free, NULL};
-const gs_kernel_type gs_kernel_product = {"product", "beta = beta0 u v", sized_create,
-                                          product_row, basic_free, NULL};
+const gs_kernel_type gs_kernel_constant = {
+    .name = "constant",
+    .summary = "beta = beta0",
+    .create = constant_create,
+    .row = constant_row,
+    .free = basic_free,
+};
+const gs_kernel_type gs_kernel_sum = {
+    .name = "sum",
+    .summary = "beta = beta0 (u + v) (Golovin)",
+    .create = sized_create,
+    .row = sum_row,
+    .free = basic_free,
+};
+const gs_kernel_type gs_kernel_product = {
+    .name = "product",
+    .summary = "beta = beta0 u v",
+    .create = sized_create,
+    .row = product_row,
+    .free = basic_free,
+};

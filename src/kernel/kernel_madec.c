@@ -76,5 +76,9 @@ static void madec_row(const void *self, size_t comp, size_t a, size_t b0, size_t
 }
 
 const gs_kernel_type gs_kernel_madec = {
-    "madec", "beta0 (V+V') [(c+c')^alpha (S-(c+c')/2)^delta]^alpha, liquid content c",
-    madec_create, madec_row, madec_free, NULL};
+    .name = "madec",
+    .summary = "beta0 (V+V') [(c+c')^alpha (S-(c+c')/2)^delta]^alpha, liquid content c",
+    .create = madec_create,
+    .row = madec_row,
+    .free = madec_free,
+};

@@ -92,5 +92,11 @@ static int table_per_compartment(const void *self) {
   return ((const table_kernel *)self)->per_comp;
 }
 
-const gs_kernel_type gs_kernel_table = {"table", "beta0 * C[class][class'] from a CSV file (DEM collision frequencies)",
-                                        table_create, table_row, table_free, table_per_compartment};
+const gs_kernel_type gs_kernel_table = {
+    .name = "table",
+    .summary = "beta0 * C[class][class'] from a CSV file (DEM collision frequencies)",
+    .create = table_create,
+    .row = table_row,
+    .free = table_free,
+    .per_compartment = table_per_compartment,
+};

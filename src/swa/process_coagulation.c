@@ -163,5 +163,10 @@ static int coag_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
 }
 
 const gs_swa_process_type gs_swa_coagulation = {
-    "aggregation", "coagulation, kernels constant/sum/product; weighted (swa) or direct (dsa)",
-    coag_create, coag_rate, coag_jump, NULL, coag_free};
+    .name = "aggregation",
+    .summary = "coagulation, kernels constant/sum/product; weighted (swa) or direct (dsa)",
+    .create = coag_create,
+    .rate = coag_rate,
+    .jump = coag_jump,
+    .free = coag_free,
+};
