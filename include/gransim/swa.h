@@ -27,7 +27,7 @@
 #include <stdint.h>
 
 #include "gransim/cfg.h"
-#include "gransim/pbm.h"
+#include "gransim/grid.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -170,7 +170,7 @@ gs_swa_stats gs_swa_sim_stats(const gs_swa_sim *s);
 typedef struct gs_swa_case {
   gs_cfg *cfg;
   char title[256];
-  gs_model grid_model; /* grid (output bins, compartments, axis names), as in sectional cases */
+  gs_grid grid;        /* output bins, compartments, axis names: the grid section of the case */
   gs_swa_model model;
   int *bin_coord;      /* coordinate of each grid axis */
   double t0;
