@@ -92,6 +92,12 @@ struct gs_swa_model {
   gs_swa_prop_fn prop_fn[GS_SWA_MAX_PROP];
   const void *prop_ctx[GS_SWA_MAX_PROP];
   int has_continuous; /* some process defers (LPDA) */
+  /* The case's grid (its axes name coordinates: bin_coord[a] is the
+   * coordinate of axis a) and directory, for the registered kernels, which
+   * are created on grids; set before the processes are created. */
+  const gs_grid *grid;
+  const int *bin_coord;
+  const char *dir;
 };
 
 /* Register a cached property; returns its column (>= 1) or -1 when full. */

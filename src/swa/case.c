@@ -177,6 +177,11 @@ int gs_swa_case_from_cfg(gs_cfg *cfg, gs_swa_case *c, gs_error *err) {
   if (!rc) rc = gs_case_read_grid_only(root, &c->grid, &size_axes, &grid, err);
   if (!rc) rc = gs_cfg_check_unused(grid, err);
   if (!rc) rc = read_solver(root, c, size_axes, err);
+  if (!rc) {
+    c->model.grid = &c->grid;
+    c->model.bin_coord = c->bin_coord;
+    c->model.dir = gs_cfg_dir(cfg);
+  }
   if (!rc) rc = read_initial(root, c, err);
   if (!rc) rc = read_mechanisms(root, c, err);
   if (!rc) rc = gs_case_read_times(root, &c->t0, &c->times, &c->ntimes, err);
