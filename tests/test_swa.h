@@ -68,7 +68,7 @@ SW_FN int sw_run(gs_swa_case *c, sw_result *r) {
   memset(r, 0, sizeof *r);
   r->ncol = gs_swa_ncolumns(&c->model);
   size_t nobs = c->ntimes * c->model.ncomp * (size_t)r->ncol;
-  size_t nh = c->ntimes * c->model.ncomp * c->grid_model.grid.ncells;
+  size_t nh = c->ntimes * c->model.ncomp * c->grid.ncells;
   r->mean = calloc(nobs, sizeof(double));
   r->ci = calloc(nobs, sizeof(double));
   char dir[] = "/tmp/gransim-swa-XXXXXX";

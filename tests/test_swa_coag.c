@@ -63,7 +63,7 @@ static double t2_cell(double beta0, double t, double a, double b) {
 /* Bins whose exact number is at least 0.5 % of N0: >= 60 % inside 1 CI, all inside 3 CI. */
 static void check_bins(const gs_swa_case *c, const sw_result *r, size_t t, int kernel_sum,
                        double beta0, const char *what) {
-  const gs_axis *ax = &c->grid_model.grid.axis[0];
+  const gs_axis *ax = &c->grid.axis[0];
   int used = 0, inside = 0, far = 0;
   for (size_t k = 0; k < ax->n; k++) {
     double a = ax->edges[k], b = ax->edges[k + 1];

@@ -56,6 +56,13 @@ void gs_case_free(gs_case *c);
  * gs_case_read_grid initialises m (free with gs_model_free); *times is
  * malloc'ed. */
 int gs_case_read_grid(gs_cfg_node *root, gs_model *m, gs_error *err);
+/* The grid section without a sectional model (the SWA solver reads it so):
+ * the axes and compartments into g (free with gs_grid_free, also on
+ * failure), grid.size_axes as a bit mask (bit k: axis k; all axes when
+ * absent), and in *section the grid map, whose other keys the caller reads
+ * before gs_cfg_check_unused. */
+int gs_case_read_grid_only(gs_cfg_node *root, gs_grid *g, int *size_axes, gs_cfg_node **section,
+                           gs_error *err);
 int gs_case_read_times(gs_cfg_node *root, double *t0, double **times, size_t *ntimes,
                        gs_error *err);
 

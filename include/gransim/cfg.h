@@ -86,6 +86,12 @@ int gs_cfg_enum_opt(gs_cfg_node *map, const char *key, const char *const *choice
 int gs_cfg_doubles_req(gs_cfg_node *map, const char *key, int allow_scalar, double **out,
                        size_t *n, gs_error *err);
 
+/* A number or a list of one number per compartment (n compartments) into
+ * out[0..n); def when absent and not required; every entry > lo (lo_strict)
+ * or >= lo.  Shared by the solvers' per-compartment rate constants. */
+int gs_cfg_per_comp(gs_cfg_node *map, const char *key, int required, double def, double lo,
+                    int lo_strict, size_t n, double *out, gs_error *err);
+
 /* Parse a scalar node as a number (helper for sequences). */
 int gs_cfg_node_double(const gs_cfg_node *n, double *out, gs_error *err);
 

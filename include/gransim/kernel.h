@@ -4,7 +4,13 @@
  * Kernels are evaluated between cells of a grid, once, when a mechanism is
  * created (kernel tables are precomputed; nothing is evaluated in the
  * right-hand side).  A kernel type prepares per-cell features in create() and
- * fills a row of beta(a, b) for one cell a against a range of cells b. */
+ * fills a row of beta(a, b) for one cell a against a range of cells b.
+ *
+ * The stochastic solver (src/swa) evaluates the same kernels at particle
+ * states instead of cells, through two optional fields: `at` (beta between
+ * two points) and `form` (a majorant of product form that pairs can be
+ * selected from in O(log N); beta / majorant is the acceptance probability
+ * when the form is not exact).  beta0 is a number or one per compartment. */
 #ifndef GRANSIM_KERNEL_H
 #define GRANSIM_KERNEL_H
 
@@ -16,6 +22,21 @@ extern "C" {
 #endif
 
 /* ---- aggregation kernels ------------------------------------------------- */
+/* Product forms of a majorant beta^(x, y) >= beta(x, y), u the sum of a set
+ * of grid axes of a particle: */
+enum {
+  GS_KERNEL_FORM_CONSTANT, /* beta^ = coef                 */
+  GS_KERNEL_FORM_SUM,      /* beta^ = coef (u(x) + u(y))   */
+  GS_KERNEL_FORM_PRODUCT   /* beta^ = coef u(x) u(y)       */
+};
+
+typedef struct gs_kernel_form {
+  int kind;           /* GS_KERNEL_FORM_* */
+  const double *coef; /* per compartment; owned by the kernel */
+  unsigned axes;      /* bit k: grid axis k is summed into u */
+  int exact;          /* 1: beta equals the form (nothing to reject) */
+} gs_kernel_form;
+
 typedef struct gs_kernel_type {
   const char *name;
   const char *summary;
@@ -29,6 +50,13 @@ typedef struct gs_kernel_type {
   /* Optional: 1 if beta differs between compartments (NULL: it does not), so
    * callers keep one table for all compartments when it does not. */
   int (*per_compartment)(const void *self);
+  /* Optional, for solvers of particles (points, not cells): beta in
+   * compartment comp between particles x and y, one coordinate per grid
+   * axis.  Must agree with row() at the pivots. */
+  double (*at)(const void *self, size_t comp, const double *x, const double *y);
+  /* Optional, with at: the majorant of product form (see above), a true
+   * upper bound of at() for every pair of states the grid's axes can hold. */
+  void (*form)(const void *self, gs_kernel_form *out);
 } gs_kernel_type;
 
 typedef struct gs_kernel {

@@ -27,7 +27,7 @@
 #include <stdint.h>
 
 #include "gransim/cfg.h"
-#include "gransim/pbm.h"
+#include "gransim/grid.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -92,6 +92,12 @@ struct gs_swa_model {
   gs_swa_prop_fn prop_fn[GS_SWA_MAX_PROP];
   const void *prop_ctx[GS_SWA_MAX_PROP];
   int has_continuous; /* some process defers (LPDA) */
+  /* The case's grid (its axes name coordinates: bin_coord[a] is the
+   * coordinate of axis a) and directory, for the registered kernels, which
+   * are created on grids; set before the processes are created. */
+  const gs_grid *grid;
+  const int *bin_coord;
+  const char *dir;
 };
 
 /* Register a cached property; returns its column (>= 1) or -1 when full. */
@@ -170,7 +176,7 @@ gs_swa_stats gs_swa_sim_stats(const gs_swa_sim *s);
 typedef struct gs_swa_case {
   gs_cfg *cfg;
   char title[256];
-  gs_model grid_model; /* grid (output bins, compartments, axis names), as in sectional cases */
+  gs_grid grid;        /* output bins, compartments, axis names: the grid section of the case */
   gs_swa_model model;
   int *bin_coord;      /* coordinate of each grid axis */
   double t0;

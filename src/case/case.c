@@ -63,11 +63,14 @@ static int read_axis(gs_cfg_node *n, gs_axis *ax, gs_error *err) {
   return rc;
 }
 
-static int read_grid(gs_cfg_node *root, gs_model *m, gs_error *err) {
+/* Shared with the SWA solver: the grid section without the sectional model. */
+int gs_case_read_grid_only(gs_cfg_node *root, gs_grid *g, int *size_axes, gs_cfg_node **section,
+                           gs_error *err) {
   gs_cfg_node *grid = NULL, *axes = NULL;
   long ncomp = 1;
   gs_axis ax[GS_MAX_DIM];
   memset(ax, 0, sizeof ax);
+  memset(g, 0, sizeof *g);
   int rc = gs_cfg_map_req(root, "grid", &grid, err);
   if (!rc) rc = gs_cfg_seq_req(grid, "axes", &axes, err);
   if (!rc && (gs_cfg_size(axes) < 1 || gs_cfg_size(axes) > GS_MAX_DIM))
@@ -75,26 +78,43 @@ static int read_grid(gs_cfg_node *root, gs_model *m, gs_error *err) {
   if (!rc) rc = gs_cfg_long_range(grid, "compartments", 0, 1, 1, 1000000, &ncomp, err);
   int dim = rc ? 0 : (int)gs_cfg_size(axes), built = 0;
   for (; !rc && built < dim; built++) rc = read_axis(gs_cfg_item(axes, (size_t)built), &ax[built], err);
-  gs_grid g;
   if (!rc) {
-    rc = gs_grid_init(&g, ax, dim, (size_t)ncomp, err);
+    rc = gs_grid_init(g, ax, dim, (size_t)ncomp, err);
     if (rc == GS_EINPUT) gs_error_prefix(err, "%s:%d: grid.axes: ", gs_cfg_file(axes), gs_cfg_line(axes));
   }
   if (rc) {
     for (int k = 0; k < built; k++) gs_axis_free(&ax[k]);
     return rc;
   }
-  rc = gs_model_init(m, &g, err);
-  gs_cfg_node *sizes = rc ? NULL : gs_cfg_get(grid, "size_axes");
+  *size_axes = (1 << dim) - 1;
+  *section = grid;
+  gs_cfg_node *sizes = gs_cfg_get(grid, "size_axes");
   if (sizes) {
     if ((rc = gs_cfg_require_kind(sizes, GS_CFG_SEQ, err))) return rc;
-    m->size_axes = 0;
+    *size_axes = 0;
     for (size_t i = 0; i < gs_cfg_size(sizes); i++) {
       const char *nm = gs_cfg_scalar(gs_cfg_item(sizes, i));
-      int k = nm ? gs_grid_axis_by_name(&m->grid, nm) : -1;
+      int k = nm ? gs_grid_axis_by_name(g, nm) : -1;
       if (k < 0) return gs_cfg_fail(gs_cfg_item(sizes, i), err, "expected the name of a grid axis");
-      m->size_axes |= 1 << k;
+      *size_axes |= 1 << k;
     }
+  }
+  return GS_OK;
+}
+
+static int read_grid(gs_cfg_node *root, gs_model *m, gs_error *err) {
+  gs_cfg_node *grid = NULL;
+  gs_grid g;
+  int size_axes = 0;
+  int rc = gs_case_read_grid_only(root, &g, &size_axes, &grid, err);
+  if (rc) {
+    gs_grid_free(&g);
+    return rc;
+  }
+  int dim = g.dim;
+  rc = gs_model_init(m, &g, err);
+  if (!rc && size_axes != m->size_axes) {
+    m->size_axes = size_axes;
     for (size_t c = 0; c < m->grid.ncells; c++) {
       double v = 0;
       for (int k = 0; k < dim; k++)

@@ -822,6 +822,28 @@ int gs_cfg_doubles_req(gs_cfg_node *map, const char *key, int allow_scalar, doub
   return GS_OK;
 }
 
+int gs_cfg_per_comp(gs_cfg_node *map, const char *key, int required, double def, double lo,
+                    int lo_strict, size_t n, double *out, gs_error *err) {
+  gs_cfg_node *node = gs_cfg_get(map, key);
+  if (!node) {
+    if (required) return gs_cfg_fail(map, err, "missing key '%s'", key);
+    for (size_t z = 0; z < n; z++) out[z] = def;
+    return GS_OK;
+  }
+  double *v = NULL;
+  size_t cnt = 0;
+  int rc = gs_cfg_doubles_req(map, key, 1, &v, &cnt, err);
+  if (!rc && cnt != 1 && cnt != n)
+    rc = gs_cfg_fail(node, err, "expected one number or one per compartment (%zu), got %zu", n, cnt);
+  for (size_t z = 0; !rc && z < n; z++) {
+    out[z] = v[cnt == 1 ? 0 : z];
+    if (lo_strict ? !(out[z] > lo) : !(out[z] >= lo))
+      rc = gs_cfg_fail(node, err, "expected numbers %s %g (entry %zu is %g)", lo_strict ? ">" : ">=", lo, z, out[z]);
+  }
+  free(v);
+  return rc;
+}
+
 int gs_cfg_check_unused(const gs_cfg_node *map, gs_error *err) {
   if (!map) return GS_OK; /* an absent optional section has no unknown keys */
   int rc = gs_cfg_require_kind(map, GS_CFG_MAP, err);

@@ -86,15 +86,42 @@ static double beta_mass(const void *s, double z) {
   return gsl_sf_beta_inc(d->q + 1, (d->nu - 1) * d->q, z);
 }
 
-static const gs_daughter_type uniform_t = {"uniform", "binary, uniform fragments: b = 2",
-                                           uniform_create, uniform_count, uniform_mass, no_atoms,
-                                           dau_free};
-static const gs_daughter_type halves_t = {"halves", "binary, two equal halves", uniform_create,
-                                          halves_count, halves_mass, halves_atoms, dau_free};
-static const gs_daughter_type power_t = {"power", "b = nu (q+1) z^q with nu = (q+2)/(q+1)",
-                                         power_create, power_count, power_mass, no_atoms, dau_free};
-static const gs_daughter_type beta_t = {"beta", "nu fragments, b = nu Beta(z; a, (nu-1) a)",
-                                        beta_create, beta_count, beta_mass, no_atoms, dau_free};
+static const gs_daughter_type uniform_t = {
+    .name = "uniform",
+    .summary = "binary, uniform fragments: b = 2",
+    .create = uniform_create,
+    .count_below = uniform_count,
+    .mass_below = uniform_mass,
+    .atoms = no_atoms,
+    .free = dau_free,
+};
+static const gs_daughter_type halves_t = {
+    .name = "halves",
+    .summary = "binary, two equal halves",
+    .create = uniform_create,
+    .count_below = halves_count,
+    .mass_below = halves_mass,
+    .atoms = halves_atoms,
+    .free = dau_free,
+};
+static const gs_daughter_type power_t = {
+    .name = "power",
+    .summary = "b = nu (q+1) z^q with nu = (q+2)/(q+1)",
+    .create = power_create,
+    .count_below = power_count,
+    .mass_below = power_mass,
+    .atoms = no_atoms,
+    .free = dau_free,
+};
+static const gs_daughter_type beta_t = {
+    .name = "beta",
+    .summary = "nu fragments, b = nu Beta(z; a, (nu-1) a)",
+    .create = beta_create,
+    .count_below = beta_count,
+    .mass_below = beta_mass,
+    .atoms = no_atoms,
+    .free = dau_free,
+};
 static const gs_daughter_type *const registry[] = {&uniform_t, &halves_t, &power_t, &beta_t, NULL};
 
 const gs_daughter_type *const *gs_daughter_types(void) { return registry; }

@@ -3,22 +3,44 @@
  *   beta = beta0 (V + V') [ (c + c')^alpha (S - (c + c')/2)^delta ]^alpha
  * with V the granule volume (sum of all axes), c = S l / V the liquid content
  * and S = 100 for liquid content in percent (seed 002) or 1 for a fraction
- * (seed 004).  Dry pairs (c + c' = 0) do not aggregate when alpha > 0. */
+ * (seed 004).  Dry pairs (c + c' = 0) do not aggregate when alpha > 0.
+ *
+ * Majorant (stochastic solver): the liquid is one of the axes summed into V,
+ * so 0 <= c <= S and s = c + c' lies in [0, 2S].  On that interval
+ * s^alpha (S - s/2)^delta is largest where alpha/s = delta/(2S - s), at
+ * s* = 2S alpha/(alpha + delta), and raising it to alpha >= 0 keeps the
+ * maximiser, so beta <= beta0 f(s*) (V + V'): a sum-kernel form on the
+ * granule volume that holds for every state, however the population moves.
+ * (Linear case alpha = delta = 1: f(s*) = S^2/2.) */
 #include <math.h>
 #include <stdlib.h>
 
 #include "gransim/kernel.h"
+#include "kernel/size_measure.h"
 
 typedef struct {
-  double beta0, alpha, delta, scale;
+  double *beta0; /* per compartment */
+  int differ;    /* beta0 differs between compartments */
+  double alpha, delta, scale;
+  int dim, axis;  /* axis: the liquid */
   double *volume, *content; /* per cell */
+  double *bound;  /* per compartment: beta0 f(s*), the majorant's coefficient */
 } madec_kernel;
 
 static void madec_free(void *self) {
   madec_kernel *k = self;
+  free(k->beta0);
+  free(k->bound);
   free(k->volume);
   free(k->content);
   free(k);
+}
+
+/* The liquid-content factor of a pair whose contents sum to c. */
+static double madec_f(const madec_kernel *k, double c) {
+  const double s = k->scale;
+  if (k->alpha == 1.0 && k->delta == 1.0) return c * (s - 0.5 * c); /* the tabulated case: no pow() */
+  return pow(pow(c, k->alpha) * pow(fmax(s - 0.5 * c, 0.0), k->delta), k->alpha);
 }
 
 static int madec_create(gs_cfg_node *node, const gs_grid *g, const char *dir, void **self,
@@ -29,7 +51,7 @@ static int madec_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
   if (!k) return GS_ENOMEM;
   const char *liquid = NULL;
   int unit = 0;
-  int rc = gs_cfg_double_range(node, "beta0", 1, 0, 0, 0, HUGE_VAL, 0, &k->beta0, err);
+  int rc = gs_kernel_beta0(node, 1, 0, g, &k->beta0, &k->differ, err);
   if (!rc) rc = gs_cfg_double_range(node, "alpha", 0, 1, 0, 0, HUGE_VAL, 0, &k->alpha, err);
   if (!rc) rc = gs_cfg_double_range(node, "delta", 0, 1, 0, 0, HUGE_VAL, 0, &k->delta, err);
   if (!rc) rc = gs_cfg_enum_opt(node, "liquid_content", units, 0, &unit, err);
@@ -46,35 +68,60 @@ static int madec_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
     k->scale = unit == 0 ? 100.0 : 1.0;
     k->volume = gs_malloc(g->ncells * sizeof(double), err);
     k->content = gs_malloc(g->ncells * sizeof(double), err);
-    if (!k->volume || !k->content) rc = GS_ENOMEM;
+    k->bound = gs_malloc(g->ncomp * sizeof(double), err);
+    if (!k->volume || !k->content || !k->bound) rc = GS_ENOMEM;
   }
   if (rc) {
     madec_free(k);
     return rc;
   }
+  k->dim = g->dim;
+  k->axis = axis;
   for (size_t c = 0; c < g->ncells; c++) {
     double v = g->volume[c];
     k->volume[c] = v;
     k->content[c] = v > 0 ? k->scale * g->x[c * (size_t)g->dim + (size_t)axis] / v : 0.0;
   }
+  double top = k->alpha + k->delta > 0 ? 2 * k->scale * k->alpha / (k->alpha + k->delta) : 0;
+  for (size_t z = 0; z < g->ncomp; z++) k->bound[z] = k->beta0[z] * madec_f(k, top);
   *self = k;
   return GS_OK;
 }
 
 static void madec_row(const void *self, size_t comp, size_t a, size_t b0, size_t b1,
                       double *out) {
-  (void)comp;
   const madec_kernel *k = self;
-  const double va = k->volume[a], ca = k->content[a], s = k->scale;
-  const int linear = k->alpha == 1.0 && k->delta == 1.0; /* the tabulated case: no pow() */
-  for (size_t b = b0; b < b1; b++) {
-    double c = ca + k->content[b];
-    double f = linear ? c * (s - 0.5 * c)
-                      : pow(pow(c, k->alpha) * pow(fmax(s - 0.5 * c, 0.0), k->delta), k->alpha);
-    out[b - b0] = k->beta0 * (va + k->volume[b]) * f;
-  }
+  const double va = k->volume[a], ca = k->content[a];
+  for (size_t b = b0; b < b1; b++)
+    out[b - b0] = k->beta0[comp] * (va + k->volume[b]) * madec_f(k, ca + k->content[b]);
+}
+
+static int madec_per_compartment(const void *self) { return ((const madec_kernel *)self)->differ; }
+
+/* V and c of a particle, as create() takes them at the pivots. */
+static double madec_content(const madec_kernel *k, const double *x, double *v) {
+  *v = gs_size_of((1u << k->dim) - 1, k->dim, x);
+  return *v > 0 ? k->scale * x[k->axis] / *v : 0.0;
+}
+
+static double madec_at(const void *self, size_t comp, const double *x, const double *y) {
+  const madec_kernel *k = self;
+  double vx, vy, cx = madec_content(k, x, &vx), cy = madec_content(k, y, &vy);
+  return k->beta0[comp] * (vx + vy) * madec_f(k, cx + cy);
+}
+
+static void madec_form(const void *self, gs_kernel_form *out) {
+  const madec_kernel *k = self;
+  *out = (gs_kernel_form){.kind = GS_KERNEL_FORM_SUM, .coef = k->bound, .axes = (1u << k->dim) - 1, .exact = 0};
 }
 
 const gs_kernel_type gs_kernel_madec = {
-    "madec", "beta0 (V+V') [(c+c')^alpha (S-(c+c')/2)^delta]^alpha, liquid content c",
-    madec_create, madec_row, madec_free, NULL};
+    .name = "madec",
+    .summary = "beta0 (V+V') [(c+c')^alpha (S-(c+c')/2)^delta]^alpha, liquid content c",
+    .create = madec_create,
+    .row = madec_row,
+    .free = madec_free,
+    .per_compartment = madec_per_compartment,
+    .at = madec_at,
+    .form = madec_form,
+};

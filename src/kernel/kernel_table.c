@@ -8,7 +8,10 @@
  * Keys: file (one file, or a list with one file per compartment), beta0
  * (default 1), measure: volume | diameter (what the edges measure; default
  * volume), axes (which grid axes make the volume; default all).  Grid cells
- * outside the classes take the nearest class; a warning says how many. */
+ * outside the classes take the nearest class; a warning says how many.
+ * A particle off the pivots (stochastic solver) takes the class of its own
+ * size measure, the same way; the majorant is the constant beta0 max C of
+ * its compartment, a true bound as every pair's beta is an entry of C. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -20,15 +23,22 @@
 #include "kernel/size_measure.h"
 
 typedef struct {
-  double beta0;
+  double *beta0;   /* per compartment */
   size_t nclass, ncomp, ncells;
-  int per_comp;    /* one file per compartment */
+  int per_comp;    /* one file per compartment, or beta0 differs between compartments */
   double *table;   /* ncomp * nclass * nclass */
   size_t *cls;     /* per cell: class index */
+  double *edges;   /* nclass + 1 class edges (of the first file) */
+  int diameter, dim;
+  unsigned axes;   /* axes of the size measure */
+  double *bound;   /* per compartment: beta0 max C */
 } table_kernel;
 
 static void table_free(void *self) {
   table_kernel *k = self;
+  free(k->beta0);
+  free(k->edges);
+  free(k->bound);
   free(k->table);
   free(k->cls);
   free(k);
@@ -42,9 +52,10 @@ static int table_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
   int measure = 0, rc;
   double *size = NULL;
   gs_class_table tf = {0};
-  rc = gs_cfg_double_range(node, "beta0", 0, 1.0, 0, 0, HUGE_VAL, 0, &k->beta0, err);
+  int differ = 0;
+  rc = gs_kernel_beta0(node, 0, 1.0, g, &k->beta0, &differ, err);
   if (!rc) rc = gs_cfg_enum_opt(node, "measure", measures, 0, &measure, err);
-  if (!rc && !(size = gs_size_measure(node, g, err))) rc = err->code;
+  if (!rc && !(size = gs_size_measure_mask(node, g, &k->axes, err))) rc = err->code;
   gs_cfg_node *files = rc ? NULL : gs_cfg_get(node, "file");
   if (!rc && !files) rc = gs_cfg_fail(node, err, "missing key 'file' (the kernel table)");
   size_t nfiles = files && gs_cfg_kind_of(files) == GS_CFG_SEQ ? gs_cfg_size(files) : 1;
@@ -52,7 +63,9 @@ static int table_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
     rc = gs_cfg_fail(files, err, "expected one file, or one per compartment (%zu)", g->ncomp);
   k->ncomp = g->ncomp;
   k->ncells = g->ncells;
-  k->per_comp = nfiles > 1;
+  k->per_comp = nfiles > 1 || differ;
+  k->diameter = measure == 1;
+  k->dim = g->dim;
   for (size_t f = 0; !rc && f < nfiles; f++) {
     gs_cfg_node *fn = gs_cfg_kind_of(files) == GS_CFG_SEQ ? gs_cfg_item(files, f) : files;
     const char *name = gs_cfg_scalar(fn);
@@ -65,7 +78,9 @@ static int table_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
       k->nclass = tf.n;
       k->table = gs_malloc(g->ncomp * tf.n * tf.n * sizeof(double), err);
       k->cls = gs_class_table_assign(&tf, size, g->ncells, measure == 1, path, err);
-      if (!k->table || !k->cls) rc = GS_ENOMEM;
+      k->edges = gs_malloc((tf.n + 1) * sizeof(double), err);
+      if (!k->table || !k->cls || !k->edges) rc = GS_ENOMEM;
+      else memcpy(k->edges, tf.edges, (tf.n + 1) * sizeof(double));
     } else if (tf.n != k->nclass) {
       rc = gs_cfg_fail(fn, err, "has %zu classes but the first table has %zu", tf.n, k->nclass);
     }
@@ -77,7 +92,14 @@ static int table_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
   }
   if (!rc) rc = gs_cfg_check_unused(node, err);
   free(size);
+  if (!rc && !(k->bound = gs_malloc(g->ncomp * sizeof(double), err))) rc = GS_ENOMEM;
   if (rc) { table_free(k); return rc; }
+  for (size_t z = 0; z < g->ncomp; z++) {
+    const double *c = k->table + z * k->nclass * k->nclass;
+    double top = 0;
+    for (size_t i = 0; i < k->nclass * k->nclass; i++) top = fmax(top, c[i]);
+    k->bound[z] = k->beta0[z] * top;
+  }
   *self = k;
   return GS_OK;
 }
@@ -85,12 +107,38 @@ static int table_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
 static void table_row(const void *self, size_t comp, size_t a, size_t b0, size_t b1, double *out) {
   const table_kernel *k = self;
   const double *row = k->table + (comp * k->nclass + k->cls[a]) * k->nclass;
-  for (size_t b = b0; b < b1; b++) out[b - b0] = k->beta0 * row[k->cls[b]];
+  for (size_t b = b0; b < b1; b++) out[b - b0] = k->beta0[comp] * row[k->cls[b]];
+}
+
+/* Class of a point, as gs_class_table_assign places cells (nearest class outside). */
+static size_t table_class(const table_kernel *k, const double *x) {
+  double v = gs_size_of(k->axes, k->dim, x), s = k->diameter ? gs_diameter(v) : v;
+  size_t i = 0;
+  while (i + 1 < k->nclass && s >= k->edges[i + 1]) i++;
+  return i;
+}
+
+static double table_at(const void *self, size_t comp, const double *x, const double *y) {
+  const table_kernel *k = self;
+  return k->beta0[comp] * k->table[(comp * k->nclass + table_class(k, x)) * k->nclass + table_class(k, y)];
+}
+
+static void table_form(const void *self, gs_kernel_form *out) {
+  const table_kernel *k = self;
+  *out = (gs_kernel_form){.kind = GS_KERNEL_FORM_CONSTANT, .coef = k->bound, .axes = 0, .exact = 0};
 }
 
 static int table_per_compartment(const void *self) {
   return ((const table_kernel *)self)->per_comp;
 }
 
-const gs_kernel_type gs_kernel_table = {"table", "beta0 * C[class][class'] from a CSV file (DEM collision frequencies)",
-                                        table_create, table_row, table_free, table_per_compartment};
+const gs_kernel_type gs_kernel_table = {
+    .name = "table",
+    .summary = "beta0 * C[class][class'] from a CSV file (DEM collision frequencies)",
+    .create = table_create,
+    .row = table_row,
+    .free = table_free,
+    .per_compartment = table_per_compartment,
+    .at = table_at,
+    .form = table_form,
+};

@@ -71,11 +71,20 @@ static double shear_rate(const void *self, const gs_grid *g, size_t cell) {
   return sqrt(4.0 / (15.0 * M_PI)) * s->a * exp(-s->b / (s->a * s->a * R));
 }
 
-static const gs_selection_type power_type = {"power", "S = s0 v^exponent", power_create,
-                                             power_rate, sel_free};
+static const gs_selection_type power_type = {
+    .name = "power",
+    .summary = "S = s0 v^exponent",
+    .create = power_create,
+    .rate = power_rate,
+    .free = sel_free,
+};
 static const gs_selection_type shear_type = {
-    "shear", "S = sqrt(4/(15 pi)) G exp(-B/(G^2 R)) (seed 002 eq. 2.7)", shear_create,
-    shear_rate, sel_free};
+    .name = "shear",
+    .summary = "S = sqrt(4/(15 pi)) G exp(-B/(G^2 R)) (seed 002 eq. 2.7)",
+    .create = shear_create,
+    .rate = shear_rate,
+    .free = sel_free,
+};
 extern const gs_selection_type gs_selection_dem_impact;
 static const gs_selection_type *const registry[] = {&power_type, &shear_type, &gs_selection_dem_impact,
                                                     NULL};

@@ -107,5 +107,9 @@ static double dem_rate(const void *self, const gs_grid *g, size_t cell) {
 }
 
 const gs_selection_type gs_selection_dem_impact = {
-    "dem_impact", "S = scale f_impact(class) P(U > U_break) from DEM impact statistics (seed 000 eq. 12)",
-    dem_create, dem_rate, dem_free};
+    .name = "dem_impact",
+    .summary = "S = scale f_impact(class) P(U > U_break) from DEM impact statistics (seed 000 eq. 12)",
+    .create = dem_create,
+    .rate = dem_rate,
+    .free = dem_free,
+};

@@ -35,9 +35,9 @@ int gs_swa_case_wanted(gs_cfg *cfg) {
   return s && !strcmp(s, "swa");
 }
 
-static int read_solver(gs_cfg_node *root, gs_swa_case *c, gs_error *err) {
+static int read_solver(gs_cfg_node *root, gs_swa_case *c, int size_axes, gs_error *err) {
   gs_swa_model *m = &c->model;
-  const gs_grid *g = &c->grid_model.grid;
+  const gs_grid *g = &c->grid;
   gs_cfg_node *n = gs_cfg_get(root, "solver");
   const char *method;
   long particles, runs, seed;
@@ -83,7 +83,7 @@ static int read_solver(gs_cfg_node *root, gs_swa_case *c, gs_error *err) {
   /* granule volume: the coordinates of the grid's size_axes, unless listed */
   unsigned def = 0;
   for (int a = 0; a < g->dim; a++)
-    if (c->grid_model.size_axes & (1 << a)) def |= 1u << c->bin_coord[a];
+    if (size_axes & (1 << a)) def |= 1u << c->bin_coord[a];
   if ((rc = gs_swa_coord_mask(n, "size_coordinates", m, def, &m->size_mask, err))) return rc;
   for (int k = 0; k < m->ncoord; k++) m->density[k] = 1;
   if (gs_cfg_get(n, "densities")) {
@@ -131,7 +131,7 @@ static int read_initial(gs_cfg_node *root, gs_swa_case *c, gs_error *err) {
     long comp = 1;
     int rc = gs_cfg_require_kind(e, GS_CFG_MAP, err);
     if (!rc) rc = gs_cfg_long_range(e, "compartment", 0, 1, 1, (long)c->model.ncomp, &comp, err);
-    if (!rc) rc = gs_swa_spec_read(e, &c->model, &c->grid_model.grid, c->bin_coord, "number", &set->spec[i], err);
+    if (!rc) rc = gs_swa_spec_read(e, &c->model, &c->grid, c->bin_coord, "number", &set->spec[i], err);
     set->n = i + 1;
     set->comp[i] = (size_t)(comp - 1);
     if (rc) return rc;
@@ -170,8 +170,18 @@ int gs_swa_case_from_cfg(gs_cfg *cfg, gs_swa_case *c, gs_error *err) {
   if (!rc) rc = gs_cfg_string_opt(root, "title", "", &title, err);
   if (!rc) snprintf(c->title, sizeof c->title, "%s", title);
   if (!rc) rc = gs_cfg_string_opt(root, "description", "", &desc, err);
-  if (!rc) rc = gs_case_read_grid(root, &c->grid_model, err);
-  if (!rc) rc = read_solver(root, c, err);
+  /* the grid alone: the SWA solver has no sectional state (grid.carried is
+   * not read, so it is reported as an unknown key) */
+  gs_cfg_node *grid = NULL;
+  int size_axes = 0;
+  if (!rc) rc = gs_case_read_grid_only(root, &c->grid, &size_axes, &grid, err);
+  if (!rc) rc = gs_cfg_check_unused(grid, err);
+  if (!rc) rc = read_solver(root, c, size_axes, err);
+  if (!rc) {
+    c->model.grid = &c->grid;
+    c->model.bin_coord = c->bin_coord;
+    c->model.dir = gs_cfg_dir(cfg);
+  }
   if (!rc) rc = read_initial(root, c, err);
   if (!rc) rc = read_mechanisms(root, c, err);
   if (!rc) rc = gs_case_read_times(root, &c->t0, &c->times, &c->ntimes, err);
@@ -203,7 +213,7 @@ void gs_swa_case_free(gs_swa_case *c) {
   free(c->bin_coord);
   free(c->sieves);
   free(c->times);
-  gs_model_free(&c->grid_model);
+  gs_grid_free(&c->grid);
   gs_cfg_free(c->cfg);
   memset(c, 0, sizeof *c);
 }

@@ -91,22 +91,5 @@ int gs_swa_coord_mask(gs_cfg_node *node, const char *key, const gs_swa_model *m,
 
 int gs_swa_per_comp(gs_cfg_node *node, const char *key, int required, double def, double lo,
                     int lo_strict, const gs_swa_model *m, double *out, gs_error *err) {
-  gs_cfg_node *n = gs_cfg_get(node, key);
-  if (!n) {
-    if (required) return gs_cfg_fail(node, err, "missing key '%s'", key);
-    for (size_t z = 0; z < m->ncomp; z++) out[z] = def;
-    return GS_OK;
-  }
-  double *v = NULL;
-  size_t cnt = 0;
-  int rc = gs_cfg_doubles_req(node, key, 1, &v, &cnt, err);
-  if (!rc && cnt != 1 && cnt != m->ncomp)
-    rc = gs_cfg_fail(n, err, "expected one number or one per compartment (%zu), got %zu", m->ncomp, cnt);
-  for (size_t z = 0; !rc && z < m->ncomp; z++) {
-    out[z] = v[cnt == 1 ? 0 : z];
-    if (lo_strict ? !(out[z] > lo) : !(out[z] >= lo))
-      rc = gs_cfg_fail(n, err, "expected numbers %s %g (entry %zu is %g)", lo_strict ? ">" : ">=", lo, z, out[z]);
-  }
-  free(v);
-  return rc;
+  return gs_cfg_per_comp(node, key, required, def, lo, lo_strict, m->ncomp, out, err);
 }

@@ -74,7 +74,7 @@ static int attr_num(hid_t loc, const char *name, double value) {
 }
 
 static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results *r) {
-  const gs_grid *g = &c->grid_model.grid;
+  const gs_grid *g = &c->grid;
   const gs_swa_model *m = &c->model;
   size_t nt = c->ntimes, nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m);
   hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);

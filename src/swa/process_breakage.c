@@ -104,5 +104,10 @@ static int brk_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
 }
 
 const gs_swa_process_type gs_swa_breakage = {
-    "breakage", "binary breakage, rate s0 v^exponent, Beta(a, b) fragments, mass-based weights",
-    brk_create, brk_rate, brk_jump, NULL, brk_free};
+    .name = "breakage",
+    .summary = "binary breakage, rate s0 v^exponent, Beta(a, b) fragments, mass-based weights",
+    .create = brk_create,
+    .rate = brk_rate,
+    .jump = brk_jump,
+    .free = brk_free,
+};

@@ -68,5 +68,10 @@ static int feed_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
 }
 
 const gs_swa_process_type gs_swa_feed = {
-    "feed", "inception of particles into a compartment; equal (EWI) or variable (VWI) weights",
-    feed_create, feed_rate, feed_jump, NULL, feed_free};
+    .name = "feed",
+    .summary = "inception of particles into a compartment; equal (EWI) or variable (VWI) weights",
+    .create = feed_create,
+    .rate = feed_rate,
+    .jump = feed_jump,
+    .free = feed_free,
+};

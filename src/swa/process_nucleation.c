@@ -135,5 +135,10 @@ static int nuc_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
 }
 
 const gs_swa_process_type gs_swa_nucleation = {
-    "immersion_nucleation", "droplet addition and unified immersion-nucleation jump (seed 001)",
-    nuc_create, nuc_rate, nuc_jump, NULL, nuc_free};
+    .name = "immersion_nucleation",
+    .summary = "droplet addition and unified immersion-nucleation jump (seed 001)",
+    .create = nuc_create,
+    .rate = nuc_rate,
+    .jump = nuc_jump,
+    .free = nuc_free,
+};

@@ -60,5 +60,9 @@ static void pen_advance(const void *self, size_t z, double *x, double dt) {
 }
 
 const gs_swa_process_type gs_swa_penetration = {
-    "penetration", "liquid penetration into the pores, continuous (LPDA, closed form)",
-    pen_create, NULL, NULL, pen_advance, pen_free};
+    .name = "penetration",
+    .summary = "liquid penetration into the pores, continuous (LPDA, closed form)",
+    .create = pen_create,
+    .advance = pen_advance,
+    .free = pen_free,
+};

@@ -57,5 +57,10 @@ static int transfer_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *er
 }
 
 const gs_swa_process_type gs_swa_transfer = {
-    "transfer", "transport to the next compartment, weights scaled by the sample volumes",
-    transfer_create, transfer_rate, transfer_jump, NULL, transfer_free};
+    .name = "transfer",
+    .summary = "transport to the next compartment, weights scaled by the sample volumes",
+    .create = transfer_create,
+    .rate = transfer_rate,
+    .jump = transfer_jump,
+    .free = transfer_free,
+};

@@ -31,7 +31,7 @@ static unsigned long run_seed(uint64_t seed, size_t run) {
 
 /* Bin compartment z of a run on the case grid: numbers per cell and outside. */
 static void bin(const gs_swa_case *c, gs_swa_sim *s, size_t z, double *hist, double *outside) {
-  const gs_grid *g = &c->grid_model.grid;
+  const gs_grid *g = &c->grid;
   const swa_comp *cp = &s->comp[z];
   size_t nc = (size_t)c->model.ncoord;
   for (size_t i = 0; i < cp->n; i++) {
@@ -66,7 +66,7 @@ static void summary_row(const gs_swa_model *m, const gs_swa_summary *s, double *
 static int one_run(const gs_swa_case *c, size_t r, double *obs, double *hist, double *extra,
                    double *sieve, gs_swa_stats *stats, gs_error *err) {
   const gs_swa_model *m = &c->model;
-  size_t nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid_model.grid.ncells;
+  size_t nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid.ncells;
   gs_swa_sim *s = gs_swa_sim_alloc(m, run_seed(c->seed, r), err);
   if (!s) return err->code;
   int rc = gs_swa_case_init_run(c, s, err);
@@ -129,7 +129,7 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
                     double *ci_out, gs_swa_report *rep, gs_error *err) {
   const gs_swa_model *m = &c->model;
   size_t runs = c->runs, nz = m->ncomp, nt = c->ntimes;
-  size_t ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid_model.grid.ncells;
+  size_t ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid.ncells;
   size_t nobs = nt * nz * ncol, nhist = nt * nz * ncells, nextra = nt * nz * 2;
   size_t nsv = nt * nz * c->nsieve;
   if ((double)runs * (double)nhist > 5e7)
