@@ -54,7 +54,7 @@ static int sectional(const char *body, gs_summary *s) {
   size_t n = sc.model.nstate + sc.model.nledger;
   double *y = calloc(n, sizeof(double));
   gs_error err = {0};
-  gs_run_options opt = {NULL, 0, 0, 0};
+  gs_run_options opt = {0};
   gs_run_report rep;
   rc = gs_case_run(&sc, &opt, y, &rep, &err);
   if (rc) fprintf(stderr, "sectional run failed: %s\n", err.msg);
