@@ -8,28 +8,31 @@ source "$(dirname "$0")/cli-lib.sh" "$@"
 run_rc 0 "$BIN" dem --help
 stdout_has "collision_kernel.csv"
 
-# the example, shortened to 2000 steps
+# the example, shortened to 2000 steps; its mesh paths are relative to the case
+# file, so the copy gets the bundled meshes beside it
 sed 's/duration: 0.02/duration: 0.01/; s/vtk_every: 0.01/vtk_every: 0.005/' \
-  "$SRC/examples/dem-corimix.yaml" | sed "s|\.\./\.\./shared|$SRC/../shared|" > "$WORK/corimix.yaml"
-if [ -f "$SRC/../shared/data/corimix/shell.stl" ]; then
-  run_rc 0 "$BIN" dem "$WORK/corimix.yaml" --out "$WORK/out" --quiet
-  for f in timeseries.csv collisions.csv collision_kernel.csv impacts.csv impact_velocity.csv \
-           impact_table.csv impact_table_impeller.csv impact_table_shell.csv velocity.csv residence.csv \
-           residence_class.csv vtk/particles_000001.vtk vtk/impeller_000001.vtk; do
-    [ -s "$WORK/out/$f" ] || fail "missing $f"
-  done
-  # collisions happened between every pair of classes, and impacts on the impeller
-  awk -F, 'NR > 2 && $5 <= 0 { bad = 1 } END { exit bad }' "$WORK/out/collisions.csv" ||
-    fail "a class pair without collisions: $(cat "$WORK/out/collisions.csv")"
-  grep -q '^impeller,1,fine,[1-9]' "$WORK/out/impacts.csv" || fail "no impeller impacts"
-  # the PBM reads the collision table as its aggregation kernel
-  cp "$WORK/out/collision_kernel.csv" "$WORK/C.csv"
-  # the PBM cases below share their grid and initial distribution
-  pbm_head='grid:
+  "$SRC/examples/dem-corimix.yaml" > "$WORK/corimix.yaml"
+grep -q '^  duration: 0.01$' "$WORK/corimix.yaml" || fail "could not shorten the CoriMix example"
+mkdir -p "$WORK/data"
+ln -s "$SRC/examples/data/corimix" "$WORK/data/corimix"
+run_rc 0 "$BIN" dem "$WORK/corimix.yaml" --out "$WORK/out" --quiet
+for f in timeseries.csv collisions.csv collision_kernel.csv impacts.csv impact_velocity.csv \
+         impact_table.csv impact_table_impeller.csv impact_table_shell.csv velocity.csv residence.csv \
+         residence_class.csv vtk/particles_000001.vtk vtk/impeller_000001.vtk; do
+  [ -s "$WORK/out/$f" ] || fail "missing $f"
+done
+# collisions happened between every pair of classes, and impacts on the impeller
+awk -F, 'NR > 2 && $5 <= 0 { bad = 1 } END { exit bad }' "$WORK/out/collisions.csv" ||
+  fail "a class pair without collisions: $(cat "$WORK/out/collisions.csv")"
+grep -q '^impeller,1,fine,[1-9]' "$WORK/out/impacts.csv" || fail "no impeller impacts"
+# the PBM reads the collision table as its aggregation kernel
+cp "$WORK/out/collision_kernel.csv" "$WORK/C.csv"
+# the PBM cases below share their grid and initial distribution
+pbm_head='grid:
   axes:
     - {name: solid, type: geometric, min: 1.0e-11, max: 1.0e-6, cells: 20, zero_first: true}
 initial: {type: exponential, number: 1, mean: 4.0e-9}'
-  cat > "$WORK/pbm.yaml" <<YAML
+cat > "$WORK/pbm.yaml" <<YAML
 title: DEM collision frequencies as the aggregation kernel
 $pbm_head
 mechanisms:
@@ -37,15 +40,15 @@ mechanisms:
     kernel: {type: table, file: C.csv, measure: diameter, beta0: 1.0e-3}
 output: {end: 1, count: 2}
 YAML
-  if "$BIN" check "$WORK/pbm.yaml" > "$WORK/pbm.out" 2>&1; then :; else
-    cat "$WORK/pbm.out" >&2
-    fail "the PBM does not accept collision_kernel.csv"
-  fi
-  # ... and the impact tables as its breakage selection (all walls, the impeller alone)
-  cp "$WORK/out/impact_table.csv" "$WORK/I.csv"
-  cp "$WORK/out/impact_table_impeller.csv" "$WORK/Iimp.csv"
-  for t in I.csv Iimp.csv; do
-    cat > "$WORK/pbm-break.yaml" <<YAML
+if "$BIN" check "$WORK/pbm.yaml" > "$WORK/pbm.out" 2>&1; then :; else
+  cat "$WORK/pbm.out" >&2
+  fail "the PBM does not accept collision_kernel.csv"
+fi
+# ... and the impact tables as its breakage selection (all walls, the impeller alone)
+cp "$WORK/out/impact_table.csv" "$WORK/I.csv"
+cp "$WORK/out/impact_table_impeller.csv" "$WORK/Iimp.csv"
+for t in I.csv Iimp.csv; do
+  cat > "$WORK/pbm-break.yaml" <<YAML
 title: DEM wall impacts as the breakage selection
 $pbm_head
 mechanisms:
@@ -54,14 +57,11 @@ mechanisms:
     daughters: {type: halves}
 output: {end: 1, count: 2}
 YAML
-    if "$BIN" check "$WORK/pbm-break.yaml" > "$WORK/pbm.out" 2>&1; then :; else
-      cat "$WORK/pbm.out" "$WORK/$t" >&2
-      fail "the PBM does not accept $t (impact table) as a dem_impact selection"
-    fi
-  done
-else
-  echo "cli_dem: shared CoriMix meshes not present; skipping the example run"
-fi
+  if "$BIN" check "$WORK/pbm-break.yaml" > "$WORK/pbm.out" 2>&1; then :; else
+    cat "$WORK/pbm.out" "$WORK/$t" >&2
+    fail "the PBM does not accept $t (impact table) as a dem_impact selection"
+  fi
+done
 
 # errors name file, line, key and value
 cat > "$WORK/bad.yaml" <<'YAML'
@@ -111,7 +111,6 @@ awk -v dir="$ex" '
 n=0
 for f in "$ex"/*.yaml; do
   [ -e "$f" ] || break
-  sed -i "s|\.\./\.\./shared|$SRC/../shared|" "$f"
   run_rc 0 "$BIN" dem --check "$f"
   stdout_has "valid"
   n=$((n + 1))

@@ -2,16 +2,13 @@
 # the table read back by a case (gransim check); bad arguments.
 source "$(dirname "$0")/cli-lib.sh" "$@"
 
-data=$SRC/../shared/data/corimix/dem_dumps
+data=$SRC/examples/data/corimix/dem_dumps
 run_rc 2 "$BIN" dem-reduce
 run_rc 2 "$BIN" dem-reduce "$data" --contacts bogus
 stderr_has "expected auto, ppcoll, cc or cc-partner"
 run_rc 1 "$BIN" dem-reduce "$WORK"
 stderr_has "no pair of collision<STEP>.atom and impact<STEP>.atom"
-if [ ! -d "$data" ]; then
-  echo "cli_dem_reduce: SKIP the bundled dumps ($data not found)"
-  exit 0
-fi
+[ -d "$data" ] || fail "the bundled dumps are missing: $data"
 # all 16 types have one diameter: the table needs the PBM's edges
 run_rc 1 "$BIN" dem-reduce "$data" --out "$WORK/t.csv"
 stderr_has "give the PBM's class edges"

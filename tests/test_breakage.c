@@ -1,5 +1,5 @@
 /* Breakage against the analytical solutions T4 (Ziff & McGrady) and T5
- * (aggregation + linear breakage) of analytic-solutions.md, and mass
+ * (aggregation + linear breakage) of docs/validation.md, and mass
  * conservation of every daughter distribution in full runs (gs_case_run,
  * balance checks on), for both redistribution schemes.
  *

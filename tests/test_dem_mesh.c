@@ -426,14 +426,15 @@ static void impeller_hit(const char *path) {
   CHECK(v[0][0][1] < 0.8 * lig2[1]);
 }
 
-/* The Lödige CoriMix meshes (when the shared data is present). */
+/* The Lödige CoriMix impeller, bundled in examples/data/corimix/. */
 static void test_corimix(void) {
   const char *dir = getenv("GRANSIM_SOURCE_DIR");
   char path[4096];
-  snprintf(path, sizeof path, "%s/../shared/data/corimix/impeller.stl", dir ? dir : "..");
+  snprintf(path, sizeof path, "%s/examples/data/corimix/impeller.stl", dir ? dir : "..");
   FILE *fp = fopen(path, "r");
   if (!fp) {
-    fprintf(stderr, "no CoriMix meshes at %s; skipped\n", path);
+    fprintf(stderr, "the bundled CoriMix impeller is missing: %s\n", path);
+    CHECK(0);
     return;
   }
   fclose(fp);

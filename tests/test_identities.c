@@ -4,7 +4,8 @@
  *
  *  aggregation (cell average and fixed pivot; constant, sum, product, madec
  *  and table kernels): dydt equals an independent, unoptimised reference
- *  implementation of the two schemes (T8 of analytic-solutions.md); the volume
+ *  implementation of the two schemes (fixed pivot: Kumar & Ramkrishna 1996;
+ *  cell average: Kumar et al. 2006); the volume
  *  of every axis is conserved up to the ledger's "lost" entry; births/deaths
  *  = 1/2; dM0/dt = -1/2 sum_ab beta_ab N_a N_b with beta evaluated here from
  *  the kernel formulas; on a ratio-2 geometric grid the fixed pivot scheme is
@@ -351,7 +352,7 @@ static void test_hounslow(void) {
     double y[n], d[n], dl[2], H[n];
     for (size_t i = 0; i < n; i++) y[i] = i + 1 < n ? tl_uniform(&r) : 0.0; /* top empty: no loss */
     gs_model_rhs(m, NULL, 0, y, d, dl);
-    /* Hounslow's equation (analytic-solutions.md T8), 0-based */
+    /* Hounslow's equation (Hounslow, Ryall & Marshall 1988), 0-based */
     double dmax = 0, hmax = 0, m0 = 0, m1 = 0, dsum = 0;
 #define BETA(i, j) table_C[(i) * n + (j)]
     for (size_t i = 0; i < n; i++) {

@@ -1,6 +1,6 @@
 /* SWA coagulation against the analytic solutions T1 (constant kernel) and
  * T2 (sum kernel) of an exponential initial distribution
- * (reference/analytic-solutions.md): the ensemble mean of M0, M2 and of the
+ * (docs/validation.md): the ensemble mean of M0, M2 and of the
  * number in every grid cell must lie within the 90 % confidence interval
  * (a 90 % interval estimated from 20 runs: some bins fall outside, so we
  * require >= 60 % of the bins inside 1 CI and all inside 3 CI, i.e. 4.9

@@ -1,5 +1,5 @@
 /* The published-error target of issue 2: on Vale & McKenna's case study 1
- * (T7b of analytic-solutions.md: 2-D constant kernel, product of Gamma(2)
+ * (T7b of docs/validation.md: 2-D constant kernel, product of Gamma(2)
  * shapes, N0 = 1, m10 = 1, m20 = 5, tau = 100) the cell-average technique
  * must give M20/M30 errors below the published fixed-pivot errors of Vale &
  * McKenna 2005, Table 1:  30x30: M20 13.1 %, M30 45.6 %;  50x50: 4.3 %, 13.7 %.

@@ -165,15 +165,14 @@ static int cmd_list(void) {
 
 /* Blocks up to 32 MiB come from the heap and stay mapped once freed, so that
  * a block of about the same size allocated later reuses pages already
- * touched: on the project's VM a fresh page costs ~13 µs and unmapping
- * costs too, and an MPI rebalancing move frees one rank's integrator and
- * allocates another (3-5 ms of fresh pages and 3-4 ms of unmapping per
- * move in the 32-compartment case).  The heap also grows 64 MiB at a time
- * (address space only) and asks for transparent huge pages there, where a
- * first touch costs ~0.15 ms per 2 MiB instead of ~13 µs per 4 KiB (the
- * CoriMix example took ~1 900 page faults, ~25 ms, of which ~190 while it
- * ran); all threads share that heap (one malloc arena: gransim's loops do
- * not allocate).  glibc and Linux only; elsewhere a no-op. */
+ * touched: a fresh page's first touch (a page fault) and unmapping both
+ * cost time, and an MPI rebalancing move frees one rank's integrator and
+ * allocates another of about the same size.  The heap also grows 64 MiB at
+ * a time (address space only) and asks for transparent huge pages there,
+ * whose first touch costs far less per byte than 4 KiB pages; all threads
+ * share that heap (one malloc arena: gransim's loops do not allocate).  The
+ * measurements are in docs/performance.md ("page faults").  glibc and Linux
+ * only; elsewhere a no-op. */
 static void keep_freed_memory(void) {
 #ifdef __GLIBC__
   mallopt(M_MMAP_THRESHOLD, 32 << 20);

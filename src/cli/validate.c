@@ -49,7 +49,7 @@ typedef struct {
   const char *note; /* printed under the table, or NULL */
 } study_t;
 
-/* ---- exact moments (analytic-solutions.md) --------------------------------- */
+/* ---- exact moments (the analytic solutions of docs/validation.md) ---------- */
 static void t1_exact(double t, double *m) { m[0] = 2 / (2 + t); m[1] = 1; m[2] = 2 + t; }
 /* T1 discrete, c_1(0) = 1 at v = 1: M2 = M2(0) + beta0 M1^2 t */
 static void t1d_exact(double t, double *m) { m[0] = 2 / (2 + t); m[1] = 1; m[2] = 1 + t; }

@@ -2,9 +2,10 @@
  * (the per-compartment steps' records): blocks given back are handed out
  * again, last in first out (still in cache), and the pool takes its memory
  * from the system in 2 MiB-aligned chunks marked for transparent huge
- * pages.  On the project's VM a first write to a 4 KiB page costs ~14 µs
- * (a guest fault and the hypervisor's own); a 2 MiB huge page costs
- * ~0.15 ms, 1/50 of that per byte.  Where the kernel gives no huge pages the
+ * pages: the first write to a fresh page takes a page fault (in a virtual
+ * machine the hypervisor's as well), and a huge page costs far less per byte
+ * than the 4 KiB pages it replaces (figures in docs/performance.md, "page
+ * faults").  Where the kernel gives no huge pages the
  * chunks are plain pages and only the reuse helps.  Safe to use from
  * several threads at once. */
 #ifndef GS_BLOCK_POOL_H

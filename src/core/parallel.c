@@ -24,12 +24,12 @@ void gs_parallel_init(int *argc, char ***argv) {
   MPI_Initialized(&up);
   if (up || !under_mpirun()) return;
   /* Open MPI's shared-memory transport sends messages above 4 KiB by a
-   * rendezvous with a single-copy system call: a 16 x 16 compartment's
-   * numbers and carried volumes (6 KiB) took 7 µs to exchange on the
-   * project's VM, against 2 µs sent eagerly.  Compartments of up to 32 KiB go
-   * eagerly unless the user set the limit in the environment (a value in an
-   * MCA parameter file is overridden; other MPIs ignore the variables; Open
-   * MPI 5 calls the transport "sm"). */
+   * rendezvous with a single-copy system call, which takes several times as
+   * long as an eager send for a compartment's numbers and carried volumes
+   * (a few KiB; docs/performance.md, "The boundary exchange").  Compartments
+   * of up to 32 KiB go eagerly unless the user set the limit in the
+   * environment (a value in an MCA parameter file is overridden; other MPIs
+   * ignore the variables; Open MPI 5 calls the transport "sm"). */
   setenv("OMPI_MCA_btl_vader_eager_limit", "32768", 0);
   setenv("OMPI_MCA_btl_sm_eager_limit", "32768", 0);
   int provided;

@@ -6,10 +6,10 @@
 #include "gransim/grid.h"
 
 /* Stable sort of pts[0..n) by volume, tmp[0..n) scratch; returns where the
- * sorted points are (pts or tmp).  Bottom-up merges, inline: qsort's
- * comparator calls were most of an output time's summaries (~6 µs per
- * compartment of 256 cells; rank 0's work alone under MPI).  Stable, so
- * equal volumes merge in their original order. */
+ * sorted points are (pts or tmp).  Bottom-up merges, inline: qsort calls
+ * its comparator through a pointer for every comparison, and that was most
+ * of the time of an output time's summaries, which under MPI rank 0 does
+ * alone.  Stable, so equal volumes merge in their original order. */
 static gs_size_point *sort_by_volume(gs_size_point *pts, gs_size_point *tmp, size_t n) {
   gs_size_point *src = pts, *dst = tmp;
   for (size_t width = 1; width < n; width *= 2) {

@@ -5,9 +5,8 @@
  * Why: the result file's large series (/number, /carried) are chunked by up
  * to 64 KiB of output times, and every commit writes whole rows.  Through
  * H5Dwrite, HDF5 iterates the selections and runs its filter pipeline chunk
- * by chunk, which cost ~10 ms per MB here (CoriMix example: 16 ms of a
- * 0.15 s run for 2 MB; zlib's per-chunk set-up inside the deflate filter had
- * cost more still).
+ * by chunk, setting zlib up again for every chunk; for small cases that
+ * cost a sizeable share of the whole run (docs/performance.md).
  * Written directly, a chunk is one pwrite plus an index entry, and one zlib
  * stream is reset between chunks instead of rebuilt.  The file is the same
  * as H5Dwrite would make it: the deflate filter's chunks are zlib streams
@@ -42,13 +41,13 @@ herr_t gs_chunk_write_rows(gs_chunk_writer *w, hid_t ds, hsize_t start, hsize_t 
  * chunk_rows: whole chunks, the last one padded with zeros past the rows
  * given (beyond the dataset's extent, where no reader looks; a later write
  * of those rows replaces them).  The small series of the result file: one
- * H5Dwrite of a few rows had cost ~65 µs, a direct chunk a few. */
+ * H5Dwrite of a few rows costs many times a direct chunk. */
 herr_t gs_chunk_write_blocks(gs_chunk_writer *w, hid_t ds, hsize_t start, hsize_t count,
                              size_t chunk_rows, size_t values, const double *rows);
 
 /* The same for one row deflated in pieces, so that a caller can interleave
  * other work (rank 0 of an MPI run writes while it waits for the others,
- * and a 512 KiB row takes ~2 ms to deflate): gs_chunk_row_begin(w, bytes,
+ * and a large row takes milliseconds to deflate): gs_chunk_row_begin(w, bytes,
  * level), then gs_chunk_row_feed() over consecutive spans of the row, then
  * gs_chunk_row_write() with the whole row (stored raw when zlib failed or
  * did not shrink it).  The compressed chunk is the one gs_chunk_write_rows

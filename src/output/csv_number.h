@@ -1,8 +1,8 @@
-/* A number of summary.csv: the text printf's "%.10g" gives, written ~3.5x
- * faster (56 against 200 ns here).  Rank 0 formats 16 numbers per
- * compartment at every output time; through fprintf that was ~12 µs of the
- * ~75 µs an output time of the CoriMix example costs it, on the other
- * ranks' path under MPI. */
+/* A number of summary.csv: the text printf's "%.10g" gives, written several
+ * times faster.  Rank 0 formats 16 numbers per compartment at every output
+ * time, and under MPI that work lies on the other ranks' path; through
+ * fprintf it was a sizeable part of an output time's cost
+ * (docs/performance.md). */
 #ifndef GRANSIM_IO_CSV_NUMBER_H
 #define GRANSIM_IO_CSV_NUMBER_H
 

@@ -37,9 +37,9 @@ gs_deferred_output *gs_deferred_output_create(gs_output *o, const gs_model *m, i
     gs_deferred_output_free(q);
     return NULL;
   }
-  /* touched now, before the steps: a fresh page costs ~13 µs on the
-   * project's VM, and the first pushes of the 32-compartment case (800 KB
-   * each) had cost rank 0 3 ms per output time while the others waited */
+  /* touched now, before the steps: first touches of fresh pages are slow,
+   * and in the first pushes of large cases they held up rank 0 at output
+   * times while the other ranks waited */
   memset(q->y, 0, (size_t)q->depth * q->n * sizeof *q->y);
   return q;
 }

@@ -23,8 +23,8 @@
  * rows) once `checkpoint` seconds of
  * wall time have passed since the last commit, when the buffer is full
  * (PENDING_BYTES) and at the end: per-time writes and flushes cost more than
- * the integration of small cases (CoriMix example: 0.4 ms per output time,
- * 86 of them in a 0.17 s run).  A killed run loses at most the last interval,
+ * the integration of small cases such as the CoriMix example.  A killed run
+ * loses at most the last interval,
  * which --resume recomputes.  checkpoint = 0 commits every output time.
  * The small series are kept in memory until the commit (one write of several
  * rows each); the large ones (/number, /carried), chunked by up to 64 KiB of
@@ -98,7 +98,7 @@ struct gs_output {
   double *sbuf; /* ncol * ncomp: one output time of every summary column */
   /* output times written but not yet committed (see Checkpoints above) */
   double *pending[NSERIES_MAX]; /* cap rows of each series, in one block: */
-  double *pending_block;        /* freeing a mapping per series cost ~40 µs each here */
+  double *pending_block;        /* one block: one mapping to free, not one per series */
   size_t cap, cap_max, npending; /* cap grows to cap_max (PENDING_BYTES) as rows come */
   int next_part; /* of the output time being written in parts (0: none begun) */
   double checkpoint, last_commit; /* seconds of wall time */
@@ -342,16 +342,15 @@ static int deflate_usable(void) {
 /* Empty float64 series i, extendible along time.  /number and /carried are
  * chunked by up to 64 KiB of output times (chunk_rows), the rest by 64 rows.
  * Only rows of at least COMPRESS_MIN_VALUES are deflated: zlib sets up
- * ~256 KiB of state per chunk, which on small grids cost more than the
- * integration (CoriMix example: 45 % of the run for 8 KiB chunks). */
+ * ~256 KiB of state per chunk, which on small grids costs more than the
+ * integration. */
 #define COMPRESS_MIN_VALUES 8192
 /* A large series' chunk holds as many output times as fit in
  * BIG_CHUNK_BYTES, at least one; only a row of COMPRESS_MIN_VALUES or more,
- * a chunk of its own, is deflated.  With a chunk per output time, the
- * CoriMix example's 8 and 16 KiB rows made 86 chunks per series: writing
- * each cost ~6 µs more, and rank 0's 65th chunk of both (probably where
- * their index, a B-tree of up to 64 entries a node, splits one) stalled the
- * other rank by ~250 µs, every run. */
+ * a chunk of its own, is deflated.  A chunk per output time makes many
+ * small chunks on small grids: each write costs more, and a chunk index
+ * that outgrows a node (a B-tree of up to 64 entries a node) stalls rank 0
+ * at an output time, and with it the other ranks. */
 #define BIG_CHUNK_BYTES ((size_t)64 << 10)
 /* Time rows per chunk of series i. */
 static hsize_t chunk_rows(const gs_output *o, int i) {
@@ -492,8 +491,8 @@ static int csv_flush(gs_output *o, gs_error *err) {
 static int csv_create(gs_output *o, gs_error *err) {
   o->csv = fopen(o->csv_tmp, "w");
   if (!o->csv) return gs_error_set(err, GS_EIO, "cannot create %s: %s", o->csv_tmp, strerror(errno));
-  /* rows are formatted at every output time: fewer, larger writes (a system
-   * call costs ~20 µs on the project's VM) */
+  /* rows are formatted at every output time: fewer, larger writes, since a
+   * system call is costly (in a virtual machine especially) */
   setvbuf(o->csv, NULL, _IOFBF, (size_t)1 << 16);
   int rc = csv_header(o, err);
   return rc ? rc : csv_flush(o, err);
@@ -670,10 +669,10 @@ static double wall_seconds(void) {
 }
 
 /* Room for one more pending output time: the block starts small and doubles
- * up to PENDING_BYTES.  Sized for PENDING_BYTES at once it was a 64 MiB
- * mapping whose pages each series touched in its own region: the CoriMix
- * example paid ~40 fresh pages during the run and 2 ms to unmap the block in
- * its final commit, after the last step (a third of its serial tail). */
+ * up to PENDING_BYTES.  Sized for PENDING_BYTES at once it would be a
+ * 64 MiB mapping whose pages each series touches in its own region: fresh
+ * pages during the run, and unmapping it in the final commit, after the last
+ * step, lengthens the run's serial tail. */
 static int pending_reserve(gs_output *o, gs_error *err) {
   if (o->npending < o->cap) return GS_OK;
   size_t row = 0;
@@ -768,9 +767,9 @@ void gs_output_set_checkpoint(gs_output *o, double seconds) {
 
 /* Parts of an output time: a summary and CSV row per compartment, then a
  * row of each large series (into its held chunk, written when full), a
- * deflated row in pieces of PIECE_BYTES (a 32-compartment x 32
- * x 32 row took 1-2 ms in one piece, which held up the other MPI ranks when
- * rank 0 began it just before they arrived), then the rows of the small
+ * deflated row in pieces of PIECE_BYTES (a large row deflated in one piece
+ * takes milliseconds, and holds up the other MPI ranks when rank 0 begins
+ * it just before they arrive), then the rows of the small
  * series held for the commit, and the commit when it is due. */
 #define PIECE_BYTES ((size_t)32 << 10)
 
@@ -787,8 +786,8 @@ int gs_output_parts(const gs_output *o) {
 }
 
 /* A small series' first write, of the rows held so far: the first chunk of
- * a dataset creates its chunk index (~70 µs, against ~30 for a write once
- * it exists), so the commit at the end of a run, which comes after the
+ * a dataset creates its chunk index (about twice the cost of a later
+ * write), so the commit at the end of a run, which comes after the
  * last step, would pay it for every series; written in the parts of an
  * output time, it falls in rank 0's waits under MPI.  The rows count only
  * once committed, like those of the large series. */
@@ -841,8 +840,7 @@ int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double
   const size_t r = o->npending;
   /* the large series go to the file at once (their rows count only once
    * committed): copies held until the commit would touch fresh memory, and
-   * a page fault costs ~13 µs on the project's VM (7 ms of the example's
-   * 0.12 s) */
+   * page faults are costly (docs/performance.md, "page faults") */
   int k = part - (int)o->ncomp;
   for (int i = 0; i < o->nseries; i++) {
     const int np = row_pieces(o, i) + !o->direct[i];
