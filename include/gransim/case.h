@@ -52,10 +52,6 @@ typedef struct gs_case {
 int gs_case_load(const char *path, gs_case *c, gs_error *err);
 int gs_case_from_cfg(gs_cfg *cfg, gs_case *c, gs_error *err);
 void gs_case_free(gs_case *c);
-/* The `grid` and `output` sections alone (also used by the SWA solver).
- * gs_case_read_grid initialises m (free with gs_model_free); *times is
- * malloc'ed. */
-int gs_case_read_grid(gs_cfg_node *root, gs_model *m, gs_error *err);
 /* The grid section without a sectional model (the SWA solver reads it so):
  * the axes and compartments into g (free with gs_grid_free, also on
  * failure), grid.size_axes as a bit mask (bit k: axis k; all axes when
@@ -63,6 +59,8 @@ int gs_case_read_grid(gs_cfg_node *root, gs_model *m, gs_error *err);
  * before gs_cfg_check_unused. */
 int gs_case_read_grid_only(gs_cfg_node *root, gs_grid *g, int *size_axes, gs_cfg_node **section,
                            gs_error *err);
+/* The `output` section alone (also read by the SWA solver); *times is
+ * malloc'ed. */
 int gs_case_read_times(gs_cfg_node *root, double *t0, double **times, size_t *ntimes,
                        gs_error *err);
 

@@ -100,7 +100,12 @@ int gs_cfg_node_double(const gs_cfg_node *n, double *out, gs_error *err);
  * Also fails if map is not a map.  Call after reading all keys of a section. */
 int gs_cfg_check_unused(const gs_cfg_node *map, gs_error *err);
 
-/* Shared helper: read node's "type" and return the entry of the NULL-terminated
+/* Registries of named types: NULL-terminated arrays of pointers to type
+ * structs whose first member is `const char *name`.  gs_registry_find: the
+ * entry called name, or NULL; gs_registry_names: "a, b, c" into buf. */
+const void *gs_registry_find(const void *const *types, const char *name);
+void gs_registry_names(const void *const *types, char *buf, size_t size);
+/* Read node's "type" and return the entry of the NULL-terminated
  * registry `types` with that name.  Every registered type struct starts with
  * its `const char *name`.  Unknown names give an error listing the known ones;
  * `what` names the registry in messages ("kernel", "selection function"...). */

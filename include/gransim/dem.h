@@ -22,6 +22,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "gransim/dem_data.h"
 #include "gransim/error.h"
 
 #ifdef __cplusplus
@@ -43,13 +44,6 @@ typedef struct {
   double density; /* [kg/m^3]; ignored for walls */
 } gs_dem_material;
 
-/* How the damping coefficient follows from e (see docs/models.md, DEM):
- *  EXACT    - solve the damped Hertz impact once so that a head-on collision
- *             rebounds with exactly e (default);
- *  LIGGGHTS - c = 2 sqrt(5/6) beta, beta = -ln e / sqrt(ln^2 e + pi^2), the
- *             closed form LIGGGHTS uses (realises e to within about 1 %,
- *             e.g. 0.3995 for 0.4); chosen for side-by-side comparisons. */
-enum { GS_DEM_DAMPING_EXACT = 0, GS_DEM_DAMPING_LIGGGHTS = 1 };
 /* Mesh contacts: one per touching region at the closest feature (gransim),
  * or one per triangle with LIGGGHTS 3.8's edge and corner ownership (to
  * compare with LIGGGHTS; see src/dem/mesh_topology.c). */
@@ -225,16 +219,6 @@ double gs_dem_wall_axial_torque(const gs_dem *d, size_t wall);
  * written to out (caller provides 9*ntri doubles; NULL: only count); returns
  * ntri, 0 if not a mesh. */
 size_t gs_dem_wall_triangles(const gs_dem *d, size_t wall, double *out);
-
-/* Coefficient c of the damping law gamma = c * sqrt(S m*) for restitution e
- * under the given damping mode (exposed for tests and documentation). */
-double gs_dem_damping_coefficient(double e, int mode);
-/* Restitution a head-on Hertz impact with damping coefficient c realises. */
-double gs_dem_restitution_of(double c);
-/* The scaled head-on impact behind both (src/dem/material.c): its duration in
- * units of (v^2 m* / (4/3 E* sqrt R*))^(2/5) / v and its restitution, for the
- * scaled damping c, integrated with step h; either output may be NULL. */
-void gs_dem_scaled_impact(double c, double h, double *duration, double *restitution);
 
 /* ---- DEM case files (src/dem/case_dem.c, run_dem.c; docs/case-files.md) -- */
 typedef struct gs_dem_case_s gs_dem_case;

@@ -119,6 +119,25 @@ int gs_dem_impact_table_write(const char *path, const char *comment, size_t ncla
  * until the overlap returns to zero). */
 double gs_dem_hertz_contact_time(double meff, double reff, double estar, double v, double e);
 
+/* ---- the damped Hertz contact law (src/demdata/hertz.c), shared with the
+ * embedded DEM ---------------------------------------------------------- */
+/* How the damping coefficient follows from e (see docs/models.md, DEM):
+ *  EXACT    - solve the damped Hertz impact once so that a head-on collision
+ *             rebounds with exactly e (default);
+ *  LIGGGHTS - c = 2 sqrt(5/6) beta, beta = -ln e / sqrt(ln^2 e + pi^2), the
+ *             closed form LIGGGHTS uses (realises e to within about 1 %,
+ *             e.g. 0.3995 for 0.4); chosen for side-by-side comparisons. */
+enum { GS_DEM_DAMPING_EXACT = 0, GS_DEM_DAMPING_LIGGGHTS = 1 };
+/* Coefficient c of the damping law gamma = c * sqrt(S m*) for restitution e
+ * under the given damping mode (exposed for tests and documentation). */
+double gs_dem_damping_coefficient(double e, int mode);
+/* Restitution a head-on Hertz impact with damping coefficient c realises. */
+double gs_dem_restitution_of(double c);
+/* The scaled head-on impact behind both (src/demdata/hertz.c): its duration in
+ * units of (v^2 m* / (4/3 E* sqrt R*))^(2/5) / v and its restitution, for the
+ * scaled damping c, integrated with step h; either output may be NULL. */
+void gs_dem_scaled_impact(double c, double h, double *duration, double *restitution);
+
 #ifdef __cplusplus
 }
 #endif

@@ -389,12 +389,6 @@ static void negative_floor(gs_cfg_node *root, gs_case *c) {
   c->eval.noise_floor = atol;
 }
 
-/* Shared with the SWA solver (src/swa/case.c), which reads the same grid and
- * output sections of a case file. */
-int gs_case_read_grid(gs_cfg_node *root, gs_model *m, gs_error *err) {
-  return read_grid(root, m, err);
-}
-
 int gs_case_read_times(gs_cfg_node *root, double *t0, double **times, size_t *ntimes,
                        gs_error *err) {
   gs_case tmp;

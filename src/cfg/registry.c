@@ -1,23 +1,37 @@
-/* Lookup of registered types by the "type" key of a case-file map. */
+/* One helper for every registry of named types (kernels, mechanisms,
+ * integrators, selection functions, daughter distributions, stochastic
+ * processes): each is a NULL-terminated array of pointers to type structs
+ * whose first member is `const char *name`. */
 #include <string.h>
 
 #include "gransim/cfg.h"
+
+static const char *name_of(const void *type) { return *(const char *const *)type; }
+
+const void *gs_registry_find(const void *const *types, const char *name) {
+  for (size_t i = 0; name && types[i]; i++)
+    if (!strcmp(name_of(types[i]), name)) return types[i];
+  return NULL;
+}
+
+void gs_registry_names(const void *const *types, char *buf, size_t size) {
+  if (!size) return;
+  buf[0] = '\0';
+  for (size_t i = 0; types[i]; i++) {
+    if (i) strncat(buf, ", ", size - strlen(buf) - 1);
+    strncat(buf, name_of(types[i]), size - strlen(buf) - 1);
+  }
+}
 
 const void *gs_registry_pick(gs_cfg_node *node, const void *const *types, const char *what,
                              gs_error *err) {
   const char *name = NULL;
   if (gs_cfg_require_kind(node, GS_CFG_MAP, err)) return NULL;
   if (gs_cfg_string_req(node, "type", &name, err)) return NULL;
-  for (size_t i = 0; types[i]; i++) {
-    const char *const *entry_name = (const char *const *)types[i];
-    if (!strcmp(*entry_name, name)) return types[i];
-  }
-  char known[512] = "";
-  for (size_t i = 0; types[i]; i++) {
-    const char *const *entry_name = (const char *const *)types[i];
-    if (i) strncat(known, ", ", sizeof known - strlen(known) - 1);
-    strncat(known, *entry_name, sizeof known - strlen(known) - 1);
-  }
+  const void *found = gs_registry_find(types, name);
+  if (found) return found;
+  char known[512];
+  gs_registry_names(types, known, sizeof known);
   gs_cfg_fail(gs_cfg_get(node, "type"), err, "unknown %s type; expected one of: %s", what, known);
   return NULL;
 }

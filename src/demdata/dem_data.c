@@ -12,7 +12,6 @@
 #include <string.h>
 
 #include "demdata/dump.h"
-#include "gransim/dem.h"
 
 void gs_dem_options_default(gs_dem_options *o) {
   memset(o, 0, sizeof *o);

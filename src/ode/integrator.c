@@ -38,10 +38,7 @@ static const gs_integrator_type *const registry[] = {&gs_integrator_rk, &gs_inte
 const gs_integrator_type *const *gs_integrator_types(void) { return registry; }
 
 const gs_integrator_type *gs_integrator_lookup(const char *name) {
-  if (!name) return NULL;
-  for (size_t i = 0; registry[i]; i++)
-    if (strcmp(registry[i]->name, name) == 0) return registry[i];
-  return NULL;
+  return gs_registry_find((const void *const *)registry, name);
 }
 
 /* A step-size key that is optional and has no numeric default: NAN when

@@ -23,9 +23,7 @@ static const gs_mech_type *const registry[] = {
 const gs_mech_type *const *gs_mech_types(void) { return registry; }
 
 const gs_mech_type *gs_mech_lookup(const char *name) {
-  for (size_t i = 0; registry[i]; i++)
-    if (!strcmp(registry[i]->name, name)) return registry[i];
-  return NULL;
+  return gs_registry_find((const void *const *)registry, name);
 }
 
 int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err) {
@@ -81,7 +79,12 @@ double gs_model_held(const gs_model *m, const double *y, size_t comp, int k) {
 int gs_model_add_mechanism(gs_model *m, const char *type, gs_cfg_node *node, const char *label,
                            gs_error *err) {
   const gs_mech_type *t = gs_mech_lookup(type);
-  if (!t) return gs_error_set(err, GS_EINPUT, "unknown mechanism type '%s'", type);
+  if (!t) {
+    char known[512];
+    gs_registry_names((const void *const *)registry, known, sizeof known);
+    return gs_error_set(err, GS_EINPUT, "unknown mechanism type '%s'; expected one of: %s", type,
+                        known);
+  }
   gs_mechanism *grown = realloc(m->mech, (m->nmech + 1) * sizeof *grown);
   if (!grown) return gs_error_set(err, GS_ENOMEM, "out of memory");
   m->mech = grown;
