@@ -53,19 +53,21 @@ static int sized_create(gs_cfg_node *n, const gs_grid *g, const char *dir, void 
 static void constant_row(const void *self, size_t comp, size_t a, size_t b0, size_t b1,
                          double *out) {
   (void)a;
-  const basic_kernel *k = self;
-  for (size_t b = b0; b < b1; b++) out[b - b0] = k->beta0[comp];
+  const double beta0 = ((const basic_kernel *)self)->beta0[comp];
+  for (size_t b = b0; b < b1; b++) out[b - b0] = beta0;
 }
 
 static void sum_row(const void *self, size_t comp, size_t a, size_t b0, size_t b1, double *out) {
   const basic_kernel *k = self;
-  for (size_t b = b0; b < b1; b++) out[b - b0] = k->beta0[comp] * (k->size[a] + k->size[b]);
+  const double beta0 = k->beta0[comp], sa = k->size[a], *size = k->size;
+  for (size_t b = b0; b < b1; b++) out[b - b0] = beta0 * (sa + size[b]);
 }
 
 static void product_row(const void *self, size_t comp, size_t a, size_t b0, size_t b1,
                         double *out) {
   const basic_kernel *k = self;
-  for (size_t b = b0; b < b1; b++) out[b - b0] = k->beta0[comp] * k->size[a] * k->size[b];
+  const double beta0 = k->beta0[comp], sa = k->size[a], *size = k->size;
+  for (size_t b = b0; b < b1; b++) out[b - b0] = beta0 * sa * size[b];
 }
 
 static int basic_per_compartment(const void *self) { return ((const basic_kernel *)self)->differ; }

@@ -91,9 +91,18 @@ static int madec_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
 static void madec_row(const void *self, size_t comp, size_t a, size_t b0, size_t b1,
                       double *out) {
   const madec_kernel *k = self;
-  const double va = k->volume[a], ca = k->content[a];
-  for (size_t b = b0; b < b1; b++)
-    out[b - b0] = k->beta0[comp] * (va + k->volume[b]) * madec_f(k, ca + k->content[b]);
+  /* loads hoisted and the linear case apart: the loop then vectorises (out
+   * might alias the kernel's arrays as far as the compiler knows) */
+  const double va = k->volume[a], ca = k->content[a], s = k->scale, beta0 = k->beta0[comp];
+  const double *volume = k->volume, *content = k->content;
+  if (k->alpha == 1.0 && k->delta == 1.0) {
+    for (size_t b = b0; b < b1; b++) {
+      const double c = ca + content[b];
+      out[b - b0] = beta0 * (va + volume[b]) * (c * (s - 0.5 * c));
+    }
+    return;
+  }
+  for (size_t b = b0; b < b1; b++) out[b - b0] = beta0 * (va + volume[b]) * madec_f(k, ca + content[b]);
 }
 
 static int madec_per_compartment(const void *self) { return ((const madec_kernel *)self)->differ; }

@@ -107,7 +107,8 @@ static int table_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
 static void table_row(const void *self, size_t comp, size_t a, size_t b0, size_t b1, double *out) {
   const table_kernel *k = self;
   const double *row = k->table + (comp * k->nclass + k->cls[a]) * k->nclass;
-  for (size_t b = b0; b < b1; b++) out[b - b0] = k->beta0[comp] * row[k->cls[b]];
+  const double beta0 = k->beta0[comp]; /* hoisted: out might alias it as far as the compiler knows */
+  for (size_t b = b0; b < b1; b++) out[b - b0] = beta0 * row[k->cls[b]];
 }
 
 /* Class of a point, as gs_class_table_assign places cells (nearest class outside). */

@@ -207,8 +207,14 @@ static int gs_rk_control_set_driver(void *state, const gsl_odeiv2_driver *d) {
 }
 
 static const gsl_odeiv2_control_type gs_rk_control_type = {
-    "gransim", gs_rk_control_alloc, gs_rk_control_init, gs_rk_control_hadjust,
-    gs_rk_control_errlevel, gs_rk_control_set_driver, free};
+    .name = "gransim",
+    .alloc = gs_rk_control_alloc,
+    .init = gs_rk_control_init,
+    .hadjust = gs_rk_control_hadjust,
+    .errlevel = gs_rk_control_errlevel,
+    .set_driver = gs_rk_control_set_driver,
+    .free = free,
+};
 
 static int gs_rk_rhs_error(const gs_rk *self, gs_error *err) {
   if (self->rhs_failed == 3)
