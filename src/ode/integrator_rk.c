@@ -174,10 +174,9 @@ static int gs_rk_control_hadjust(void *state, size_t dim, unsigned int ord, cons
    * for it (error ~ h^ord): f is not smooth there.  Where a cell's wetness
    * switches aggregation on, the error of a step jumps by 1e6-1e10 once the
    * step reaches the switch; growing by 5 after each retry made the steps
-   * alternate between rejected and accepted up to it (the CoriMix example:
-   * 81 of 271 steps rejected).  After every rejection (Hairer-Nørsett-Wanner's
-   * facmax = 1) it would also have held back the steps of the smooth
-   * 32-compartment case (+15 % evaluations). */
+   * alternate between rejected and accepted up to it.  Holding back after
+   * every rejection (Hairer-Nørsett-Wanner's facmax = 1) would also hold
+   * back the steps of smooth cases (docs/performance.md). */
   if (rk->rejected_h > 0) {
     const double predicted = fmax(rmax, DBL_MIN) * pow(rk->rejected_h / h_old, ord);
     const int rough = rk->rejected_error > GS_RK_ROUGH * predicted;

@@ -1,7 +1,7 @@
 /* Sums over the cells of a compartment in four interleaved partial sums.
- * A single accumulator makes every addition wait for the one before (4
- * cycles each): the transfer mechanism's volume sums were 27 % of the
- * 32-compartment CoriMix case's run that way.  The order of the additions
+ * A single accumulator makes every addition wait for the one before, which
+ * made long sums (transfer's moved volumes) a large share of a run with
+ * many compartments (docs/performance.md).  The order of the additions
  * is fixed (lane c mod 4, then the lanes pairwise), so results do not
  * depend on where or how often a sum is taken. */
 #ifndef GRANSIM_PBM_SUMS_H

@@ -593,10 +593,10 @@ int gs_comp_steps_create(gs_case *c, gs_comp_steps **out, gs_error *err) {
   const size_t slot_bytes = per * node_bytes > NODE_KEEP_BYTES ? per * node_bytes : NODE_KEEP_BYTES;
   while (s->depth > 2 && s->depth * (s->ncomp - 1) * slot_bytes > RING_BYTES) s->depth--;
   if (s->ncomp > 1 && !(s->pool = gs_block_pool_create(per * node_bytes, err))) return GS_ENOMEM;
-  /* a block for each record of the rings, taken and touched now: the first
-   * piece of a run had paid for it alone (~0.2 ms for the example's 2 MiB
-   * chunk, and 4-5 ms at times on the project's VM, where the hypervisor
-   * backs freshly touched memory), the other threads waiting for it */
+  /* a block for each record of the rings, taken and touched now: otherwise
+   * the first piece of a run pays for the fresh memory alone (costly where a
+   * hypervisor backs freshly touched pages), the other threads waiting for
+   * it */
   if (s->pool) {
     int rc = gs_block_pool_reserve(s->pool, s->depth * (s->ncomp - 1), err);
     if (rc) return rc;
