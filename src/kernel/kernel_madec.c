@@ -2,8 +2,8 @@
  * 2.5/3.9) and 004 (eq. 4):
  *   beta = beta0 (V + V') [ (c + c')^alpha (S - (c + c')/2)^delta ]^alpha
  * with V the granule volume (sum of all axes), c = S l / V the liquid content
- * and S = 100 for liquid content in percent (seed 002) or 1 for a fraction
- * (seed 004).  Dry pairs (c + c' = 0) do not aggregate when alpha > 0.
+ * and S = 100 for liquid content in percent (Chaudhury 2015) or 1 for a fraction
+ * (De et al. 2025).  Dry pairs (c + c' = 0) do not aggregate when alpha > 0.
  *
  * Majorant (stochastic solver): the liquid is one of the axes summed into V,
  * so 0 <= c <= S and s = c + c' lies in [0, 2S].  On that interval

@@ -1,7 +1,7 @@
 /* Breakage selection functions S [1/s], a registry of named types:
  *   power: S = s0 * v^exponent, v the size measure (default granule volume);
  *   shear: S = sqrt(4/(15 pi)) G exp(-B / (G^2 R)), R the volume-equivalent
- *          radius (seed 002 eq. 2.7, after Soos et al. 2006).
+ *          radius (Chaudhury 2015, eq. 2.7, after Soos et al. 2006).
  * Both accept min_volume: particles whose size measure is below it do not
  * break (e.g. primary particles, whose fragments the grid cannot hold). */
 #include <math.h>
@@ -80,7 +80,7 @@ static const gs_selection_type power_type = {
 };
 static const gs_selection_type shear_type = {
     .name = "shear",
-    .summary = "S = sqrt(4/(15 pi)) G exp(-B/(G^2 R)) (seed 002 eq. 2.7)",
+    .summary = "S = sqrt(4/(15 pi)) G exp(-B/(G^2 R)) (Chaudhury 2015, eq. 2.7)",
     .create = shear_create,
     .rate = shear_rate,
     .free = sel_free,

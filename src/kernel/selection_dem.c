@@ -1,9 +1,9 @@
-/* Breakage selection from DEM impacts (seed 000 eqs. 11-12):
+/* Breakage selection from DEM impacts (Sampat et al. 2018, eqs. 11-12):
  *   S(cell) = scale * f_impact(class) * P(U > U_break(d))
  * f_impact: wall impacts per particle per second of the cell's size class,
  * P: the lognormal fit (mu, sigma of ln U) of that class's impact speeds,
  * U_break: the speed that breaks a granule of diameter d, a constant
- * `u_break` or from the critical Stokes deformation number (seed 000, after
+ * `u_break` or from the critical Stokes deformation number (Sampat et al. 2018, after
  * Tardos et al.):
  *    U_break = (2 St_c / rho) (9/8) ((1 - e)^2 / e^2) (9/16) (mu_binder / d),
  * St_c the critical Stokes deformation number.
@@ -108,7 +108,7 @@ static double dem_rate(const void *self, const gs_grid *g, size_t cell) {
 
 const gs_selection_type gs_selection_dem_impact = {
     .name = "dem_impact",
-    .summary = "S = scale f_impact(class) P(U > U_break) from DEM impact statistics (seed 000 eq. 12)",
+    .summary = "S = scale f_impact(class) P(U > U_break) from DEM impact statistics (Sampat et al. 2018, eq. 12)",
     .create = dem_create,
     .rate = dem_rate,
     .free = dem_free,

@@ -1,4 +1,4 @@
-/* Compaction at collisions (seed 001 eqs. 16-21, corrected): see compaction.h. */
+/* Compaction at collisions (McGuire et al. 2018, eqs. 16-21, corrected): see compaction.h. */
 #include <stdlib.h>
 
 #include "swa/compaction.h"

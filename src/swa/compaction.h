@@ -1,4 +1,4 @@
-/* Compaction T_comp of seed 001 (eqs. 16-21), in the physically consistent
+/* Compaction T_comp of McGuire et al. (2018, eqs. 16-21), in the physically consistent
  * form (docs/models.md, "SWA twin-screw model"): the porosity moves a
  * fraction k of the way to eps_min, the pore saturation l_i/p is kept, and
  * liquid squeezed out of the shrinking pores becomes external liquid. */

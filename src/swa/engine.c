@@ -1,5 +1,5 @@
 /* The jump loop of one run: exponential waiting times from the total
- * (majorant) rate of all processes in all compartments (seed 001 eqs. 28,
+ * (majorant) rate of all processes in all compartments (McGuire et al. 2018, eqs. 28,
  * 62, 63), LPDA checkpoints, doubling after every event. */
 #include <gsl/gsl_randist.h>
 #include <math.h>

@@ -1,6 +1,6 @@
 /* One run's particle ensemble: storage, cached properties, LPDA catch-up,
  * adding and removing particles, contraction and doubling (ensemble control
- * of Lee et al. 2015 as used by seed 001: N(0) = 0.75 N_max, doubling below
+ * of Lee et al. 2015 as used by McGuire et al. (2018): N(0) = 0.75 N_max, doubling below
  * 3/8 N_max). */
 #include <gsl/gsl_randist.h>
 #include <math.h>

@@ -1,4 +1,4 @@
-/* Binary breakage (seed 001 eqs. 22, 52-57), number-conserving: particle i
+/* Binary breakage (McGuire et al. 2018, eqs. 22, 52-57), number-conserving: particle i
  * breaks at rate s0_z * g(x_i), with g = v^exponent for v >= min_volume
  * (and, with wet_only, only if it holds liquid or pores: dry primaries never
  * break); a fraction f ~ Beta(a, b) of the parent (every coordinate scaled

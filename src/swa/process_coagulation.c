@@ -1,4 +1,4 @@
-/* Coagulation (seed 001 eqs. 48-51).
+/* Coagulation (McGuire et al. 2018, eqs. 48-51).
  *
  * Weighted scheme (`scheme: swa`): an ordered pair (i, j) jumps at rate
  * K(x_i, x_j) w_j / V; particle i becomes x_i + x_j with weight
@@ -21,9 +21,9 @@
  * selected pair jumps with probability K(x_i, x_j) / K^(x_i, x_j), both taken
  * at the particles' current states (thinning), else the jump is fictitious.
  * Optional: a coalescence rule and efficiency (a collision that does not
- * coalesce only compacts i, eq. 49) and compaction of the product (seed 001
+ * coalesce only compacts i, eq. 49) and compaction of the product (McGuire et al. 2018
  * eqs. 16-21).  `coalescence: wet_surface` stands in for the Stokes criterion
- * of Braumann et al. (2010), whose formula seed 001 does not give: only a
+ * of Braumann et al. (2010), whose formula McGuire et al. (2018) do not give: only a
  * collision in which a partner has external (surface) liquid can coalesce,
  * as with a dry pair the criterion's liquid layer thickness is zero. */
 #include <gsl/gsl_rng.h>

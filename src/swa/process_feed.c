@@ -1,4 +1,4 @@
-/* Inception (seed 001 eqs. 29-37, 68-70): particles enter a compartment at
+/* Inception (McGuire et al. 2018, eqs. 29-37, 68-70): particles enter a compartment at
  * a physical rate R (per unit time; or mass_rate / (density * mean particle
  * volume) for a `diameters` distribution).  A computational particle with
  * weight w-bar * (relative weight of the sample) enters at rate R V / w-bar,

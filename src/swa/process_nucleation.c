@@ -1,5 +1,5 @@
 /* Immersion nucleation: droplet addition and the unified nucleation jump of
- * seed 001 (Section 3.4, eqs. 40-47, 73-77; Appendix A), in the limit of
+ * McGuire et al. (2018) (Section 3.4, eqs. 40-47, 73-77; Appendix A), in the limit of
  * instantaneous nuclei growth.
  *
  * A droplet (0, v_drop, 0, 0) of weight w_drop is incepted at rate
@@ -112,7 +112,7 @@ static int nuc_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
     if (!(sv > 0))
       return gs_error_set(err, GS_ENUMERIC,
                           "no particles left for a nucleus to absorb (liquid left %g of %g); the ensemble "
-                          "is too small for this droplet weight (seed 001: unstable below N_max = 128)",
+                          "is too small for this droplet weight (McGuire et al. 2018: unstable below N_max = 128)",
                           xn[n->ext], n->vdrop);
     int col = gs_swa_uniform01(s) * (wn * sv + svw) < wn * sv ? n->col_v : n->col_vw; /* eqs. 76-77 */
     size_t i = gs_swa_select(s, z, col);
@@ -136,7 +136,7 @@ static int nuc_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
 
 const gs_swa_process_type gs_swa_nucleation = {
     .name = "immersion_nucleation",
-    .summary = "droplet addition and unified immersion-nucleation jump (seed 001)",
+    .summary = "droplet addition and unified immersion-nucleation jump (McGuire et al. 2018)",
     .create = nuc_create,
     .rate = nuc_rate,
     .jump = nuc_jump,

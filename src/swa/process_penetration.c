@@ -1,4 +1,4 @@
-/* Liquid penetration (seed 001 eqs. 23-24), a continuous process deferred
+/* Liquid penetration (McGuire et al. 2018, eqs. 23-24), a continuous process deferred
  * with LPDA: r = k l_e (p - l_i) moves external liquid into the pores.  With
  * a = l_e, b = p - l_i: da/dt = -k a b, db/dt = -kappa k a b (kappa = 2 when
  * the pores shrink with the penetrated liquid, as printed; 1 otherwise), so

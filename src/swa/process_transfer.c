@@ -1,4 +1,4 @@
-/* Transport between compartments (seed 001 eqs. 58-61): every particle of
+/* Transport between compartments (McGuire et al. 2018, eqs. 58-61): every particle of
  * compartment z leaves at rate k_z = 1 / tau_z; it enters z + 1 with its
  * weight scaled by V_{z+1} / V_z (so it stands for the same real number),
  * and leaves the system from the last compartment (product). */

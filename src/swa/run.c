@@ -1,6 +1,6 @@
 /* Independent runs in parallel (MPI ranks and OpenMP over runs, per-run
  * seeds), ensemble means and 90 % confidence half-widths c = 1.64
- * sqrt(sum_r (M_r - mean)^2) / n_runs (seed 001 eqs. 64-65), and the result
+ * sqrt(sum_r (M_r - mean)^2) / n_runs (McGuire et al. 2018, eqs. 64-65), and the result
  * files.  Run r is executed by rank r % size, OpenMP spreads a rank's runs over
  * its threads.  Every run keeps its own observations in run-major arrays that
  * are zero for the runs other ranks execute; summing them over the ranks

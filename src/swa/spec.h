@@ -1,7 +1,7 @@
 /* Particle distributions of an SWA case, sampled exactly (no grid): the
  * sectional distribution specs (point, cell, exponential, gamma; see
  * docs/case-files.md) and `diameters`, a feed size distribution given as
- * volume fractions q3 over logarithmic diameter sections (seed 001 eqs.
+ * volume fractions q3 over logarithmic diameter sections (McGuire et al. 2018, eqs.
  * 3-5), sampled with equal weights (EWI) or uniformly in diameter with
  * weights proportional to the number density (VWI, eqs. 69-70). */
 #ifndef GS_SWA_SPEC_H
