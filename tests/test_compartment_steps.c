@@ -1,7 +1,7 @@
 /* Per-compartment time steps (solver.steps: per_compartment,
  * src/run/compartment_steps.c).
  *  1. The CoriMix example (which takes its own steps in each compartment), checked
- *     at every output time against the closed forms of test_seed000.c
+ *     at every output time against the closed forms of test_corimix.c
  *     (solids: tanks in series, V_n = F/k P(n, k t); sprayed liquid), scaled
  *     by the steady state F/k (a compartment that still holds almost nothing
  *     is resolved to atol, not to rtol of its own contents); the ledger of

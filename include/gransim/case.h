@@ -33,14 +33,14 @@ typedef struct gs_case {
   size_t ntimes;
   gs_ode ode;          /* the ODE system of the model (numbers + ledger), in eval */
   gs_eval eval;        /* the whole model's evaluation context (noise floor: solver.atol) */
-  double *abs_scale;   /* error-control scale per component (ledger excluded) */
+  double *abs_scale;   /* error-control scale per component (the ledger at a typical particle's volume) */
   gs_integrator_setup integrator_setup; /* solver.method and its keys, for more integrators */
   gs_integrator integrator;            /* of ode */
   gs_checks checks;
   double checkpoint;   /* output.checkpoint: seconds of wall time between commits */
-  /* solver.rebalance: under MPI, move compartments between ranks at output
-   * times when the measured costs promise a largest block this fraction
-   * cheaper (0: whenever the best split differs; none: never) */
+  /* solver.rebalance: under MPI, move compartments between ranks between
+   * steps when the measured costs promise a largest block this fraction
+   * cheaper (0: whenever the best split differs; none (-1): never) */
   double rebalance;
   /* solver.steps: 1 = per_compartment (each compartment its own steps,
    * src/run/compartment_steps.h), 0 = shared (one step for all) */

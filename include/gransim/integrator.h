@@ -9,7 +9,8 @@
  *            that dt * max(-f_i / y_i) stays below `safety` (default 0.1),
  *            within [min_step, max_step].
  * Components i with abs_scale[i] = 0 take part in the integration but not in
- * the error control (used for the mass ledger). */
+ * the error control (integrals nothing feeds back on, such as the volumes a
+ * compartment discharged and received under per-compartment steps). */
 #ifndef GRANSIM_INTEGRATOR_H
 #define GRANSIM_INTEGRATOR_H
 

@@ -10,7 +10,8 @@
  *               Ft = -mu_s |Fn| shear/|shear| (sliding; shear shortened to match,
  *               no damping while sliding).
  * This is LIGGGHTS' `hertz tangential history` (normal force not clamped at
- * zero, as its default limitForce off); c follows from e (material.c).
+ * zero, as its default limitForce off); c follows from e (src/demdata/hertz.c,
+ * cached per material pair in material.c).
  * Rolling resistance (CDT) is applied by the callers because it needs the
  * angular velocities: torque -mu_r (kn delta) R* w_rel/|w_rel| without its
  * component along n. */

@@ -47,7 +47,7 @@ typedef struct {
   size_t *first;        /* ncells+1: packets of parent k are [first[k], first[k+1]) */
   packet_t *pk;
   double *excess;       /* FP: volume removed by clamping (lever.h), per parent and axis */
-  double *births, *vol; /* CA workspace per slot (gs_model.slot): ncells and dim*ncells */
+  double *births, *vol; /* CA workspace per slot (gs_eval.slot): ncells and dim*ncells */
   int nc;               /* carried quantities */
   double *cbirth;       /* CA workspace per slot: nc*ncells pooled loads */
   size_t births_len, vol_len, cbirth_len; /* per-slot strides, whole pages (GS_APART) */

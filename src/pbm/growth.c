@@ -89,7 +89,7 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
   G->kind = kind;
   G->liquid = G->gas = -1;
   /* liquid_addition recomputes the rates per compartment: one row per slot
-   * (gs_model.slot), on pages of their own as threads write them at once;
+   * (gs_eval.slot), on pages of their own as threads write them at once;
    * the others' stay in the first */
   const size_t rows = kind == KIND_LIQUID && m->nslots > 1 ? (size_t)m->nslots : 1;
   G->row_len = rows > 1 ? gs_doubles_apart(g->ncells) : g->ncells;

@@ -13,10 +13,11 @@
  * compartment that feeds another also integrates Z' = (N, Q), the integral
  * of its numbers and carried totals, so k_c Z is exactly what its
  * Runge-Kutta steps discharged.  Z through its step ends is a piecewise
- * cubic Hermite curve Z_H (values Z, slopes N).  The next compartment, on a
- * step [s, s + h] of its own, takes as its inflow k_c P'(t), P the cubic
- * Hermite interpolant of Z_H on [s, s + h]: P' is quadratic, so the
- * Runge-Kutta weights (order >= 3) integrate it exactly, and a step receives
+ * quintic Hermite curve Z_H (values Z, slopes N, second derivatives f).
+ * The next compartment, on a step [s, s + h] of its own, takes as its
+ * inflow k_c P'(t), P the quintic Hermite interpolant of Z_H on [s, s + h]:
+ * P' is a quartic, so the weights of a Runge-Kutta step of order >= 5
+ * integrate it exactly, and a step receives
  * k_c (Z_H(s + h) - Z_H(s)), which telescopes over the steps to what the
  * upstream compartment discharged.  Every stretch ends checking that (the
  * received volumes are integrated alongside, in the local vector).
@@ -25,13 +26,13 @@
  * switches); each compartment restarts its integral there, so the record of
  * step ends kept for the next compartment is one stretch long.
  *
- * Threads (OpenMP's, at most one per compartment) take the compartments of
- * a stretch in order, each the next free one when it is done with one, and
- * follow the compartment before through the stretch: a step waits only
- * until that one has published a step end at or past its own end.  Every
- * compartment's steps and rates are those of one thread (mechanisms keep
- * scratch per slot, gs_model.slot), so results are identical bit for bit
- * whatever the number of threads. */
+ * Threads (OpenMP's, at most one per compartment) each own a contiguous
+ * block of compartments, split by their measured cost, take their
+ * (compartment, stretch) pieces in order, and follow the compartment before
+ * through a stretch: a step waits only until that one has published a step
+ * end at or past its own end.  Every compartment's steps and rates are
+ * those of one caller (mechanisms keep scratch per slot, gs_eval.slot), so
+ * results are identical bit for bit whatever the number of threads. */
 #ifndef GRANSIM_PBM_COMPARTMENT_STEPS_H
 #define GRANSIM_PBM_COMPARTMENT_STEPS_H
 

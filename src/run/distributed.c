@@ -139,8 +139,8 @@ double gs_dist_speedup_bound(const double *cost, size_t n, double rates, double 
   if (nr < 1 || (size_t)nr > n || !(total > 0)) return NAN;
   double measured = 0;
   for (size_t j = 0; j < n; j++) measured += cost[j];
-  /* what the compartments' own clocks did not see (transfer, spray, the
-   * calls between mechanisms) counts as the same for each, as does the
+  /* what the compartments' own clocks did not see (zeroing the rates, the
+   * calls around the model) counts as the same for each, as does the
    * integrator's work */
   const double even = (fmax(0.0, rates - measured) + fmax(0.0, integrator)) / (double)n;
   double *c = malloc(n * sizeof *c), *none = calloc((size_t)nr, sizeof *none);
