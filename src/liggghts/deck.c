@@ -219,13 +219,14 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
     if ((rc = region_cmd(fp, rid, &f->reg, key, err))) return rc;
     double span = fmin(f->end, c->duration) - f->start;
     long every = (long)fmax(1, round(f->every / dt)), start = (long)round(f->start / dt);
-    fprintf(fp, "fix ins%zu all insert/rate/region seed %ld distributiontemplate pdd%zu ", k, lig_seed(c, 65 + 2 * (int)k), k);
+    /* LIGGGHTS reads these keywords in this order only */
+    fprintf(fp, "fix ins%zu all insert/rate/region seed %ld distributiontemplate pdd%zu verbose no ", k,
+            lig_seed(c, 65 + 2 * (int)k), k);
     if (f->mass_rate > 0) fprintf(fp, "mass %.9g massrate %.9g", f->mass_rate * span * (1 + 1e-9), f->mass_rate);
     else fprintf(fp, "nparticles %.0f particlerate %.9g", ceil(f->number_rate * span), f->number_rate);
-    fprintf(fp, " insert_every %ld overlapcheck yes all_in yes vel constant %.9g %.9g %.9g region %s", every, f->v[0],
-            f->v[1], f->v[2], rid);
+    fprintf(fp, " insert_every %ld", every);
     if (start > 0) fprintf(fp, " start %ld", start);
-    fprintf(fp, " verbose no\n");
+    fprintf(fp, " overlapcheck yes all_in yes vel constant %.9g %.9g %.9g region %s\n", f->v[0], f->v[1], f->v[2], rid);
   }
   for (size_t k = 0; k < c->noutlets; k++) {
     char key[64], rid[32];
@@ -280,6 +281,8 @@ int gs_lig_write_exclusion_deck(const gs_dem_case *c, size_t wall, const char *p
   FILE *fp = fopen(path, "w");
   if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
   preamble(c, fp, NULL);
+  /* no atoms, hence no cutoff: LIGGGHTS would refuse to sort them by bins of size 0 */
+  fprintf(fp, "atom_modify sort 0 0.0\n");
   const gs_dem_wall_src *s = &c->wall_src[wall];
   fprintf(fp, "fix wall%zu all mesh/surface file %s type %zu heal auto_remove_duplicates "
           "element_exclusion_list write ex_wall%zu.txt scale %.9g curvature_tolerant yes\n", wall, s->mesh,
