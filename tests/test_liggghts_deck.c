@@ -3,12 +3,14 @@
  * time step, gravity, the mesh and its scale, the impeller's rotation as a
  * period, the feed's insertion, the outlet, the dumps; and keys a deck cannot
  * express are refused naming them.  Runs without LIGGGHTS. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "check.h"
 #include "gransim/dem.h"
+#include "gransim/dem_data.h"
 #include "gransim/liggghts.h"
 
 static const char *stl =
@@ -83,6 +85,16 @@ int main(void) {
     HAS(d, "compute wgl all wall/gran/local id vel force contactArea delta\n");
     HAS(d, "dump dcol all custom 200 post/collision*.atom id type x y z vx vy vz radius c_cc_1 c_cc_2\n");
     HAS(d, "dump dimp all local 200 post/impact*.atom c_wgl[1]");
+    /* the contact lists of the events: every third of the Hertz contact of two 1 mm spheres at 10 m/s */
+    double r = 1e-3, m = 500 * 4.0 / 3.0 * M_PI * r * r * r;
+    double tc = gs_dem_hertz_contact_time(m / 2, r / 2, 8e6 / (2 * (1 - 0.04)), 10, 0.4);
+    long ek = (long)floor(tc / 3 / 2.5e-6);
+    CHECK(ek >= 5 && ek <= 20);
+    char want[200];
+    snprintf(want, sizeof want, "dump dev all local %ld post/events_pp.txt c_pgl[7] c_pgl[8] c_pgl[14]\n", ek);
+    HAS(d, want);
+    snprintf(want, sizeof want, "dump dwev all local %ld post/events_wall.txt c_wgl[1]", ek);
+    HAS(d, want);
     /* 2000 steps before the window (10 chunks of 200 with the outlet emptied), 2000 in it */
     HAS(d, "variable before loop 10\n");
     HAS(d, "variable window loop 10\n");

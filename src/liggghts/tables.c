@@ -2,13 +2,17 @@
  * files, columns and conventions, so that the PBM cannot tell the engines
  * apart.
  *
- * LIGGGHTS lists current contacts, not collision events: src/demdata turns
- * the contacts K_ij of each snapshot into events per second E_ij = K_ij / t_c
- * with the Hertz contact duration t_c of the pair (docs/models.md, "DEM data
- * reduction").  The collision frequency is then written with the embedded
- * engine's convention C_ij = E_ij / (N_i N_j) for every pair, the diagonal
- * included (demdata's own C_ii is 2 E_ii / N_i^2, the PBM pair loop's).  Wall
- * impacts likewise: per wall and class, current wall contacts / t_c,wall. */
+ * LIGGGHTS lists current contacts, not collision events.  The deck dumps the
+ * contact lists of compute pair/gran/local and wall/gran/local every few
+ * steps (a third of the shortest Hertz contact, deck.c), and a pair (or an
+ * atom on a mesh) absent from the previous list is a contact that began: the
+ * embedded engine's event, with the same C_ij = N_coll,ij / (N_i N_j window)
+ * and the impact speed |v - v_wall| at the first list that holds the wall
+ * contact.  Contacts shorter than the interval can be missed.  Numbers and
+ * velocities per class come from the `collision*.atom` snapshots (src/demdata's
+ * dump reader); demdata's own reduction of the contact snapshots (contacts /
+ * Hertz contact time, docs/models.md) is written alongside, as a comment, for
+ * comparison. */
 #include <dirent.h>
 #include <errno.h>
 #include <math.h>
@@ -36,8 +40,9 @@ int gs_lig_clear_dumps(const char *dir, gs_error *err) {
   if (!dp) return gs_error_set(err, GS_EIO, "%s: cannot open: %s", dir, strerror(errno));
   char path[4400];
   for (struct dirent *e; (e = readdir(dp));)
-    if (strstr(e->d_name, ".atom") &&
-        (!strncmp(e->d_name, "collision", 9) || !strncmp(e->d_name, "impact", 6) || !strncmp(e->d_name, "ppcoll", 6))) {
+    if ((strstr(e->d_name, ".atom") && (!strncmp(e->d_name, "collision", 9) || !strncmp(e->d_name, "impact", 6) ||
+                                        !strncmp(e->d_name, "ppcoll", 6))) ||
+        !strncmp(e->d_name, "events_", 7)) {
       snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
       remove(path);
     }
@@ -50,7 +55,10 @@ typedef struct {
   size_t ncl, ncmp, nw;
   double *num;             /* per class: sum over snapshots of N_i */
   double *cv_n, *cv_s, *cv_s2, *cv_a, *cv_v, *cv_v2; /* per class x compartment, as stats.c */
-  double *wall_contacts;   /* nw x ncl: sum over snapshots */
+  double *pair_events;     /* ncl x ncl (i <= j) */
+  double *wall_contacts;   /* nw x ncl: wall impacts (contacts that began) */
+  id_cls *ids;             /* every atom seen in a snapshot (the class of an id never changes) */
+  size_t nids, capids, unknown;
   double *ln_u;            /* impact speeds (ln) ... */
   int *u_wc;               /* ... and wall * ncl + class */
   size_t nu, capu;
@@ -79,7 +87,7 @@ static void cmp_add(pass *a, const gs_dem_case *c, int k, const double x[3], con
 
 static int snapshot(pass *a, const gs_dem_case *c, const char *post, long step, gs_error *err) {
   char path[4600];
-  gs_dump d, w;
+  gs_dump d;
   snprintf(path, sizeof path, "%s/collision%ld.atom", post, step);
   int rc = gs_dump_read(path, &d, err);
   if (rc) return rc;
@@ -100,44 +108,121 @@ static int snapshot(pass *a, const gs_dem_case *c, const char *post, long step, 
   }
   size_t nmap = d.nrows;
   gs_dump_free(&d);
-  if (rc || !a->nw) { free(map); return rc; }
-  qsort(map, nmap, sizeof *map, cmp_id);
-  snprintf(path, sizeof path, "%s/impact%ld.atom", post, step);
-  if ((rc = gs_dump_read(path, &w, err))) { free(map); return rc; }
-  long lc[14];
-  for (int k = 0; k < 14 && !rc; k++)
-    if ((lc[k] = gs_dump_col_index(&w, k + 1)) < 0) rc = gs_error_set(err, GS_EINPUT, "%s: no column [%d]", path, k + 1);
-  for (size_t r = 0; !rc && r < w.nrows; r++) {
-    const double *v = w.v + r * w.ncols;
-    size_t wall = (size_t)v[lc[6]];
-    id_cls key = {(long)v[lc[8]], 0}, *f = bsearch(&key, map, nmap, sizeof *map, cmp_id);
-    if (!f || wall >= a->nw) continue; /* an atom deleted between the two dumps */
-    a->wall_contacts[wall * a->ncl + (size_t)f->cls] += 1;
-    double du[3] = {v[lc[3]] - v[lc[0]], v[lc[4]] - v[lc[1]], v[lc[5]] - v[lc[2]]};
-    double u = sqrt(du[0] * du[0] + du[1] * du[1] + du[2] * du[2]);
-    int b = (int)(u / a->dv);
-    if (b >= a->nbins) b = a->nbins - 1;
-    a->hist[(wall * a->ncl + (size_t)f->cls) * (size_t)a->nbins + (size_t)b] += 1;
-    if (!(u >= GS_DEM_MIN_IMPACT_SPEED)) continue; /* resting contacts: no speed, as the embedded engine */
-    if (a->nu == a->capu) {
-      size_t cap = a->capu ? 2 * a->capu : 1024;
-      double *l = realloc(a->ln_u, cap * sizeof(double));
-      if (l) a->ln_u = l;
-      int *q = realloc(a->u_wc, cap * sizeof(int));
-      if (q) a->u_wc = q;
-      if (!l || !q) { rc = gs_error_set(err, GS_ENOMEM, "out of memory"); break; }
-      a->capu = cap;
-    }
-    a->ln_u[a->nu] = log(u);
-    a->u_wc[a->nu++] = (int)(wall * a->ncl + (size_t)f->cls);
+  if (!rc && a->nids + nmap > a->capids) {
+    size_t cap = a->capids ? a->capids : 1024;
+    while (cap < a->nids + nmap) cap *= 2;
+    id_cls *t = realloc(a->ids, cap * sizeof *t);
+    if (!t) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+    else a->ids = t, a->capids = cap;
   }
-  gs_dump_free(&w);
+  if (!rc) memcpy(a->ids + a->nids, map, nmap * sizeof *map), a->nids += nmap;
   free(map);
   return rc;
 }
 
+static int cmp_u64(const void *a, const void *b) {
+  unsigned long long x = *(const unsigned long long *)a, y = *(const unsigned long long *)b;
+  return (x > y) - (x < y);
+}
+
+static int class_of(pass *a, double id) {
+  id_cls key = {(long)id, 0}, *f = bsearch(&key, a->ids, a->nids, sizeof *a->ids, cmp_id);
+  return f ? f->cls : -1;
+}
+
+/* One contact list of an events file: its rows (ncol numbers each), or 0 at the end. */
+static long next_list(FILE *fp, size_t ncol, double **rows, size_t *cap, size_t *n) {
+  char line[1024];
+  long step = -1, nrow = -1;
+  while (fgets(line, sizeof line, fp)) {
+    if (!strncmp(line, "ITEM: TIMESTEP", 14) && fgets(line, sizeof line, fp)) step = atol(line);
+    else if (!strncmp(line, "ITEM: NUMBER OF ENTRIES", 23) && fgets(line, sizeof line, fp)) nrow = atol(line);
+    else if (!strncmp(line, "ITEM: ENTRIES", 13)) break;
+  }
+  if (step < 0 || nrow < 0) return 0;
+  if ((size_t)nrow * ncol > *cap) {
+    double *r = realloc(*rows, ((size_t)nrow * ncol + 1) * sizeof(double));
+    if (!r) return -1;
+    *rows = r, *cap = (size_t)nrow * ncol;
+  }
+  for (long r = 0; r < nrow; r++)
+    for (size_t k = 0; k < ncol; k++)
+      if (fscanf(fp, "%lf", *rows + (size_t)r * ncol + k) != 1) return -1;
+  *n = (size_t)nrow;
+  return step + 1; /* > 0 */
+}
+
+/* Contacts that began: keys of the list not in the previous list.  Pairs
+ * (ncol 3: id1 id2 overlap) or wall contacts (ncol 10: particle and wall
+ * velocities, mesh, triangle, atom, overlap); an atom on a mesh is one contact
+ * whichever triangles it touches. */
+static int count_events(pass *a, const char *path, int wall, gs_error *err) {
+  FILE *fp = fopen(path, "r");
+  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot read: %s", path, strerror(errno));
+  const size_t ncol = wall ? 10 : 3;
+  double *rows = NULL;
+  size_t cap = 0, n = 0, nprev = 0, ncur = 0;
+  unsigned long long *prev = NULL, *cur = NULL;
+  int rc = GS_OK, first = 1;
+  long st;
+  while (!rc && (st = next_list(fp, ncol, &rows, &cap, &n)) != 0) {
+    unsigned long long *t = st < 0 ? NULL : realloc(cur, (n + 1) * sizeof *cur);
+    if (!t) { rc = gs_error_set(err, GS_EINPUT, "%s: unreadable contact list", path); break; }
+    cur = t;
+    ncur = 0;
+    for (size_t r = 0; r < n; r++) {
+      const double *v = rows + r * ncol;
+      if (!(v[ncol - 1] > 0)) continue; /* not overlapping */
+      unsigned long long i1 = (unsigned long long)(wall ? v[8] : v[0]), i2 = (unsigned long long)(wall ? v[6] : v[1]);
+      unsigned long long key = wall ? i1 << 16 | i2 : (i1 < i2 ? i1 << 32 | i2 : i2 << 32 | i1);
+      if (ncur && cur[ncur - 1] == key) continue; /* the same atom on another triangle of the mesh */
+      int dup = 0;
+      for (size_t q = ncur; wall && q-- > 0 && cur[q] >> 16 == i1;) dup |= cur[q] == key;
+      if (dup) continue;
+      cur[ncur++] = key;
+      if (first || (nprev && bsearch(&key, prev, nprev, sizeof *prev, cmp_u64))) continue;
+      int c1 = class_of(a, wall ? v[8] : v[0]), c2 = wall ? 0 : class_of(a, v[1]);
+      if (c1 < 0 || c2 < 0) { a->unknown++; continue; }
+      if (!wall) {
+        size_t i = (size_t)(c1 < c2 ? c1 : c2), j = (size_t)(c1 < c2 ? c2 : c1);
+        a->pair_events[i * a->ncl + j] += 1;
+        continue;
+      }
+      size_t w = (size_t)v[6];
+      if (w >= a->nw) continue;
+      size_t at = w * a->ncl + (size_t)c1;
+      a->wall_contacts[at] += 1;
+      double du[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]};
+      double u = sqrt(du[0] * du[0] + du[1] * du[1] + du[2] * du[2]);
+      int b = (int)(u / a->dv);
+      if (b >= a->nbins) b = a->nbins - 1;
+      a->hist[at * (size_t)a->nbins + (size_t)b] += 1;
+      if (!(u >= GS_DEM_MIN_IMPACT_SPEED)) continue; /* resting contacts: no speed, as the embedded engine */
+      if (a->nu == a->capu) {
+        size_t nc = a->capu ? 2 * a->capu : 1024;
+        double *l = realloc(a->ln_u, nc * sizeof(double));
+        if (l) a->ln_u = l;
+        int *q = realloc(a->u_wc, nc * sizeof(int));
+        if (q) a->u_wc = q;
+        if (!l || !q) { rc = gs_error_set(err, GS_ENOMEM, "out of memory"); break; }
+        a->capu = nc;
+      }
+      a->ln_u[a->nu] = log(u);
+      a->u_wc[a->nu++] = (int)at;
+    }
+    qsort(cur, ncur, sizeof *cur, cmp_u64);
+    unsigned long long *sw = prev;
+    prev = cur, nprev = ncur;
+    cur = sw;
+    first = 0;
+  }
+  free(rows), free(prev), free(cur);
+  fclose(fp);
+  return rc;
+}
+
 /* impact_table.csv (wall < 0: all walls) or impact_table_WALL.csv */
-static int impact_table(const pass *a, const gs_dem_case *c, const gs_dem_data *dd, const char *dir, long wall,
+static int impact_table(const pass *a, const gs_dem_case *c, const char *dir, long wall,
                         double ns, double *rate_all, gs_error *err) {
   const size_t ncl = a->ncl;
   double e[GS_DEM_MAX_CLASSES + 1], rate[GS_DEM_MAX_CLASSES], mu[GS_DEM_MAX_CLASSES], sg[GS_DEM_MAX_CLASSES];
@@ -154,8 +239,8 @@ static int impact_table(const pass *a, const gs_dem_case *c, const gs_dem_data *
     double contacts = 0;
     for (size_t w = 0; w < a->nw; w++)
       if (wall < 0 || (size_t)wall == w) contacts += a->wall_contacts[w * ncl + i];
-    double Ni = a->num[i] / ns;
-    rate[i] = Ni > 0 ? contacts / ns / dd->wall_contact_time[i] / Ni : 0;
+    double Ni = a->num[i] / ns, win = c->duration - c->stats_start;
+    rate[i] = Ni > 0 ? contacts / (Ni * win) : 0;
     if (rate_all) rate_all[i] = rate[i];
     size_t m = 0;
     for (size_t q = 0; q < a->nu; q++)
@@ -168,9 +253,9 @@ static int impact_table(const pass *a, const gs_dem_case *c, const gs_dem_data *
   if (wall < 0) snprintf(path, sizeof path, "%s/impact_table.csv", dir);
   else snprintf(path, sizeof path, "%s/impact_table_%s.csv", dir, c->wall_src[wall].name);
   snprintf(comment, sizeof comment,
-           "# gransim dem (engine liggghts): wall impacts on %s%s, per class, from t = %.9g s: current wall contacts\n"
-           "# of %.0f snapshots / Hertz wall contact time (src/demdata); rows: impacts per particle per second;\n"
-           "# mu, sigma of the lognormal fit of the relative speed U = |v - v_wall| of the contacts in the snapshots\n"
+           "# gransim dem (engine liggghts): wall impacts (contacts that began) on %s%s, per class, from t = %.9g s;\n"
+           "# N_i over %.0f snapshots; rows: impacts per particle per second (impacts / (N_i window));\n"
+           "# mu, sigma of the lognormal fit of U = |v - v_wall| at the first contact list holding the impact\n"
            "# (%zu speeds fitted, those slower than %g m/s left out; %zu class(es) take the pooled fit mu %.6g, sigma %.6g)\n",
            wall < 0 ? "all walls" : "wall ", wall < 0 ? "" : c->wall_src[wall].name, c->stats_start, ns, np,
            GS_DEM_MIN_IMPACT_SPEED, pooled, pmu, psg);
@@ -223,14 +308,23 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   a.hist = calloc(nw * ncl * (size_t)a.nbins + 1, sizeof(double));
   if (!a.num || !a.cv_n || !a.cv_s || !a.cv_s2 || !a.cv_a || !a.cv_v || !a.cv_v2 || !a.wall_contacts || !a.hist)
     rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  a.pair_events = calloc(ncl * ncl, sizeof(double));
+  if (!rc && !a.pair_events) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   for (size_t s = 0; !rc && s < dd.nsnap; s++) rc = snapshot(&a, c, post, dd.steps[s], err);
+  if (!rc) qsort(a.ids, a.nids, sizeof *a.ids, cmp_id);
+  snprintf(path, sizeof path, "%s/events_pp.txt", post);
+  if (!rc) rc = count_events(&a, path, 0, err);
+  snprintf(path, sizeof path, "%s/events_wall.txt", post);
+  if (!rc && nw) rc = count_events(&a, path, 1, err);
   const double ns = dd.nsnap ? (double)dd.nsnap : 1;
   const double t0 = dd.nsnap ? dd.steps[0] * dt : NAN, t1 = dd.nsnap ? dd.steps[dd.nsnap - 1] * dt : NAN;
   const double win = c->duration - c->stats_start;
   FILE *fp = NULL;
   double e[GS_DEM_MAX_CLASSES + 1];
   gs_dem_class_edges(c, e);
-  const char *note = "; engine liggghts: events = current contacts / Hertz contact time (src/demdata)";
+  char note[512];
+  snprintf(note, sizeof note, "; engine liggghts: contacts that began between contact lists %ld steps apart%s",
+           gs_lig_event_every(c), a.unknown ? " (contacts of atoms inserted after the last snapshot left out)" : "");
 
   /* collisions per class pair */
   double *C = calloc(ncl * ncl, sizeof(double));
@@ -238,15 +332,24 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   if (!rc && (fp = gs_dem_table_open(out, "collisions.csv", path, sizeof path, err))) {
     fprintf(fp, "# collision events from t = %.9g to %.9g s (%.9g s, %.0f snapshots from t = %.9g to %.9g s)%s\n",
             c->stats_start, c->duration, win, ns, t0, t1, note);
-    fprintf(fp, "class_i,class_j,name_i,name_j,events,N_i,N_j,window_s,events_per_s,C_ij\n");
+    /* demdata's estimate from the contact snapshots, for comparison (it
+     * over-counts enduring contacts of a resting bed: each counts as a collision per t_c) */
+    fprintf(fp, "# contacts / Hertz contact time of the snapshots (src/demdata), C_ij:");
     for (size_t i = 0; i < ncl; i++)
       for (size_t j = i; j < ncl; j++) {
-        double eps = dd.contacts[i * ncl + j] / dd.pair_contact_time[i * ncl + j];
         double Ni = a.num[i] / ns, Nj = a.num[j] / ns;
-        double cij = Ni > 0 && Nj > 0 ? eps / (Ni * Nj) : 0;
+        double eps = dd.contacts[i * ncl + j] / dd.pair_contact_time[i * ncl + j];
+        fprintf(fp, " %zu-%zu %.6g", i + 1, j + 1, Ni > 0 && Nj > 0 ? eps / (Ni * Nj) : 0);
+      }
+    fprintf(fp, "\nclass_i,class_j,name_i,name_j,events,N_i,N_j,window_s,events_per_s,C_ij\n");
+    for (size_t i = 0; i < ncl; i++)
+      for (size_t j = i; j < ncl; j++) {
+        double ev = a.pair_events[i * ncl + j];
+        double Ni = a.num[i] / ns, Nj = a.num[j] / ns;
+        double cij = Ni > 0 && Nj > 0 ? ev / (Ni * Nj * win) : 0;
         C[i * ncl + j] = C[j * ncl + i] = cij;
         fprintf(fp, "%zu,%zu,%s,%s,%.0f,%.6g,%.6g,%.9g,%.9g,%.9g\n", i + 1, j + 1, c->cls[i].name, c->cls[j].name,
-                eps * win, Ni, Nj, win, eps, cij);
+                ev, Ni, Nj, win, ev / win, cij);
       }
     rc = gs_dem_table_close(fp, path, err);
   } else if (!rc) rc = err->code;
@@ -265,19 +368,20 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
 
   /* impacts per wall and class; the breakage selection's tables */
   if (!rc && (fp = gs_dem_table_open(out, "impacts.csv", path, sizeof path, err))) {
-    fprintf(fp, "# wall impacts from t = %.9g to %.9g s (%.9g s)%s; vn, vt: not in LIGGGHTS' contact dumps (nan); "
-            "impact_table.csv holds the fits of the relative speed\n", c->stats_start, c->duration, win, note);
+    fprintf(fp, "# wall impacts (contacts that began) from t = %.9g to %.9g s (%.9g s)%s; vn, vt: not in LIGGGHTS' "
+            "contact lists (nan); impact_table.csv holds the fits of the relative speed\n", c->stats_start, c->duration,
+            win, note);
     fprintf(fp, "wall,class,name,impacts,impacts_per_s,impacts_per_particle_s,mean_vn,std_vn,mean_vt\n");
     for (size_t w = 0; w < nw; w++)
       for (size_t i = 0; i < ncl; i++) {
-        double Ni = a.num[i] / ns, per_s = a.wall_contacts[w * ncl + i] / ns / dd.wall_contact_time[i];
-        fprintf(fp, "%s,%zu,%s,%.0f,%.9g,%.9g,nan,nan,nan\n", c->wall_src[w].name, i + 1, c->cls[i].name, per_s * win,
-                per_s, Ni > 0 ? per_s / Ni : 0);
+        double Ni = a.num[i] / ns, n = a.wall_contacts[w * ncl + i];
+        fprintf(fp, "%s,%zu,%s,%.0f,%.9g,%.9g,nan,nan,nan\n", c->wall_src[w].name, i + 1, c->cls[i].name, n, n / win,
+                Ni > 0 ? n / (Ni * win) : 0);
       }
     rc = gs_dem_table_close(fp, path, err);
   } else if (!rc) rc = err->code;
-  if (!rc) rc = impact_table(&a, c, &dd, out, -1, ns, NULL, err);
-  for (size_t w = 0; w < nw && !rc; w++) rc = impact_table(&a, c, &dd, out, (long)w, ns, NULL, err);
+  if (!rc) rc = impact_table(&a, c, out, -1, ns, NULL, err);
+  for (size_t w = 0; w < nw && !rc; w++) rc = impact_table(&a, c, out, (long)w, ns, NULL, err);
   if (!rc && (fp = gs_dem_table_open(out, "impact_velocity.csv", path, sizeof path, err))) {
     fprintf(fp, "# impact speed distributions (the last bin holds everything above); engine liggghts: the relative "
             "speed |v - v_wall| of the wall contacts in the snapshots, not the normal speed at first contact\n"
@@ -341,7 +445,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   } else if (!rc) rc = err->code;
 
   free(a.num), free(a.cv_n), free(a.cv_s), free(a.cv_s2), free(a.cv_a), free(a.cv_v), free(a.cv_v2);
-  free(a.wall_contacts), free(a.ln_u), free(a.u_wc), free(a.hist);
+  free(a.wall_contacts), free(a.ln_u), free(a.u_wc), free(a.hist), free(a.pair_events), free(a.ids);
   gs_dem_data_free(&dd);
   return rc;
 }
