@@ -60,6 +60,7 @@ int main(void) {
   CHECK(rc == 0 && d);
   if (d) {
     HAS(d, "read_data bed.data\n");
+    CHECK(strstr(d, "custom/vtk") == NULL); /* no output.vtk_every */
     HAS(d, "timestep 2.5e-06\n");
     HAS(d, "neighbor 0.0005 bin\n");
     HAS(d, "fix gravi all gravity 9.81 vector 0 -1 0\n");
@@ -108,6 +109,8 @@ int main(void) {
       {"statistics: {start: 0.005", "statistics: {start: steady", "statistics.start"},
       {"axis: [0, 1, 0], radius: 0.005,", "axis: [0, 1, 0], radius: 0.005, inner_radius: 0.001,", "feed[0].region.cylinder"},
       {"{name: b, radius: 1.5e-3,", "{name: b, radius: [1.0e-3, 2.0e-3],", "classes[1].radius"},
+      {"seed: 5,", "seed: 5, damping: exact,", "dem.damping"},
+      {"seed: 5,", "seed: 5, mesh_contacts: closest,", "dem.mesh_contacts"},
   };
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
     char y[4096];

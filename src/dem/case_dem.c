@@ -350,6 +350,7 @@ static int load(gs_dem_case *c, gs_error *err) {
     if (!(p->hi[a] > p->lo[a])) return gs_cfg_fail(gs_cfg_get(box, "hi"), err, "expected hi > lo on every axis");
   c->seed = (uint64_t)seed;
   c->damping_given = gs_cfg_get(dem, "damping") != NULL;
+  c->mesh_contacts_given = gs_cfg_get(dem, "mesh_contacts") != NULL;
   gs_cfg_node *skin = gs_cfg_get(dem, "skin");
   /* materials */
   if ((rc = gs_cfg_seq_req(root, "materials", &mats, err))) return rc;

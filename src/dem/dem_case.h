@@ -54,6 +54,7 @@ struct gs_dem_case_s {
   gs_dem_params prm;
   int engine;          /* GS_DEM_ENGINE_* */
   int damping_given;   /* dem.damping was in the file */
+  int mesh_contacts_given; /* dem.mesh_contacts was in the file */
   size_t nwall_src;
   gs_dem_wall_src wall_src[GS_DEM_CASE_MAX_WALLS];
   double duration;

@@ -156,6 +156,12 @@ int gs_lig_check(const gs_dem_case *c, gs_error *err) {
       return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): %s walls are not expressible in the LIGGGHTS engine "
                           "(compute wall/gran/local reports mesh walls only); give the wall as an STL mesh", w,
                           c->wall_src[w].name, c->wall_src[w].kind == GS_DEM_SRC_PLANE ? "plane" : "cylinder");
+  if (c->damping_given && c->prm.damping != GS_DEM_DAMPING_LIGGGHTS)
+    return gs_error_set(err, GS_EINPUT, "dem.damping: 'exact' is not expressible in LIGGGHTS, whose damping follows "
+                        "from e by its closed form; give 'liggghts' or leave the key out");
+  if (c->mesh_contacts_given && c->prm.mesh_contacts != GS_DEM_MESH_LIGGGHTS)
+    return gs_error_set(err, GS_EINPUT, "dem.mesh_contacts: 'closest' is not expressible in LIGGGHTS, which counts "
+                        "mesh contacts by its own rule; give 'liggghts' or leave the key out");
   if (c->start_steady)
     return gs_error_set(err, GS_EINPUT, "statistics.start: 'steady' is not expressible in a LIGGGHTS deck (the "
                         "detector needs the collision rate during the run); give a time");
@@ -273,6 +279,11 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   fprintf(fp, "compute rke all erotate/sphere\n"
               "thermo_style custom step atoms ke c_rke cpu\nthermo %ld\nthermo_modify lost ignore norm no\n", out_k);
 
+  if (c->vtk_every > 0) { /* frames in DIR/vtk, named by step: LIGGGHTS' own writers */
+    long vk = (long)fmax(1, round(c->vtk_every / dt));
+    fprintf(fp, "dump dvtk all custom/vtk %ld ../vtk/particles_*.vtk id type radius x y z vx vy vz\n", vk);
+    if (c->nwall_src) fprintf(fp, "dump dstl all mesh/stl %ld ../vtk/walls_*.stl\n", vk);
+  }
   fprintf(fp, "# before the statistics window (%.9g s)\n", c->stats_start);
   run_cmd(fp, c, start_k, "before");
   fprintf(fp, "# the statistics window: a snapshot every %ld steps (%.9g s)\n", smp_k, smp_k * dt);

@@ -151,6 +151,9 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
   snprintf(path, sizeof path, "%s/post", dir);
   if (mkdir(path, 0777) && errno != EEXIST) return gs_error_set(err, GS_EIO, "%s: cannot create: %s", path, strerror(errno));
   if ((rc = gs_lig_clear_dumps(path, err))) return rc;
+  snprintf(path, sizeof path, "%s/vtk", out);
+  if (c->vtk_every > 0 && mkdir(path, 0777) && errno != EEXIST)
+    return gs_error_set(err, GS_EIO, "%s: cannot create: %s", path, strerror(errno));
   int ranks = opt && opt->ranks > 0 ? opt->ranks : (int)sysconf(_SC_NPROCESSORS_ONLN);
   if (ranks < 1) ranks = 1;
   if (opt && opt->launcher) snprintf(launch, sizeof launch, "%s", opt->launcher);
