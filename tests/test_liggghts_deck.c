@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "check.h"
 #include "gransim/dem.h"
@@ -36,6 +37,12 @@ static char *deck_of(const char *yaml, gs_error *err, int *rc) {
 #define HAS(deck, s) do { if (!strstr(deck, s)) { fprintf(stderr, "deck lacks: %s\n", s); CHECK(0); } } while (0)
 
 int main(void) {
+  /* the case and its mesh in a folder of their own */
+  char tmp[] = "/tmp/gransim_lig_deck_XXXXXX";
+  if (!mkdtemp(tmp) || chdir(tmp)) {
+    perror("test_liggghts_deck: temporary folder");
+    return 1;
+  }
   FILE *fp = fopen("liggghts_deck_plate.stl", "w");
   fputs(stl, fp);
   fclose(fp);
@@ -127,5 +134,6 @@ int main(void) {
   }
   remove("liggghts_deck_case.yaml");
   remove("liggghts_deck_plate.stl");
+  if (chdir("/") == 0) rmdir(tmp);
   TEST_EXIT();
 }
