@@ -16,9 +16,6 @@
 #include "gransim/liggghts.h"
 #include "liggghts/lig_internal.h"
 
-/* demdata's impact reader knows two meshes (column 7 of wall/gran/local is
- * the mesh's index in the wall fix: 0 or 1). */
-#define GS_LIG_MAX_WALLS 2
 
 /* LIGGGHTS wants prime seeds above 10000; the case seed picks where to start. */
 static long next_prime(long n) {
@@ -147,10 +144,6 @@ long gs_lig_event_every(const gs_dem_case *c) {
 
 /* What a deck cannot express, named by key. */
 int gs_lig_check(const gs_dem_case *c, gs_error *err) {
-  if (c->nwall_src > GS_LIG_MAX_WALLS)
-    return gs_error_set(err, GS_EINPUT, "walls: the LIGGGHTS engine takes at most %d mesh walls (its dumps are "
-                        "reduced as a static shell and a moving impeller), the case has %zu", GS_LIG_MAX_WALLS,
-                        c->nwall_src);
   for (size_t w = 0; w < c->nwall_src; w++)
     if (c->wall_src[w].kind != GS_DEM_SRC_MESH)
       return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): %s walls are not expressible in the LIGGGHTS engine "
@@ -262,7 +255,8 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
     if (s->rotating && s->omega != 0) {
       double sg = s->omega > 0 ? 1 : -1;
       fprintf(fp, "fix rot%zu all move/mesh mesh wall%zu rotate origin %.9g %.9g %.9g axis %.9g %.9g %.9g period %.9g\n",
-              w, w, s->origin[0], s->origin[1], s->origin[2], sg * s->axis[0], sg * s->axis[1], sg * s->axis[2],
+              w, w, s->origin[0], s->origin[1], s->origin[2], sg * s->axis[0] + 0.0, sg * s->axis[1] + 0.0,
+              sg * s->axis[2] + 0.0,
               2 * M_PI / fabs(s->omega));
     }
     if (s->velocity[0] != 0 || s->velocity[1] != 0 || s->velocity[2] != 0)

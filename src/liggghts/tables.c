@@ -262,6 +262,41 @@ static int impact_table(const pass *a, const gs_dem_case *c, const char *dir, lo
   return gs_dem_impact_table_write(path, comment, ncl, e, 0, rate, mu, sg, err);
 }
 
+static int cmp_long(const void *a, const void *b) {
+  long x = *(const long *)a, y = *(const long *)b;
+  return (x > y) - (x < y);
+}
+
+/* The steps of the collision<STEP>.atom snapshots in dir, increasing. */
+static int snapshot_steps(const char *dir, long **out, size_t *n, gs_error *err) {
+  DIR *dp = opendir(dir);
+  if (!dp) return gs_error_set(err, GS_EIO, "%s: cannot open: %s", dir, strerror(errno));
+  size_t cap = 64;
+  long *s = malloc(cap * sizeof *s);
+  *n = 0;
+  for (struct dirent *e; s && (e = readdir(dp));) {
+    long st;
+    char tail[8];
+    if (sscanf(e->d_name, "collision%ld%7s", &st, tail) != 2 || strcmp(tail, ".atom")) continue;
+    if (*n == cap) {
+      long *t = realloc(s, 2 * cap * sizeof *t);
+      if (!t) { free(s); s = NULL; break; }
+      s = t, cap *= 2;
+    }
+    s[(*n)++] = st;
+  }
+  closedir(dp);
+  if (!s) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  if (!*n) {
+    free(s);
+    return gs_error_set(err, GS_EINPUT, "%s: LIGGGHTS wrote no collision<STEP>.atom snapshot (is the statistics "
+                        "window empty?)", dir);
+  }
+  qsort(s, *n, sizeof *s, cmp_long);
+  *out = s;
+  return GS_OK;
+}
+
 int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, gs_error *err) {
   char post[4400], path[4600];
   snprintf(post, sizeof post, "%s/liggghts/post", out);
@@ -297,8 +332,17 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     }
     closedir(dp);
   }
-  int rc = gs_dem_data_read(post, &opt, &dd, err);
-  if (rc) return gs_error_prefix(err, "reducing the LIGGGHTS dumps: ");
+  /* demdata's snapshot estimate is only a comparison: without it (more than two
+   * meshes, or no relative velocities) the tables are written all the same */
+  gs_error derr = {0};
+  int have_dd = gs_dem_data_read(post, &opt, &dd, &derr) == GS_OK;
+  long *steps = NULL;
+  size_t nsnap = 0;
+  int rc = snapshot_steps(post, &steps, &nsnap, err);
+  if (rc) {
+    if (have_dd) gs_dem_data_free(&dd);
+    return rc;
+  }
   pass a = {.ncl = ncl, .ncmp = c->ncmp, .nw = nw, .nbins = 40, .dv = c->prm.impact_dv > 0 ? c->prm.impact_dv : 0.25};
   size_t nc = ncl * c->ncmp;
   a.num = calloc(ncl, sizeof(double));
@@ -310,14 +354,14 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   a.pair_events = calloc(ncl * ncl, sizeof(double));
   if (!rc && !a.pair_events) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-  for (size_t s = 0; !rc && s < dd.nsnap; s++) rc = snapshot(&a, c, post, dd.steps[s], err);
+  for (size_t s = 0; !rc && s < nsnap; s++) rc = snapshot(&a, c, post, steps[s], err);
   if (!rc) qsort(a.ids, a.nids, sizeof *a.ids, cmp_id);
   snprintf(path, sizeof path, "%s/events_pp.txt", post);
   if (!rc) rc = count_events(&a, path, 0, err);
   snprintf(path, sizeof path, "%s/events_wall.txt", post);
   if (!rc && nw) rc = count_events(&a, path, 1, err);
-  const double ns = dd.nsnap ? (double)dd.nsnap : 1;
-  const double t0 = dd.nsnap ? dd.steps[0] * dt : NAN, t1 = dd.nsnap ? dd.steps[dd.nsnap - 1] * dt : NAN;
+  const double ns = nsnap ? (double)nsnap : 1;
+  const double t0 = nsnap ? steps[0] * dt : NAN, t1 = nsnap ? steps[nsnap - 1] * dt : NAN;
   const double win = c->duration - c->stats_start;
   FILE *fp = NULL;
   double e[GS_DEM_MAX_CLASSES + 1];
@@ -335,7 +379,8 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     /* demdata's estimate from the contact snapshots, for comparison (it
      * over-counts enduring contacts of a resting bed: each counts as a collision per t_c) */
     fprintf(fp, "# contacts / Hertz contact time of the snapshots (src/demdata), C_ij:");
-    for (size_t i = 0; i < ncl; i++)
+    if (!have_dd) fprintf(fp, " not available (%s)", derr.msg);
+    for (size_t i = 0; have_dd && i < ncl; i++)
       for (size_t j = i; j < ncl; j++) {
         double Ni = a.num[i] / ns, Nj = a.num[j] / ns;
         double eps = dd.contacts[i * ncl + j] / dd.pair_contact_time[i * ncl + j];
@@ -446,6 +491,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
 
   free(a.num), free(a.cv_n), free(a.cv_s), free(a.cv_s2), free(a.cv_a), free(a.cv_v), free(a.cv_v2);
   free(a.wall_contacts), free(a.ln_u), free(a.u_wc), free(a.hist), free(a.pair_events), free(a.ids);
-  gs_dem_data_free(&dd);
+  if (have_dd) gs_dem_data_free(&dd);
+  free(steps);
   return rc;
 }
