@@ -109,6 +109,18 @@ int main(void) {
     CHECK(strstr(d, "variable before") < strstr(d, "dump dcol"));
   }
   free(d);
+  /* number fractions 1:3 become mass weights 1 : 3 * 1.5^3 */
+  {
+    char y[4096];
+    const char *at = strstr(base, "fractions_by: mass");
+    snprintf(y, sizeof y, "%.*sfractions_by: number%s", (int)(at - base), base, at + strlen("fractions_by: mass"));
+    d = deck_of(y, &err, &rc);
+    CHECK(rc == 0 && d);
+    char want[200];
+    snprintf(want, sizeof want, " 2 pts1 %.9g pts2 %.9g\n", 1 / 11.125, 10.125 / 11.125);
+    if (d) HAS(d, want);
+    free(d);
+  }
   /* refused keys name themselves */
   struct { const char *from, *to, *msg; } bad[] = {
       {"    mesh: liggghts_deck_plate.stl\n    scale: 1.0e-3\n", "    plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n",

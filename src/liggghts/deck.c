@@ -218,12 +218,18 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
                   i + 1, lig_seed(c, (int)i), i + 1, c->cls[i].mat.density, c->cls[i].rmin);
     size_t nz = 0;
     for (size_t i = 0; i < ncl; i++) nz += f->frac[i] > 0;
-    fprintf(fp, "fix pdd%zu all particledistribution/discrete%s %ld %zu", k, f->by_mass ? "" : "/numberbased",
-            lig_seed(c, 64 + 2 * (int)k), nz);
-    double fs = 0;
-    for (size_t i = 0; i < ncl; i++) fs += f->frac[i];
+    /* mass-based weights (particledistribution/discrete): number fractions become mass
+     * fractions f_i m_i, feeds having one radius per class; one convention, checked
+     * against the embedded engine (a 1:1 number feed gave 29:29 and 30:28 particles) */
+    double w[GS_DEM_MAX_CLASSES], fs = 0;
+    for (size_t i = 0; i < ncl; i++) {
+      double r = c->cls[i].rmin;
+      w[i] = f->frac[i] * (f->by_mass ? 1 : c->cls[i].mat.density * r * r * r);
+      fs += w[i];
+    }
+    fprintf(fp, "fix pdd%zu all particledistribution/discrete %ld %zu", k, lig_seed(c, 64 + 2 * (int)k), nz);
     for (size_t i = 0; i < ncl; i++)
-      if (f->frac[i] > 0) fprintf(fp, " pts%zu %.9g", i + 1, f->frac[i] / fs);
+      if (f->frac[i] > 0) fprintf(fp, " pts%zu %.9g", i + 1, w[i] / fs);
     fprintf(fp, "\n");
     char key[64];
     snprintf(key, sizeof key, "feed[%zu].region", k);
