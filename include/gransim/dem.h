@@ -230,6 +230,9 @@ void gs_dem_case_describe(const gs_dem_case *c, char *buf, size_t n);
 /* Run it, writing the tables, time series and VTK files into out_dir. */
 int gs_dem_case_run(gs_dem_case *c, const char *out_dir, int progress, gs_error *err);
 void gs_dem_case_free(gs_dem_case *c);
+/* The engine the case asks for (dem.engine): 0 embedded, 1 LIGGGHTS
+ * (include/gransim/liggghts.h runs those). */
+int gs_dem_case_engine(const gs_dem_case *c);
 
 #ifdef __cplusplus
 }

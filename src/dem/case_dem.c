@@ -138,6 +138,13 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   if ((mesh != NULL) + (pl != NULL) + (cy != NULL) != 1)
     return gs_cfg_fail(n, err, "expected exactly one of 'mesh' (an STL file), 'plane' or 'cylinder'");
   int w = -1;
+  if (c->nwall_src >= GS_DEM_CASE_MAX_WALLS)
+    return gs_cfg_fail(n, err, "at most %d walls", GS_DEM_CASE_MAX_WALLS);
+  gs_dem_wall_src *src = &c->wall_src[c->nwall_src++];
+  snprintf(src->name, sizeof src->name, "%s", name);
+  src->mat = *m;
+  src->scale = 1;
+  src->kind = mesh ? GS_DEM_SRC_MESH : pl ? GS_DEM_SRC_PLANE : GS_DEM_SRC_CYLINDER;
   if (mesh) {
     const char *file;
     double scale;
@@ -147,6 +154,11 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
     char path[4096];
     snprintf(path, sizeof path, "%s%s%s", file[0] == '/' ? "" : gs_cfg_dir(c->cfg),
              file[0] == '/' ? "" : "/", file);
+    /* absolute, since LIGGGHTS runs in another folder */
+    char *abs = realpath(path, NULL);
+    snprintf(src->mesh, sizeof src->mesh, "%s", abs ? abs : path);
+    free(abs);
+    src->scale = scale;
     gs_dem_mesh *me = gs_dem_mesh_read_stl(path, scale, err);
     if (!me) return gs_error_prefix(err, "%s:%d: walls: ", gs_cfg_file(mesh), gs_cfg_line(mesh));
     w = gs_dem_add_mesh(c->dem, name, me, m, err);
@@ -186,6 +198,11 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   }
   const double zero[3] = {0, 0, 0};
   if ((rc = vec3(n, "velocity", 0, zero, vel, err))) return rc;
+  src->rotating = rot != NULL;
+  memcpy(src->origin, origin, sizeof origin);
+  memcpy(src->axis, axis, sizeof axis);
+  src->omega = omega;
+  memcpy(src->velocity, vel, sizeof vel);
   if (rot || vel[0] != 0 || vel[1] != 0 || vel[2] != 0)
     if ((rc = gs_dem_wall_set_motion(c->dem, w, origin, axis, omega, vel, err))) return rc;
   return gs_cfg_check_unused(n, err);
@@ -315,6 +332,7 @@ static int load(gs_dem_case *c, gs_error *err) {
   memset(p, 0, sizeof *p);
   static const char *const damp[] = {"exact", "liggghts", NULL};
   static const char *const mesh_contacts[] = {"closest", "liggghts", NULL};
+  static const char *const engines[] = {"embedded", "liggghts", NULL};
   const double g0[3] = {0, 0, -9.81};
   long seed = 1;
   gs_cfg_node *box;
@@ -322,6 +340,7 @@ static int load(gs_dem_case *c, gs_error *err) {
       (rc = gs_cfg_double_range(dem, "duration", 1, 0, 0, 1, HUGE_VAL, 0, &c->duration, err)) ||
       (rc = vec3(dem, "gravity", 0, g0, p->gravity, err)) ||
       (rc = gs_cfg_enum_opt(dem, "damping", damp, 0, &p->damping, err)) ||
+      (rc = gs_cfg_enum_opt(dem, "engine", engines, GS_DEM_ENGINE_EMBEDDED, &c->engine, err)) ||
       (rc = gs_cfg_enum_opt(dem, "mesh_contacts", mesh_contacts, 0, &p->mesh_contacts, err)) ||
       (rc = gs_cfg_long_range(dem, "seed", 0, 1, 0, LONG_MAX, &seed, err)) ||
       (rc = gs_cfg_map_req(dem, "box", &box, err)) || (rc = vec3(box, "lo", 1, NULL, p->lo, err)) ||
@@ -330,6 +349,8 @@ static int load(gs_dem_case *c, gs_error *err) {
   for (int a = 0; a < 3; a++)
     if (!(p->hi[a] > p->lo[a])) return gs_cfg_fail(gs_cfg_get(box, "hi"), err, "expected hi > lo on every axis");
   c->seed = (uint64_t)seed;
+  c->damping_given = gs_cfg_get(dem, "damping") != NULL;
+  c->mesh_contacts_given = gs_cfg_get(dem, "mesh_contacts") != NULL;
   gs_cfg_node *skin = gs_cfg_get(dem, "skin");
   /* materials */
   if ((rc = gs_cfg_seq_req(root, "materials", &mats, err))) return rc;
@@ -357,6 +378,7 @@ static int load(gs_dem_case *c, gs_error *err) {
       break;
     }
     snprintf(c->cls[k].name, sizeof c->cls[k].name, "%s", name);
+    c->cls[k].mat = *cmat[k];
     gs_cfg_node *rn = gs_cfg_get(cn, "radius");
     if (rn && gs_cfg_kind_of(rn) == GS_CFG_MAP) {
       if ((rc = read_lognormal(rn, &c->cls[k], err))) break;
@@ -454,6 +476,8 @@ void gs_dem_case_describe(const gs_dem_case *c, char *buf, size_t n) {
            c->nclass, gs_dem_nwalls(c->dem), c->nfill, c->nfeed, c->noutlets, c->duration, c->prm.dt,
            ceil(c->duration / c->prm.dt - 1e-9));
 }
+
+int gs_dem_case_engine(const gs_dem_case *c) { return c->engine; }
 
 void gs_dem_case_free(gs_dem_case *c) {
   if (!c) return;

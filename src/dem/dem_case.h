@@ -6,6 +6,25 @@
 #include "gransim/dem.h"
 
 #define GS_DEM_MAX_CLASSES 64
+#define GS_DEM_CASE_MAX_WALLS 32
+
+/* Which engine runs the case (dem.engine): the embedded one, or LIGGGHTS
+ * through a deck written from the same keys (src/liggghts). */
+enum { GS_DEM_ENGINE_EMBEDDED = 0, GS_DEM_ENGINE_LIGGGHTS = 1 };
+enum { GS_DEM_SRC_MESH = 0, GS_DEM_SRC_PLANE = 1, GS_DEM_SRC_CYLINDER = 2 };
+
+/* A wall as the case file gave it: kept because the LIGGGHTS deck needs the
+ * file, scale and motion, which the embedded engine only holds as triangles. */
+typedef struct {
+  char name[64];
+  int kind;              /* GS_DEM_SRC_* */
+  char mesh[4096];       /* mesh: the STL file, resolved against the case's folder */
+  double scale;
+  gs_dem_material mat;
+  int rotating;
+  double origin[3], axis[3], omega; /* rotation (omega rad/s about the unit axis) */
+  double velocity[3];
+} gs_dem_wall_src;
 
 typedef struct {
   gs_dem_region reg;
@@ -25,6 +44,7 @@ typedef struct {
   int type;
   double rmin, rmax;   /* fixed (equal), uniform range, or the lognormal's truncation */
   double median, gsd;  /* lognormal radius when gsd > 1 (else 0) */
+  gs_dem_material mat; /* its particles' material (for the LIGGGHTS deck) */
 } gs_dem_class;
 
 struct gs_dem_case_s {
@@ -32,6 +52,11 @@ struct gs_dem_case_s {
   char path[1024];
   gs_dem *dem;
   gs_dem_params prm;
+  int engine;          /* GS_DEM_ENGINE_* */
+  int damping_given;   /* dem.damping was in the file */
+  int mesh_contacts_given; /* dem.mesh_contacts was in the file */
+  size_t nwall_src;
+  gs_dem_wall_src wall_src[GS_DEM_CASE_MAX_WALLS];
   double duration;
   uint64_t seed;
   size_t nclass;
@@ -52,5 +77,11 @@ struct gs_dem_case_s {
   /* output */
   double out_every, vtk_every;
 };
+
+/* Insert into the case's simulation with inserter in's region, velocity and
+ * class fractions (run_dem.c; the LIGGGHTS engine builds its initial bed with
+ * it too, so both engines start from the same particles). */
+int gs_dem_case_insert(gs_dem_case *c, gs_dem_inserter *in, long count, double mass, uint64_t *rng,
+                       long *n, double *m, gs_error *err);
 
 #endif

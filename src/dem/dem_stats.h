@@ -3,6 +3,8 @@
  * tables written from them and from the engine's event counters. */
 #ifndef GRANSIM_DEM_STATS_H
 #define GRANSIM_DEM_STATS_H
+#include <stdio.h>
+
 #include "dem/dem_case.h"
 
 typedef struct {
@@ -47,4 +49,11 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
                        double t_steady, gs_error *err);
 /* 1 if the window holds statistics (gs_dem_stats_write writes rates). */
 int gs_dem_stats_have_window(const gs_dem_stats *s, const gs_dem_case *c, double t_end, double t_steady);
+/* The tables' helpers, shared with the LIGGGHTS engine's reduction
+ * (src/liggghts/tables.c) so that both write the same edges and files:
+ * dir/name opened for writing (path receives it), closed with its error
+ * checked, and the class edges in diameter (nclass + 1 values). */
+FILE *gs_dem_table_open(const char *dir, const char *name, char *path, size_t n, gs_error *err);
+int gs_dem_table_close(FILE *fp, const char *path, gs_error *err);
+void gs_dem_class_edges(const gs_dem_case *c, double *e);
 #endif

@@ -24,8 +24,8 @@ static int in_outlet(const double x[3], void *ctx) {
   return 0;
 }
 
-static int insert(gs_dem_case *c, gs_dem_inserter *in, long count, double mass, uint64_t *rng,
-                  long *n, double *m, gs_error *err) {
+int gs_dem_case_insert(gs_dem_case *c, gs_dem_inserter *in, long count, double mass, uint64_t *rng,
+                       long *n, double *m, gs_error *err) {
   int types[GS_DEM_MAX_CLASSES];
   double rmin[GS_DEM_MAX_CLASSES], rmax[GS_DEM_MAX_CLASSES], med[GS_DEM_MAX_CLASSES], gsd[GS_DEM_MAX_CLASSES];
   for (size_t k = 0; k < c->nclass; k++) {
@@ -75,7 +75,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   for (size_t k = 0; k < c->nfill && !rc; k++) {
     long n;
     double m;
-    rc = insert(c, &c->fill[k], c->fill[k].count, c->fill[k].mass, &rng, &n, &m, err);
+    rc = gs_dem_case_insert(c, &c->fill[k], c->fill[k].count, c->fill[k].mass, &rng, &n, &m, err);
     if (!rc && n < c->fill[k].count && !isfinite(c->fill[k].mass))
       fprintf(stderr, "gransim: warning: fill[%zu]: region full after %ld of %ld particles\n", k, n,
               c->fill[k].count);
@@ -130,8 +130,8 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       double span = fmin(t + f->every, f->end) - f->start;
       long n;
       double m;
-      if (f->mass_rate > 0) rc = insert(c, f, LONG_MAX, f->mass_rate * span - f->done_m, &rng, &n, &m, err);
-      else rc = insert(c, f, (long)floor(f->number_rate * span - f->done_n + 0.5), HUGE_VAL, &rng, &n, &m, err);
+      if (f->mass_rate > 0) rc = gs_dem_case_insert(c, f, LONG_MAX, f->mass_rate * span - f->done_m, &rng, &n, &m, err);
+      else rc = gs_dem_case_insert(c, f, (long)floor(f->number_rate * span - f->done_n + 0.5), HUGE_VAL, &rng, &n, &m, err);
       f->done_n += (double)n;
       f->done_m += m;
       f->next_t += f->every;

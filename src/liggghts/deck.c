@@ -1,0 +1,328 @@
+/* The LIGGGHTS 3.8 deck of a `gransim dem` case.  Every key the embedded
+ * engine reads becomes the LIGGGHTS command with the same physics (the table
+ * is in docs/design-notes.md, "LIGGGHTS engine"); a key no deck can express
+ * is refused here, naming it, rather than silently dropped.
+ *
+ * Atom types: 1..nclass are the size classes (so that demdata's readers find
+ * the class in the `type` column), nclass+1.. one per wall, each with the
+ * wall's material. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "dem/dem_case.h"
+#include "gransim/dem_data.h"
+#include "gransim/liggghts.h"
+#include "liggghts/lig_internal.h"
+
+
+/* LIGGGHTS wants prime seeds above 10000; the case seed picks where to start. */
+static long next_prime(long n) {
+  for (;; n++) {
+    int prime = n > 1;
+    for (long d = 2; d * d <= n && prime; d++) prime = n % d != 0;
+    if (prime) return n;
+  }
+}
+
+static long lig_seed(const gs_dem_case *c, int k) {
+  long p = 10007 + (long)(c->seed % 100000) * 97;
+  for (int i = 0; i <= k; i++) p = next_prime(p + 1);
+  return p;
+}
+
+static double mean2(double a, double b) { return 0.5 * (a + b); }
+
+/* Material value of atom type t (1-based): a class or a wall. */
+static const gs_dem_material *type_mat(const gs_dem_case *c, size_t t) {
+  return t <= c->nclass ? &c->cls[t - 1].mat : &c->wall_src[t - 1 - c->nclass].mat;
+}
+
+/* fix property/global ... peratomtypepair: the pair's value is the mean of
+ * the two materials', as the embedded engine combines e, mu_s and mu_r. */
+static void pair_prop(FILE *fp, const gs_dem_case *c, size_t nt, const char *id, const char *name, int which) {
+  fprintf(fp, "fix %s all property/global %s peratomtypepair %zu", id, name, nt);
+  for (size_t i = 1; i <= nt; i++) {
+    fprintf(fp, " &\n   ");
+    for (size_t j = 1; j <= nt; j++) {
+      const gs_dem_material *a = type_mat(c, i), *b = type_mat(c, j);
+      double v = which == 0 ? mean2(a->e, b->e) : which == 1 ? mean2(a->mu_s, b->mu_s) : mean2(a->mu_r, b->mu_r);
+      fprintf(fp, " %.9g", v);
+    }
+  }
+  fprintf(fp, "\n");
+}
+
+/* A region as a LIGGGHTS region command: boxes, and cylinders along x, y or z
+ * without an inner radius. */
+static int region_cmd(FILE *fp, const char *id, const gs_dem_region *g, const char *key, gs_error *err) {
+  if (g->kind == GS_DEM_REGION_BOX) {
+    fprintf(fp, "region %s block %.9g %.9g %.9g %.9g %.9g %.9g units box\n", id, g->lo[0], g->hi[0], g->lo[1],
+            g->hi[1], g->lo[2], g->hi[2]);
+    return GS_OK;
+  }
+  int ax = -1;
+  for (int a = 0; a < 3; a++)
+    if (fabs(fabs(g->a[a]) - 1) < 1e-12) ax = a;
+  if (ax < 0 || g->Rin > 0)
+    return gs_error_set(err, GS_EINPUT, "%s.cylinder: the LIGGGHTS engine takes cylinders along x, y or z without "
+                        "inner_radius here (a LIGGGHTS region); use a box or such a cylinder", key);
+  double lo = g->p[ax] + g->a[ax] * g->s0, hi = g->p[ax] + g->a[ax] * g->s1;
+  int c1 = ax == 0 ? 1 : 0, c2 = ax == 2 ? 1 : 2;
+  fprintf(fp, "region %s cylinder %c %.9g %.9g %.9g %.9g %.9g units box\n", id, "xyz"[ax], g->p[c1], g->p[c2], g->R,
+          fmin(lo, hi), fmax(lo, hi));
+  return GS_OK;
+}
+
+/* Runs nsteps; with outlets, in chunks of 200 steps with the outlet regions
+ * emptied after each (the embedded engine removes at least every 200 steps). */
+static void run_cmd(FILE *fp, const gs_dem_case *c, long nsteps, const char *label) {
+  if (nsteps <= 0) return;
+  if (!c->noutlets) {
+    fprintf(fp, "run %ld\n", nsteps);
+    return;
+  }
+  long q = nsteps / 200, r = nsteps % 200;
+  if (q > 0) {
+    fprintf(fp, "variable %s loop %ld\nlabel %s\nrun 200\n", label, q, label);
+    for (size_t k = 0; k < c->noutlets; k++) fprintf(fp, "delete_atoms region outlet%zu compress no\n", k);
+    fprintf(fp, "next %s\njump SELF %s\n", label, label);
+  }
+  if (r > 0) {
+    fprintf(fp, "run %ld\n", r);
+    for (size_t k = 0; k < c->noutlets; k++) fprintf(fp, "delete_atoms region outlet%zu compress no\n", k);
+  }
+}
+
+/* Everything before the walls: atoms, box, materials, contact law, time
+ * step and gravity. */
+static void preamble(const gs_dem_case *c, FILE *fp, const char *data_file) {
+  const gs_dem_params *p = &c->prm;
+  const size_t ncl = c->nclass, nt = ncl + c->nwall_src;
+  const double dt = p->dt;
+  fprintf(fp, "atom_style granular\natom_modify map array\nboundary f f f\nnewton off\n"
+              "communicate single vel yes\nunits si\n");
+  if (data_file) {
+    fprintf(fp, "read_data %s\n", data_file);
+  } else {
+    fprintf(fp, "region domain block %.9g %.9g %.9g %.9g %.9g %.9g units box\ncreate_box %zu domain\n", p->lo[0],
+            p->hi[0], p->lo[1], p->hi[1], p->lo[2], p->hi[2], nt);
+  }
+  fprintf(fp, "neighbor %.9g bin\nneigh_modify delay 0\n", p->skin);
+
+  fprintf(fp, "# materials: types 1..%zu the size classes, %zu.. the walls\n", ncl, ncl + 1);
+  fprintf(fp, "fix m1 all property/global youngsModulus peratomtype");
+  for (size_t t = 1; t <= nt; t++) fprintf(fp, " %.9g", type_mat(c, t)->E);
+  fprintf(fp, "\nfix m2 all property/global poissonsRatio peratomtype");
+  for (size_t t = 1; t <= nt; t++) fprintf(fp, " %.9g", type_mat(c, t)->nu);
+  fprintf(fp, "\n");
+  pair_prop(fp, c, nt, "m3", "coefficientRestitution", 0);
+  pair_prop(fp, c, nt, "m4", "coefficientFriction", 1);
+  pair_prop(fp, c, nt, "m5", "coefficientRollingFriction", 2);
+  fprintf(fp, "pair_style gran model hertz tangential history rolling_friction cdt\npair_coeff * *\n");
+  fprintf(fp, "timestep %.9g\n", dt);
+  double g = sqrt(p->gravity[0] * p->gravity[0] + p->gravity[1] * p->gravity[1] + p->gravity[2] * p->gravity[2]);
+  if (g > 0)
+    fprintf(fp, "fix gravi all gravity %.9g vector %.9g %.9g %.9g\n", g, p->gravity[0] / g, p->gravity[1] / g,
+            p->gravity[2] / g);
+
+}
+
+long gs_lig_event_every(const gs_dem_case *c) {
+  /* the contact time falls with the impact speed as v^(-1/5): at 10 m/s it is
+   * shorter than nearly every contact in a granulator */
+  double tc = HUGE_VAL;
+  for (size_t i = 0; i < c->nclass; i++) {
+    const gs_dem_material *m = &c->cls[i].mat;
+    double r = c->cls[i].rmin, mass = m->density * 4.0 / 3.0 * M_PI * r * r * r;
+    double estar = m->E / (2 * (1 - m->nu * m->nu));
+    tc = fmin(tc, gs_dem_hertz_contact_time(mass / 2, r / 2, estar, 10.0, m->e));
+  }
+  return (long)fmax(1, floor(tc / 3 / c->prm.dt));
+}
+
+/* What a deck cannot express, named by key. */
+int gs_lig_check(const gs_dem_case *c, gs_error *err) {
+  for (size_t w = 0; w < c->nwall_src; w++)
+    if (c->wall_src[w].kind != GS_DEM_SRC_MESH)
+      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): %s walls are not expressible in the LIGGGHTS engine "
+                          "(compute wall/gran/local reports mesh walls only); give the wall as an STL mesh", w,
+                          c->wall_src[w].name, c->wall_src[w].kind == GS_DEM_SRC_PLANE ? "plane" : "cylinder");
+  if (c->damping_given && c->prm.damping != GS_DEM_DAMPING_LIGGGHTS)
+    return gs_error_set(err, GS_EINPUT, "dem.damping: 'exact' is not expressible in LIGGGHTS, whose damping follows "
+                        "from e by its closed form; give 'liggghts' or leave the key out");
+  if (c->mesh_contacts_given && c->prm.mesh_contacts != GS_DEM_MESH_LIGGGHTS)
+    return gs_error_set(err, GS_EINPUT, "dem.mesh_contacts: 'closest' is not expressible in LIGGGHTS, which counts "
+                        "mesh contacts by its own rule; give 'liggghts' or leave the key out");
+  if (c->start_steady)
+    return gs_error_set(err, GS_EINPUT, "statistics.start: 'steady' is not expressible in a LIGGGHTS deck (the "
+                        "detector needs the collision rate during the run); give a time");
+  if (c->has_holdup)
+    return gs_error_set(err, GS_EINPUT, "statistics.holdup_region: not available with the LIGGGHTS engine");
+  for (size_t k = 0; k < c->nfeed; k++)
+    for (size_t i = 0; i < c->nclass; i++)
+      if (c->feed[k].frac[i] > 0 && c->cls[i].rmin != c->cls[i].rmax)
+        return gs_error_set(err, GS_EINPUT, "classes[%zu].radius: a feed of the LIGGGHTS engine inserts classes of "
+                            "one radius only (particletemplate/sphere radius constant); class '%s' has a range or "
+                            "a distribution", i, c->cls[i].name);
+  for (size_t i = 0; i < c->nclass; i++)
+    if (memcmp(&c->cls[i].mat, &c->cls[0].mat, sizeof c->cls[0].mat))
+      return gs_error_set(err, GS_EINPUT, "classes[%zu].material: the LIGGGHTS engine's reduction assumes one "
+                          "particle material (that of classes[0]) for its Hertz contact times", i);
+  return GS_OK;
+}
+
+int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, const char *exclusion,
+                      gs_error *err) {
+  int rc = gs_lig_check(c, err);
+  if (rc) return rc;
+  const gs_dem_params *p = &c->prm;
+  const size_t ncl = c->nclass;
+  const double dt = p->dt;
+  const long nsteps = (long)ceil(c->duration / dt - 1e-9);
+  const long smp_k = (long)fmax(1, round(c->sample_every / dt));
+  const long out_k = (long)fmax(1, round(c->out_every / dt));
+  long start_k = (long)round(c->stats_start / dt);
+  if (start_k > nsteps) start_k = nsteps;
+
+  fprintf(fp, "# LIGGGHTS 3.8 deck written by gransim from %s (dem.engine: liggghts)\n", c->path);
+  fprintf(fp, "# Hertz-Mindlin with tangential history and CDT rolling friction; LIGGGHTS' damping from e\n"
+              "# (the embedded engine's `damping: liggghts`); mesh contacts by LIGGGHTS' own rule.\n");
+  preamble(c, fp, data_file);
+
+  /* walls: the STL files as the case gives them, scaled by LIGGGHTS */
+  if (c->nwall_src) {
+    for (size_t w = 0; w < c->nwall_src; w++) {
+      const gs_dem_wall_src *s = &c->wall_src[w];
+      /* LIGGGHTS wants its keywords in this order: type, heal, element_exclusion_list, scale */
+      fprintf(fp, "fix wall%zu all mesh/surface file %s type %zu heal auto_remove_duplicates", w, s->mesh, ncl + 1 + w);
+      /* LIGGGHTS refuses facets with more than two edge neighbours (the CoriMix
+       * shell has such rings); its remedy: a first run writes them, this one excludes them */
+      if (exclusion) fprintf(fp, " element_exclusion_list %s ex_wall%zu.txt", exclusion, w);
+      fprintf(fp, " scale %.9g curvature_tolerant yes  # %s\n", s->scale, s->name);
+    }
+    fprintf(fp, "fix walls all wall/gran model hertz tangential history rolling_friction cdt mesh n_meshes %zu meshes",
+            c->nwall_src);
+    for (size_t w = 0; w < c->nwall_src; w++) fprintf(fp, " wall%zu", w);
+    fprintf(fp, "\n");
+  }
+
+  /* feeds: one particle template per class, one distribution and inserter per feed */
+  for (size_t k = 0; k < c->nfeed; k++) {
+    const gs_dem_inserter *f = &c->feed[k];
+    if (k == 0)
+      for (size_t i = 0; i < ncl; i++)
+        if (c->cls[i].rmin == c->cls[i].rmax)
+          fprintf(fp, "fix pts%zu all particletemplate/sphere %ld atom_type %zu density constant %.9g radius constant %.9g\n",
+                  i + 1, lig_seed(c, (int)i), i + 1, c->cls[i].mat.density, c->cls[i].rmin);
+    size_t nz = 0;
+    for (size_t i = 0; i < ncl; i++) nz += f->frac[i] > 0;
+    /* mass-based weights (particledistribution/discrete): number fractions become mass
+     * fractions f_i m_i, feeds having one radius per class; one convention, checked
+     * against the embedded engine (a 1:1 number feed gave 29:29 and 30:28 particles) */
+    double w[GS_DEM_MAX_CLASSES], fs = 0;
+    for (size_t i = 0; i < ncl; i++) {
+      double r = c->cls[i].rmin;
+      w[i] = f->frac[i] * (f->by_mass ? 1 : c->cls[i].mat.density * r * r * r);
+      fs += w[i];
+    }
+    fprintf(fp, "fix pdd%zu all particledistribution/discrete %ld %zu", k, lig_seed(c, 64 + 2 * (int)k), nz);
+    for (size_t i = 0; i < ncl; i++)
+      if (f->frac[i] > 0) fprintf(fp, " pts%zu %.9g", i + 1, w[i] / fs);
+    fprintf(fp, "\n");
+    char key[64];
+    snprintf(key, sizeof key, "feed[%zu].region", k);
+    char rid[32];
+    snprintf(rid, sizeof rid, "feed%zu", k);
+    if ((rc = region_cmd(fp, rid, &f->reg, key, err))) return rc;
+    double span = fmin(f->end, c->duration) - f->start;
+    long every = (long)fmax(1, round(f->every / dt)), start = (long)round(f->start / dt);
+    /* LIGGGHTS reads these keywords in this order only */
+    fprintf(fp, "fix ins%zu all insert/rate/region seed %ld distributiontemplate pdd%zu verbose no ", k,
+            lig_seed(c, 65 + 2 * (int)k), k);
+    if (f->mass_rate > 0) fprintf(fp, "mass %.9g massrate %.9g", f->mass_rate * span * (1 + 1e-9), f->mass_rate);
+    else fprintf(fp, "nparticles %.0f particlerate %.9g", ceil(f->number_rate * span), f->number_rate);
+    fprintf(fp, " insert_every %ld", every);
+    if (start > 0) fprintf(fp, " start %ld", start);
+    fprintf(fp, " overlapcheck yes all_in yes vel constant %.9g %.9g %.9g region %s\n", f->v[0], f->v[1], f->v[2], rid);
+  }
+  for (size_t k = 0; k < c->noutlets; k++) {
+    char key[64], rid[32];
+    snprintf(key, sizeof key, "outlets[%zu].region", k);
+    snprintf(rid, sizeof rid, "outlet%zu", k);
+    if ((rc = region_cmd(fp, rid, &c->outlets[k], key, err))) return rc;
+  }
+  fprintf(fp, "fix integr all nve/sphere\n");
+
+  /* prescribed wall motion: rotation as a period (a negative rate turns the axis round) */
+  for (size_t w = 0; w < c->nwall_src; w++) {
+    const gs_dem_wall_src *s = &c->wall_src[w];
+    if (s->rotating && s->omega != 0) {
+      double sg = s->omega > 0 ? 1 : -1;
+      fprintf(fp, "fix rot%zu all move/mesh mesh wall%zu rotate origin %.9g %.9g %.9g axis %.9g %.9g %.9g period %.9g\n",
+              w, w, s->origin[0], s->origin[1], s->origin[2], sg * s->axis[0] + 0.0, sg * s->axis[1] + 0.0,
+              sg * s->axis[2] + 0.0,
+              2 * M_PI / fabs(s->omega));
+    }
+    if (s->velocity[0] != 0 || s->velocity[1] != 0 || s->velocity[2] != 0)
+      fprintf(fp, "fix lin%zu all move/mesh mesh wall%zu linear %.9g %.9g %.9g\n", w, w, s->velocity[0],
+              s->velocity[1], s->velocity[2]);
+  }
+
+  /* computes must exist before the first run (LIGGGHTS 3.8); the dumps are
+   * the files src/demdata reads (collision/impact/ppcoll<STEP>.atom) */
+  fprintf(fp, "# contacts and impacts: the dumps gransim reduces (src/demdata)\n");
+  for (size_t i = 1; i <= ncl; i++) fprintf(fp, "group t%zu type %zu\ncompute cc_%zu t%zu contact/atom\n", i, i, i, i);
+  fprintf(fp, "compute pgl all pair/gran/local id vel force contactArea delta\n");
+  if (c->nwall_src) fprintf(fp, "compute wgl all wall/gran/local id vel force contactArea delta\n");
+  fprintf(fp, "compute rke all erotate/sphere\n"
+              "thermo_style custom step atoms ke c_rke cpu\nthermo %ld\nthermo_modify lost ignore norm no\n", out_k);
+
+  if (c->vtk_every > 0) { /* frames in DIR/vtk, named by step: LIGGGHTS' own writers */
+    long vk = (long)fmax(1, round(c->vtk_every / dt));
+    fprintf(fp, "dump dvtk all custom/vtk %ld ../vtk/particles_*.vtk id type radius x y z vx vy vz\n", vk);
+    if (c->nwall_src) fprintf(fp, "dump dstl all mesh/stl %ld ../vtk/walls_*.stl\n", vk);
+  }
+  fprintf(fp, "# before the statistics window (%.9g s)\n", c->stats_start);
+  run_cmd(fp, c, start_k, "before");
+  fprintf(fp, "# the statistics window: a snapshot every %ld steps (%.9g s)\n", smp_k, smp_k * dt);
+  fprintf(fp, "dump dcol all custom %ld post/collision*.atom id type x y z vx vy vz radius", smp_k);
+  for (size_t i = 1; i <= ncl; i++) fprintf(fp, " c_cc_%zu", i);
+  fprintf(fp, "\ndump dpp all local %ld post/ppcoll*.atom", smp_k);
+  for (int q = 1; q <= 14; q++) fprintf(fp, " c_pgl[%d]", q);
+  fprintf(fp, "\n");
+  /* (without walls the runner writes an empty impact file per snapshot) */
+  if (c->nwall_src) {
+    fprintf(fp, "dump dimp all local %ld post/impact*.atom", smp_k);
+    for (int q = 1; q <= 14; q++) fprintf(fp, " c_wgl[%d]", q);
+    fprintf(fp, "\n");
+  }
+  /* the contact lists the collision events are counted from (tables.c) */
+  const long ek = gs_lig_event_every(c);
+  fprintf(fp, "dump dev all local %ld post/events_pp.txt c_pgl[7] c_pgl[8] c_pgl[14]\n", ek);
+  if (c->nwall_src) {
+    fprintf(fp, "dump dwev all local %ld post/events_wall.txt", ek);
+    for (int q = 1; q <= 9; q++) fprintf(fp, " c_wgl[%d]", q);
+    fprintf(fp, " c_wgl[14]\n");
+  }
+  run_cmd(fp, c, nsteps - start_k, "window");
+  return ferror(fp) ? gs_error_set(err, GS_EIO, "cannot write the LIGGGHTS deck") : GS_OK;
+}
+
+int gs_lig_write_exclusion_deck(const gs_dem_case *c, size_t wall, const char *path, gs_error *err) {
+  FILE *fp = fopen(path, "w");
+  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  preamble(c, fp, NULL);
+  /* no atoms, hence no cutoff: LIGGGHTS would refuse to sort them by bins of size 0 */
+  fprintf(fp, "atom_modify sort 0 0.0\n");
+  const gs_dem_wall_src *s = &c->wall_src[wall];
+  fprintf(fp, "fix wall%zu all mesh/surface file %s type %zu heal auto_remove_duplicates "
+          "element_exclusion_list write ex_wall%zu.txt scale %.9g curvature_tolerant yes\n", wall, s->mesh,
+          c->nclass + 1 + wall, wall, s->scale);
+  fprintf(fp, "fix walls all wall/gran model hertz tangential history rolling_friction cdt mesh n_meshes 1 "
+          "meshes wall%zu\nrun 1\n", wall);
+  int bad = ferror(fp);
+  if (fclose(fp) || bad) return gs_error_set(err, GS_EIO, "%s: write failed", path);
+  return GS_OK;
+}

@@ -1,0 +1,24 @@
+/* Inside the LIGGGHTS engine: the exclusion decks (deck.c), the thermo rows
+ * the runner collects (run_liggghts.c) and the reduction (tables.c). */
+#ifndef GRANSIM_LIG_INTERNAL_H
+#define GRANSIM_LIG_INTERNAL_H
+#include <stddef.h>
+
+#include "dem/dem_case.h"
+
+typedef struct {
+  size_t n, cap;
+  double *row; /* 5 per row: time [s], atoms, kinetic energy, rotational energy, cpu seconds */
+} gs_lig_thermo;
+
+/* A deck that only reads mesh `wall` and writes the facets LIGGGHTS refuses
+ * to ex_wall<wall>.txt (element_exclusion_list write). */
+int gs_lig_write_exclusion_deck(const gs_dem_case *c, size_t wall, const char *path, gs_error *err);
+/* Steps between the contact lists the events are counted from: a third of
+ * the Hertz contact time of two of the smallest particles at 10 m/s. */
+long gs_lig_event_every(const gs_dem_case *c);
+/* Remove the collision/impact/ppcoll dumps of an earlier run from dir. */
+int gs_lig_clear_dumps(const char *dir, gs_error *err);
+/* Reduce out/liggghts/post into out's tables (those of src/dem/stats.c). */
+int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, gs_error *err);
+#endif

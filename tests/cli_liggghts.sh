@@ -1,0 +1,116 @@
+# `engine: liggghts`: a tiny settling case (200 spheres of two classes in an STL box) through
+# both engines; both must write the same tables with the same classes and columns, keep every
+# particle, and agree on the mean velocity to within its order of magnitude.  Skips (exit 0)
+# only when the liggghts binary is absent (scripts/setup installs it).
+# Usage: bash cli_liggghts.sh GRANSIM_BINARY SOURCE_DIR
+set -euo pipefail
+BIN=$1
+if ! command -v "${GRANSIM_LIGGGHTS:-liggghts}" >/dev/null || ! command -v mpirun >/dev/null; then
+  echo "cli_liggghts: SKIPPED: no liggghts or mpirun on PATH (scripts/setup installs liggghts, mpi-default-bin)"
+  exit 0
+fi
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+fail() { echo "cli_liggghts: FAIL: $*" >&2; exit 1; }
+# a closed box 20 x 20 x 30 mm as an STL mesh (12 facets), in millimetres (scale 1e-3)
+python3 - "$W/box.stl" <<'PY'
+import sys
+q = [((0,0,0),(0,1,0),(1,1,0),(1,0,0)), ((0,0,1),(1,0,1),(1,1,1),(0,1,1)), ((0,0,0),(1,0,0),(1,0,1),(0,0,1)),
+     ((0,1,0),(0,1,1),(1,1,1),(1,1,0)), ((0,0,0),(0,0,1),(0,1,1),(0,1,0)), ((1,0,0),(1,1,0),(1,1,1),(1,0,1))]
+with open(sys.argv[1], "w") as f:
+    f.write("solid box\n")
+    for a, b, c, d in q:
+        for t in ((a, b, c), (a, c, d)):
+            f.write(" facet normal 0 0 0\n  outer loop\n")
+            for x, y, z in t: f.write("   vertex %g %g %g\n" % (20 * x - 10, 20 * y - 10, 30 * z))
+            f.write("  endloop\n endfacet\n")
+    f.write("endsolid box\n")
+PY
+case_yaml() { # case_yaml ENGINE
+  cat <<YAML
+dem:
+  time_step: 5.0e-6
+  duration: 0.1
+  gravity: [0, 0, -9.81]
+  box: {lo: [-0.011, -0.011, -0.001], hi: [0.011, 0.011, 0.031]}
+  damping: liggghts
+  mesh_contacts: liggghts
+  seed: 3
+  engine: $1
+materials:
+  - {name: granule, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}
+classes:
+  - {name: small, radius: 1.0e-3, material: granule}
+  - {name: large, radius: 1.5e-3, material: granule}
+walls:
+  - {name: box, mesh: box.stl, scale: 1.0e-3, material: granule}
+fill:
+  - region: {box: {lo: [-0.008, -0.008, 0.002], hi: [0.008, 0.008, 0.025]}}
+    count: 200
+statistics: {start: 0.08, sample_every: 0.0025}
+YAML
+}
+case_yaml embedded > "$W/e.yaml"
+case_yaml liggghts > "$W/l.yaml"
+t0=$(date +%s.%N)
+"$BIN" dem "$W/e.yaml" --out "$W/e" --threads 1 --quiet || fail "embedded run"
+echo "cli_liggghts: embedded run took $(awk "BEGIN { printf \"%.2f\", $(date +%s.%N) - $t0 }") s"
+"$BIN" dem --check "$W/l.yaml" | grep -q "engine liggghts" || fail "--check does not name the engine"
+t0=$(date +%s.%N)
+"$BIN" dem "$W/l.yaml" --out "$W/l" --ranks 1 2> "$W/l.log" || { cat "$W/l.log"; fail "liggghts run"; }
+echo "cli_liggghts: LIGGGHTS run (200 spheres, 20000 steps, 1 rank) took $(awk "BEGIN { printf \"%.2f\", $(date +%s.%N) - $t0 }") s"
+grep -q "gransim dem (liggghts): t = 0.10000 / 0.10000 s, 200 particles" "$W/l.log" || fail "no progress line from thermo"
+grep -q "^fix wall0 all mesh/surface file .*box.stl type 3 .*scale 0.001" "$W/l/liggghts/in.gransim" || fail "deck mesh"
+for t in collisions.csv collision_kernel.csv impacts.csv impact_table.csv impact_table_box.csv impact_velocity.csv \
+         velocity.csv residence.csv residence_class.csv timeseries.csv; do
+  [ -s "$W/l/$t" ] || fail "liggghts engine wrote no $t"
+  # the same header row (first line not a comment) in both
+  he=$(grep -v '^#' "$W/e/$t" | head -1); hl=$(grep -v '^#' "$W/l/$t" | head -1)
+  [ "$he" = "$hl" ] || fail "$t: columns differ: '$he' vs '$hl'"
+  ne=$(grep -vc '^#' "$W/e/$t" || true); nl=$(grep -vc '^#' "$W/l/$t" || true)
+  case $t in residence*|timeseries.csv|impact_velocity.csv) ;; *)
+    [ "$ne" = "$nl" ] || fail "$t: $ne rows (embedded) vs $nl (liggghts)" ;; esac
+done
+# the same classes and numbers (no particle lost); mean speeds within a factor 3 (both fall
+# and settle under gravity; contact rules differ in detail); collision events per class pair and
+# wall impacts per particle within a factor 1.5 where there are more than 100 events (LIGGGHTS'
+# events are contacts new between contact lists a few steps apart, the embedded engine's exact)
+python3 - "$W/e/velocity.csv" "$W/l/velocity.csv" "$W/e/collisions.csv" "$W/l/collisions.csv" \
+  "$W/e/impact_table.csv" "$W/l/impact_table.csv" <<'PY'
+import csv, sys
+def rows(p): return [r for r in csv.DictReader(l for l in open(p) if not l.startswith("#"))]
+ve, vl = rows(sys.argv[1]), rows(sys.argv[2])
+for a, b in zip(ve, vl):
+    assert a["name"] == b["name"], (a["name"], b["name"])
+    ne, nl = float(a["mean_number"]), float(b["mean_number"])
+    assert abs(ne - nl) < 0.5, ("number", a["name"], ne, nl)
+    se, sl = float(a["mean_speed"]), float(b["mean_speed"])
+    assert 1 / 3 < sl / se < 3, ("mean speed", a["name"], se, sl)
+    print("cli_liggghts: class %s: N %.0f / %.0f, mean speed %.4g / %.4g m/s (embedded / liggghts)" % (a["name"], ne, nl, se, sl))
+ce, cl = rows(sys.argv[3]), rows(sys.argv[4])
+assert [(r["class_i"], r["class_j"]) for r in ce] == [(r["class_i"], r["class_j"]) for r in cl]
+for a, b in zip(ce, cl):
+    ee, el = float(a["events"]), float(b["events"])
+    print("cli_liggghts: collisions %s-%s: %.0f / %.0f events, C_ij %.4g / %.4g 1/s" % (a["name_i"], a["name_j"], ee, el, float(a["C_ij"]), float(b["C_ij"])))
+    if ee > 100: assert 1 / 1.5 < el / ee < 1.5, ("collision events", a["name_i"], a["name_j"], ee, el)
+def rate(p): # the first row after the edges: impacts per particle per second
+    return [float(x) for x in [l for l in open(p) if not l.startswith("#") and not l.startswith("edges")][0].split(",")]
+rate_e, rate_l = rate(sys.argv[5]), rate(sys.argv[6])
+for k, (a, b) in enumerate(zip(rate_e, rate_l)):
+    print("cli_liggghts: wall impacts class %d: %.4g / %.4g per particle per s" % (k + 1, a, b))
+    assert 1 / 1.5 < b / a < 1.5, ("impact rate", k + 1, a, b)
+PY
+# keys a deck cannot express are refused, naming the key
+sed 's/  - {name: box, mesh: box.stl, scale: 1.0e-3, material: granule}/  - {name: floor, plane: {point: [0, 0, 0], normal: [0, 0, 1]}, material: granule}/' \
+  "$W/l.yaml" > "$W/bad.yaml"
+if "$BIN" dem --check "$W/bad.yaml" 2> "$W/bad.log"; then fail "a plane wall was accepted"; fi
+grep -q "walls\[0\] (floor): plane walls are not expressible" "$W/bad.log" || { cat "$W/bad.log"; fail "plane error"; }
+# a failed run reports LIGGGHTS' own error line
+cp "$W/l.yaml" "$W/fail.yaml"
+mkdir -p "$W/fakebin"
+printf '#!/bin/sh\necho "ERROR: Illegal something (./src/input.cpp:1)"\nexit 1\n' > "$W/fakebin/liggghts"
+chmod +x "$W/fakebin/liggghts"
+if GRANSIM_LIGGGHTS="$W/fakebin/liggghts" "$BIN" dem "$W/fail.yaml" --out "$W/f" --launcher "" --quiet 2> "$W/f.log"; then
+  fail "a failing LIGGGHTS run succeeded"; fi
+grep -q "LIGGGHTS failed.*ERROR: Illegal something" "$W/f.log" || { cat "$W/f.log"; fail "failure report"; }
+echo "cli_liggghts: ok"

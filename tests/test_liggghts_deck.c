@@ -1,0 +1,151 @@
+/* The LIGGGHTS deck of a small case (src/liggghts/deck.c) holds the commands
+ * and values the case gives: material properties (per type and pair means),
+ * time step, gravity, the mesh and its scale, the impeller's rotation as a
+ * period, the feed's insertion, the outlet, the dumps; and keys a deck cannot
+ * express are refused naming them.  Runs without LIGGGHTS. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "gransim/dem.h"
+#include "gransim/dem_data.h"
+#include "gransim/liggghts.h"
+
+static const char *stl =
+    "solid t\n facet normal 0 0 1\n  outer loop\n   vertex -10 -10 0\n   vertex 10 -10 0\n   vertex 10 10 0\n"
+    "  endloop\n endfacet\nendsolid t\n";
+
+static char *deck_of(const char *yaml, gs_error *err, int *rc) {
+  FILE *fp = fopen("liggghts_deck_case.yaml", "w");
+  fputs(yaml, fp);
+  fclose(fp);
+  gs_dem_case *c = gs_dem_case_load("liggghts_deck_case.yaml", err);
+  if (!c) { *rc = err->code; return NULL; }
+  char *buf = NULL;
+  size_t n = 0;
+  FILE *m = open_memstream(&buf, &n);
+  *rc = gs_lig_write_deck(c, m, "bed.data", "read", err);
+  fclose(m);
+  CHECK(gs_dem_case_engine(c) == 1);
+  gs_dem_case_free(c);
+  return buf;
+}
+
+#define HAS(deck, s) do { if (!strstr(deck, s)) { fprintf(stderr, "deck lacks: %s\n", s); CHECK(0); } } while (0)
+
+int main(void) {
+  /* the case and its mesh in a folder of their own */
+  char tmp[] = "/tmp/gransim_lig_deck_XXXXXX";
+  if (!mkdtemp(tmp) || chdir(tmp)) {
+    perror("test_liggghts_deck: temporary folder");
+    return 1;
+  }
+  FILE *fp = fopen("liggghts_deck_plate.stl", "w");
+  fputs(stl, fp);
+  fclose(fp);
+  const char *base =
+      "dem: {time_step: 2.5e-6, duration: 0.01, gravity: [0, -9.81, 0], engine: liggghts, seed: 5,\n"
+      "      box: {lo: [-0.02, -0.02, -0.02], hi: [0.02, 0.02, 0.02]}, skin: 5.0e-4}\n"
+      "materials:\n"
+      "  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}\n"
+      "  - {name: steel, E: 2.0e8, nu: 0.3, e: 0.6, mu_s: 0.3, mu_r: 0.1}\n"
+      "classes:\n  - {name: a, radius: 1.0e-3, material: g}\n  - {name: b, radius: 1.5e-3, material: g}\n"
+      "walls:\n  - name: imp\n    mesh: liggghts_deck_plate.stl\n    scale: 1.0e-3\n    material: steel\n"
+      "    rotation: {origin: [0, 0, 0], axis: [0, 0, 1], rpm: 600}\n"
+      "fill:\n  - {region: {box: {lo: [-0.01, -0.01, 0.001], hi: [0.01, 0.01, 0.01]}}, count: 10}\n"
+      "feed:\n  - {region: {cylinder: {point: [0, 0.01, 0], axis: [0, 1, 0], radius: 0.005, from: 0, to: 0.004}},\n"
+      "     mass_rate: 0.1, every: 0.001, fractions: [1, 3], fractions_by: mass, velocity: [0, -1, 0]}\n"
+      "outlets:\n  - region: {box: {lo: [-0.02, -0.02, -0.02], hi: [0.02, -0.015, 0.02]}}\n"
+      "statistics: {start: 0.005, sample_every: 0.0005}\n";
+  gs_error err = {0};
+  int rc;
+  char *d = deck_of(base, &err, &rc);
+  if (rc) fprintf(stderr, "%s\n", err.msg);
+  CHECK(rc == 0 && d);
+  if (d) {
+    HAS(d, "read_data bed.data\n");
+    CHECK(strstr(d, "custom/vtk") == NULL); /* no output.vtk_every */
+    HAS(d, "timestep 2.5e-06\n");
+    HAS(d, "neighbor 0.0005 bin\n");
+    HAS(d, "fix gravi all gravity 9.81 vector 0 -1 0\n");
+    /* types 1, 2 the classes, 3 the wall */
+    HAS(d, "youngsModulus peratomtype 8000000 8000000 200000000\n");
+    HAS(d, "poissonsRatio peratomtype 0.2 0.2 0.3\n");
+    HAS(d, "coefficientRestitution peratomtypepair 3 &\n    0.4 0.4 0.5 &\n    0.4 0.4 0.5 &\n    0.5 0.5 0.6\n");
+    HAS(d, "coefficientRollingFriction peratomtypepair 3 &\n    0.2 0.2 0.15");
+    HAS(d, "pair_style gran model hertz tangential history rolling_friction cdt\n");
+    HAS(d, "liggghts_deck_plate.stl type 3 heal auto_remove_duplicates element_exclusion_list read ex_wall0.txt "
+           "scale 0.001 curvature_tolerant yes");
+    HAS(d, "mesh n_meshes 1 meshes wall0\n");
+    HAS(d, "fix rot0 all move/mesh mesh wall0 rotate origin 0 0 0 axis 0 0 1 period 0.1\n"); /* 600 rpm */
+    HAS(d, "particletemplate/sphere");
+    HAS(d, "atom_type 2 density constant 500 radius constant 0.0015\n");
+    HAS(d, "particledistribution/discrete");
+    HAS(d, " 2 pts1 0.25 pts2 0.75\n");
+    HAS(d, "region feed0 cylinder y 0 0 0.005 0.01 0.014 units box\n");
+    HAS(d, "massrate 0.1 insert_every 400 overlapcheck yes all_in yes vel constant 0 -1 0 region feed0\n");
+    HAS(d, "region outlet0 block -0.02 0.02 -0.02 -0.015 -0.02 0.02 units box\n");
+    HAS(d, "delete_atoms region outlet0 compress no\n");
+    HAS(d, "compute pgl all pair/gran/local id vel force contactArea delta\n");
+    HAS(d, "compute wgl all wall/gran/local id vel force contactArea delta\n");
+    HAS(d, "dump dcol all custom 200 post/collision*.atom id type x y z vx vy vz radius c_cc_1 c_cc_2\n");
+    HAS(d, "dump dimp all local 200 post/impact*.atom c_wgl[1]");
+    /* the contact lists of the events: every third of the Hertz contact of two 1 mm spheres at 10 m/s */
+    double r = 1e-3, m = 500 * 4.0 / 3.0 * M_PI * r * r * r;
+    double tc = gs_dem_hertz_contact_time(m / 2, r / 2, 8e6 / (2 * (1 - 0.04)), 10, 0.4);
+    long ek = (long)floor(tc / 3 / 2.5e-6);
+    CHECK(ek >= 5 && ek <= 20);
+    char want[200];
+    snprintf(want, sizeof want, "dump dev all local %ld post/events_pp.txt c_pgl[7] c_pgl[8] c_pgl[14]\n", ek);
+    HAS(d, want);
+    snprintf(want, sizeof want, "dump dwev all local %ld post/events_wall.txt c_wgl[1]", ek);
+    HAS(d, want);
+    /* 2000 steps before the window (10 chunks of 200 with the outlet emptied), 2000 in it */
+    HAS(d, "variable before loop 10\n");
+    HAS(d, "variable window loop 10\n");
+    CHECK(strstr(d, "variable before") < strstr(d, "dump dcol"));
+  }
+  free(d);
+  /* number fractions 1:3 become mass weights 1 : 3 * 1.5^3 */
+  {
+    char y[4096];
+    const char *at = strstr(base, "fractions_by: mass");
+    snprintf(y, sizeof y, "%.*sfractions_by: number%s", (int)(at - base), base, at + strlen("fractions_by: mass"));
+    d = deck_of(y, &err, &rc);
+    CHECK(rc == 0 && d);
+    char want[200];
+    snprintf(want, sizeof want, " 2 pts1 %.9g pts2 %.9g\n", 1 / 11.125, 10.125 / 11.125);
+    if (d) HAS(d, want);
+    free(d);
+  }
+  /* refused keys name themselves */
+  struct { const char *from, *to, *msg; } bad[] = {
+      {"    mesh: liggghts_deck_plate.stl\n    scale: 1.0e-3\n", "    plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n",
+       "walls[0] (imp): plane walls"},
+      {"statistics: {start: 0.005", "statistics: {start: steady", "statistics.start"},
+      {"axis: [0, 1, 0], radius: 0.005,", "axis: [0, 1, 0], radius: 0.005, inner_radius: 0.001,", "feed[0].region.cylinder"},
+      {"{name: b, radius: 1.5e-3,", "{name: b, radius: [1.0e-3, 2.0e-3],", "classes[1].radius"},
+      {"seed: 5,", "seed: 5, damping: exact,", "dem.damping"},
+      {"seed: 5,", "seed: 5, mesh_contacts: closest,", "dem.mesh_contacts"},
+  };
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+    char y[4096];
+    const char *at = strstr(base, bad[k].from);
+    CHECK(at != NULL);
+    if (!at) continue;
+    snprintf(y, sizeof y, "%.*s%s%s", (int)(at - base), base, bad[k].to, at + strlen(bad[k].from));
+    gs_error e2 = {0};
+    char *d2 = deck_of(y, &e2, &rc);
+    free(d2);
+    CHECK(rc != 0);
+    if (!strstr(e2.msg, bad[k].msg)) fprintf(stderr, "case %zu: '%s' lacks '%s'\n", k, e2.msg, bad[k].msg);
+    CHECK(strstr(e2.msg, bad[k].msg) != NULL);
+  }
+  remove("liggghts_deck_case.yaml");
+  remove("liggghts_deck_plate.stl");
+  if (chdir("/") == 0) rmdir(tmp);
+  TEST_EXIT();
+}
