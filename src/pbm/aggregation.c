@@ -159,6 +159,9 @@ static int build_axis_maps(agg_t *A, const gs_grid *g, gs_error *err) {
 static int build_kernel_table(agg_t *A, double limit_mb, gs_error *err) {
   size_t per = A->ncells * (A->ncells + 1) / 2;
   const gs_kernel_type *kt = A->kernel.type;
+  /* a row as cheap as reading it: a table would only cost memory (and its
+   * reads miss the cache on large grids) */
+  if (kt->cheap_row && kt->cheap_row(A->kernel.self)) return GS_OK;
   A->table_comps = kt->per_compartment && kt->per_compartment(A->kernel.self) ? A->ncomp : 1;
   double mb = (double)(per * A->table_comps) * sizeof(double) / 1048576.0;
   if (mb > limit_mb) return GS_OK; /* evaluate rows on the fly */
