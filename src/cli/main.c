@@ -10,6 +10,10 @@
 #include <unistd.h>
 #endif
 
+#ifdef __linux__
+#include <unistd.h> /* execv */
+#endif
+
 #include "cli/commands.h"
 #include "gransim/case.h"
 #include "gransim/run.h"
@@ -191,6 +195,29 @@ static void keep_freed_memory(void) {
 #endif
 }
 
+/* Threads that wait for their team by sleeping, not spinning.  libgomp
+ * spins for a while (about 300 000 rounds by default) at every barrier
+ * before it sleeps; when another process occupies a core, a spinning thread
+ * takes the time slices that the thread it waits for needs, and a run on
+ * all cores becomes several times slower than on one (docs/performance.md,
+ * "Threads on a busy machine").  Waiting passively costs nothing measurable
+ * on an idle machine at gransim's grain (one parallel region per
+ * compartment or per right-hand side).  libgomp reads OMP_WAIT_POLICY and
+ * GOMP_SPINCOUNT once, when it is loaded, before main: so the variable is
+ * set and the program executes itself again, once (the variable then set is
+ * the guard).  A user's own setting of either is kept; where re-executing
+ * fails (no /proc) the run goes on with the runtime's default. */
+static void wait_passively(char **argv) {
+#ifdef __linux__
+  if (getenv("OMP_WAIT_POLICY") || getenv("GOMP_SPINCOUNT")) return;
+  if (setenv("OMP_WAIT_POLICY", "passive", 1)) return;
+  execv("/proc/self/exe", argv);
+  unsetenv("OMP_WAIT_POLICY"); /* not re-executed: the runtime kept its default */
+#else
+  (void)argv;
+#endif
+}
+
 int main(int argc, char **argv) {
   if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
     usage(stdout);
@@ -200,6 +227,8 @@ int main(int argc, char **argv) {
     printf("gransim %s\nMPI: %s\n", GRANSIM_VERSION, gs_parallel_have_mpi() ? "yes" : "no");
     return 0;
   }
+  /* the commands that run threads */
+  if (!strcmp(argv[1], "run") || !strcmp(argv[1], "validate") || !strcmp(argv[1], "dem")) wait_passively(argv);
   if (!strcmp(argv[1], "run")) {
     keep_freed_memory();
     /* MPI only for runs, and only when launched by mpirun (gransim/parallel.h) */
