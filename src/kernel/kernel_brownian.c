@@ -46,7 +46,7 @@ typedef struct {
   unsigned axes;   /* the axes of the volume */
   double v_lo;     /* smallest volume taken */
   double *cbrt_v;  /* per cell: v^(1/3) (clamped) */
-  double *inv_v;   /* per cell: 1 / v (clamped) */
+  double *inv;     /* per cell: 1 / v^(1/3) (continuum) or 1 / v (free molecular), clamped */
 } brownian_kernel;
 
 static void brownian_free(void *self) {
@@ -54,15 +54,21 @@ static void brownian_free(void *self) {
   free(k->beta0);
   free(k->bound);
   free(k->cbrt_v);
-  free(k->inv_v);
+  free(k->inv);
   free(k);
 }
 
-/* beta / K between volumes given by their cube roots and inverses. */
+/* beta / K between volumes given by their cube roots c and `inv` (1/c in
+ * the continuum regime, 1/v in the free-molecular one).  Both are per-cell
+ * numbers on the grid, so a continuum row is additions and multiplications
+ * alone. */
 static inline double brownian_pair(int regime, double ca, double ia, double cb, double ib) {
-  if (regime == CONTINUUM) return (ca + cb) * (1.0 / ca + 1.0 / cb);
+  if (regime == CONTINUUM) return (ca + cb) * (ia + ib);
   return sqrt(ia + ib) * (ca + cb) * (ca + cb);
 }
+
+/* The per-cell number `inv` of a (clamped) volume w with cube root c. */
+static double brownian_inv(int regime, double c, double w) { return regime == CONTINUUM ? 1.0 / c : 1.0 / w; }
 
 /* The prefactor: beta0 (a number or one per compartment), or from the
  * physical properties of the regime; not both. */
@@ -113,9 +119,9 @@ static int brownian_create(gs_cfg_node *node, const gs_grid *g, const char *dir,
   if (!rc) rc = gs_cfg_check_unused(node, err);
   if (!rc) {
     k->cbrt_v = gs_malloc(g->ncells * sizeof(double), err);
-    k->inv_v = gs_malloc(g->ncells * sizeof(double), err);
+    k->inv = gs_malloc(g->ncells * sizeof(double), err);
     k->bound = gs_malloc(g->ncomp * sizeof(double), err);
-    if (!k->cbrt_v || !k->inv_v || !k->bound) rc = GS_ENOMEM;
+    if (!k->cbrt_v || !k->inv || !k->bound) rc = GS_ENOMEM;
   }
   if (rc) {
     free(size);
@@ -125,7 +131,7 @@ static int brownian_create(gs_cfg_node *node, const gs_grid *g, const char *dir,
   for (size_t c = 0; c < g->ncells; c++) {
     double v = fmax(size[c], k->v_lo);
     k->cbrt_v[c] = cbrt(v);
-    k->inv_v[c] = 1.0 / v;
+    k->inv[c] = brownian_inv(k->regime, k->cbrt_v[c], v);
   }
   free(size);
   const double f = k->regime == CONTINUUM ? 2.0 / k->v_lo : pow(2.0, 1.5) * pow(k->v_lo, -5.0 / 6);
@@ -137,8 +143,8 @@ static int brownian_create(gs_cfg_node *node, const gs_grid *g, const char *dir,
 static void brownian_row(const void *self, size_t comp, size_t a, size_t b0, size_t b1,
                          double *out) {
   const brownian_kernel *k = self;
-  const double K = k->beta0[comp], ca = k->cbrt_v[a], ia = k->inv_v[a];
-  const double *cb = k->cbrt_v, *ib = k->inv_v;
+  const double K = k->beta0[comp], ca = k->cbrt_v[a], ia = k->inv[a];
+  const double *cb = k->cbrt_v, *ib = k->inv;
   if (k->regime == CONTINUUM)
     for (size_t b = b0; b < b1; b++) out[b - b0] = K * brownian_pair(CONTINUUM, ca, ia, cb[b], ib[b]);
   else
@@ -149,11 +155,20 @@ static int brownian_per_compartment(const void *self) {
   return ((const brownian_kernel *)self)->differ;
 }
 
+/* Continuum rows are two additions and two multiplications per pair on
+ * per-cell arrays, cheaper than reading a table; free-molecular rows take a
+ * square root per pair and keep the table. */
+static int brownian_cheap_row(const void *self) {
+  return ((const brownian_kernel *)self)->regime == CONTINUUM;
+}
+
 static double brownian_at(const void *self, size_t comp, const double *x, const double *y) {
   const brownian_kernel *k = self;
   const double vx = gs_size_of(k->axes, k->dim, x), vy = gs_size_of(k->axes, k->dim, y);
   const double wx = fmax(vx, k->v_lo), wy = fmax(vy, k->v_lo);
-  const double beta = k->beta0[comp] * brownian_pair(k->regime, cbrt(wx), 1.0 / wx, cbrt(wy), 1.0 / wy);
+  const double cx = cbrt(wx), cy = cbrt(wy);
+  const double beta = k->beta0[comp] * brownian_pair(k->regime, cx, brownian_inv(k->regime, cx, wx), cy,
+                                                     brownian_inv(k->regime, cy, wy));
   /* below v_lo: scaled with the volume (see the majorant above) */
   return vx >= k->v_lo && vy >= k->v_lo ? beta : beta * ((vx + vy) / (wx + wy));
 }
@@ -170,6 +185,7 @@ const gs_kernel_type gs_kernel_brownian = {
     .row = brownian_row,
     .free = brownian_free,
     .per_compartment = brownian_per_compartment,
+    .cheap_row = brownian_cheap_row,
     .at = brownian_at,
     .form = brownian_form,
 };
