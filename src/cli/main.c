@@ -206,15 +206,24 @@ static void keep_freed_memory(void) {
  * compartment or per right-hand side).  libgomp reads OMP_WAIT_POLICY and
  * GOMP_SPINCOUNT once, when it is loaded, before main: so the variable is
  * set and the program executes itself again, once (the variable then set is
- * the guard).  A user's own setting of either is kept; where re-executing
- * fails (no /proc) the run goes on with the runtime's default. */
-static void wait_passively(char **argv) {
+ * the guard).  Setting it earlier, from .preinit_array, did not reach
+ * libgomp (glibc 2.36: the setting was gone when libgomp read its
+ * environment, which the C library sets up after .preinit_array).  A user's own
+ * setting of either is kept; where re-executing fails (no /proc) the run
+ * goes on with the runtime's default. */
+static void wait_passively(int argc, char **argv) {
 #ifdef __linux__
   if (getenv("OMP_WAIT_POLICY") || getenv("GOMP_SPINCOUNT")) return;
+  /* one thread never waits for another: no need to pay a second start */
+  int threads = omp_get_max_threads();
+  for (int i = 2; i + 1 < argc; i++)
+    if (!strcmp(argv[i], "--threads")) threads = atoi(argv[i + 1]);
+  if (threads < 2) return;
   if (setenv("OMP_WAIT_POLICY", "passive", 1)) return;
   execv("/proc/self/exe", argv);
   unsetenv("OMP_WAIT_POLICY"); /* not re-executed: the runtime kept its default */
 #else
+  (void)argc;
   (void)argv;
 #endif
 }
@@ -229,7 +238,7 @@ int main(int argc, char **argv) {
     return 0;
   }
   /* the commands that run threads */
-  if (!strcmp(argv[1], "run") || !strcmp(argv[1], "validate") || !strcmp(argv[1], "dem")) wait_passively(argv);
+  if (!strcmp(argv[1], "run") || !strcmp(argv[1], "validate") || !strcmp(argv[1], "dem")) wait_passively(argc, argv);
   if (!strcmp(argv[1], "run")) {
     keep_freed_memory();
     /* MPI only for runs, and only when launched by mpirun (gransim/parallel.h) */
