@@ -201,8 +201,8 @@ static void keep_freed_memory(void) {
  * before it sleeps; when another process occupies a core, a spinning thread
  * takes the time slices that the thread it waits for needs, and a run on
  * all cores becomes several times slower than on one (docs/performance.md,
- * "Threads on a busy machine").  Waiting passively costs nothing measurable
- * on an idle machine at gransim's grain (one parallel region per
+ * "Threads on a busy machine").  Waiting passively costs a wake-up per
+ * barrier instead, small at gransim's grain (one parallel region per
  * compartment or per right-hand side).  libgomp reads OMP_WAIT_POLICY and
  * GOMP_SPINCOUNT once, when it is loaded, before main: so the variable is
  * set and the program executes itself again, once (the variable then set is
