@@ -74,4 +74,17 @@ rows=$(($(wc -l <"$WORK/e1/summary.csv") - 1))
 [ "$rows" -eq 88 ] || fail "summary.csv has $rows rows, expected 88 (11 times x 8 compartments)"
 csv_rows_close "$WORK/e1/summary.csv" "$WORK/e2/summary.csv" 1e-12
 
+# Waiting threads sleep by default (src/cli/main.c: the variable is set and
+# the program executes itself again before libgomp reads it): libgomp's last
+# display of its settings shows no spinning; a user's setting is kept.
+env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT OMP_DISPLAY_ENV=verbose \
+  "$BIN" run "$c" --out "$WORK/w1" --threads 2 --quiet 2>"$WORK/w1.err" || fail "default run failed"
+spin=$(grep "GOMP_SPINCOUNT" "$WORK/w1.err" | tail -1 | tr -d " '")
+[ "$spin" = "GOMP_SPINCOUNT=0" ] || fail "default run: libgomp spins ($spin), expected passive waits"
+cmp -s "$WORK/t2/summary.csv" "$WORK/w1/summary.csv" || fail "passive waits changed the results"
+env -u OMP_WAIT_POLICY GOMP_SPINCOUNT=1234 OMP_DISPLAY_ENV=verbose \
+  "$BIN" run "$c" --out "$WORK/w2" --quiet 2>"$WORK/w2.err" || fail "run with GOMP_SPINCOUNT set failed"
+spin=$(grep "GOMP_SPINCOUNT" "$WORK/w2.err" | tail -1 | tr -d " '")
+[ "$spin" = "GOMP_SPINCOUNT=1234" ] || fail "the user's GOMP_SPINCOUNT was not kept ($spin)"
+
 echo "cli_threads: ok"

@@ -48,7 +48,7 @@ expect_section() {
   got=$(section_names "$heading" | tr '\n' ' ')
   [ "$got" = "$* " ] || fail "gransim list: under '$heading' expected '$*', got '$got'"
 }
-expect_section "aggregation kernels:" constant sum product madec table
+expect_section "aggregation kernels:" constant sum product madec table brownian
 expect_section "mechanisms:" aggregation breakage growth liquid_addition consolidation feed transfer spray pore_consolidation
 expect_section "breakage selection functions:" power shear dem_impact
 expect_section "daughter distributions:" uniform halves power beta

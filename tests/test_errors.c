@@ -47,8 +47,8 @@ static void test_case_errors(void) {
   EXPECT_INPUT(GRID1 "output: {end: 1}\nmechanisms:\n  - {type: agregation}\n",
                "bad.yaml:4:", "mechanisms[0].type = 'agregation'", "aggregation, breakage, growth, liquid_addition, consolidation, feed, transfer");
   EXPECT_INPUT(GRID1 "output: {end: 1}\n"
-                     "mechanisms:\n  - type: aggregation\n    kernel: {type: brownian, beta0: 1}\n",
-               "bad.yaml:5:", "mechanisms[0].kernel.type = 'brownian'", "unknown kernel type", "constant, sum, product, madec, table");
+                     "mechanisms:\n  - type: aggregation\n    kernel: {type: ballistic, beta0: 1}\n",
+               "bad.yaml:5:", "mechanisms[0].kernel.type = 'ballistic'", "unknown kernel type", "constant, sum, product, madec, table, brownian");
   EXPECT_INPUT(GRID1 "output: {end: 1}\n"
                      "mechanisms:\n  - {type: breakage, selection: {type: cubic, s0: 1}, daughters: {type: uniform}}\n",
                "bad.yaml:4:", "mechanisms[0].selection.type = 'cubic'", "power, shear");

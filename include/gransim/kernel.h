@@ -50,6 +50,11 @@ typedef struct gs_kernel_type {
   /* Optional: 1 if beta differs between compartments (NULL: it does not), so
    * callers keep one table for all compartments when it does not. */
   int (*per_compartment)(const void *self);
+  /* Optional: 1 if a row costs about what reading it from memory would (a
+   * few arithmetic operations per pair on per-cell arrays, no pow or
+   * lookups), so callers evaluate rows where they need them and keep no
+   * table of beta (NULL: tables pay; see table_limit_mb of aggregation). */
+  int (*cheap_row)(const void *self);
   /* Optional, for solvers of particles (points, not cells): beta in
    * compartment comp between particles x and y, one coordinate per grid
    * axis.  Must agree with row() at the pivots. */

@@ -10,6 +10,10 @@
 #include <unistd.h>
 #endif
 
+#ifdef __linux__
+#include <unistd.h> /* execv */
+#endif
+
 #include "cli/commands.h"
 #include "gransim/case.h"
 #include "gransim/run.h"
@@ -50,7 +54,8 @@ static int cmd_run(int argc, char **argv) {
              "compartment, ledger, summary, case echo) and DIR/summary.csv (one row per output\n"
              "time and compartment).  Files are written under temporary names and renamed\n"
              "only when the run succeeds.  --resume continues a killed run from the partial\n"
-             "files in DIR.  --threads sets the OpenMP threads (default: OMP_NUM_THREADS or all).\n"
+             "files in DIR.  --threads sets the OpenMP threads (default: OMP_NUM_THREADS or all);\n"
+             "waiting threads sleep rather than spin unless OMP_WAIT_POLICY or GOMP_SPINCOUNT is set.\n"
              "--timings prints, at the end, the seconds each MPI rank spent in the rates, the\n"
              "exchange between ranks, the integrator's own work, waiting for the other ranks at\n"
              "step agreements, the outputs and the final write, and the compartments it held\n"
@@ -191,6 +196,38 @@ static void keep_freed_memory(void) {
 #endif
 }
 
+/* Threads that wait for their team by sleeping, not spinning.  libgomp
+ * spins for a while (about 300 000 rounds by default) at every barrier
+ * before it sleeps; when another process occupies a core, a spinning thread
+ * takes the time slices that the thread it waits for needs, and a run on
+ * all cores becomes several times slower than on one (docs/performance.md,
+ * "Threads on a busy machine").  Waiting passively costs a wake-up per
+ * barrier instead, small at gransim's grain (one parallel region per
+ * compartment or per right-hand side).  libgomp reads OMP_WAIT_POLICY and
+ * GOMP_SPINCOUNT once, when it is loaded, before main: so the variable is
+ * set and the program executes itself again, once (the variable then set is
+ * the guard).  Setting it earlier, from .preinit_array, did not reach
+ * libgomp (glibc 2.36: the setting was gone when libgomp read its
+ * environment, which the C library sets up after .preinit_array).  A user's own
+ * setting of either is kept; where re-executing fails (no /proc) the run
+ * goes on with the runtime's default. */
+static void wait_passively(int argc, char **argv) {
+#ifdef __linux__
+  if (getenv("OMP_WAIT_POLICY") || getenv("GOMP_SPINCOUNT")) return;
+  /* one thread never waits for another: no need to pay a second start */
+  int threads = omp_get_max_threads();
+  for (int i = 2; i + 1 < argc; i++)
+    if (!strcmp(argv[i], "--threads")) threads = atoi(argv[i + 1]);
+  if (threads < 2) return;
+  if (setenv("OMP_WAIT_POLICY", "passive", 1)) return;
+  execv("/proc/self/exe", argv);
+  unsetenv("OMP_WAIT_POLICY"); /* not re-executed: the runtime kept its default */
+#else
+  (void)argc;
+  (void)argv;
+#endif
+}
+
 int main(int argc, char **argv) {
   if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
     usage(stdout);
@@ -200,6 +237,8 @@ int main(int argc, char **argv) {
     printf("gransim %s\nMPI: %s\n", GRANSIM_VERSION, gs_parallel_have_mpi() ? "yes" : "no");
     return 0;
   }
+  /* the commands that run threads */
+  if (!strcmp(argv[1], "run") || !strcmp(argv[1], "validate") || !strcmp(argv[1], "dem")) wait_passively(argc, argv);
   if (!strcmp(argv[1], "run")) {
     keep_freed_memory();
     /* MPI only for runs, and only when launched by mpirun (gransim/parallel.h) */

@@ -72,6 +72,12 @@ static void product_row(const void *self, size_t comp, size_t a, size_t b0, size
 
 static int basic_per_compartment(const void *self) { return ((const basic_kernel *)self)->differ; }
 
+/* a fill, a sum or a product of two numbers per pair */
+static int basic_cheap_row(const void *self) {
+  (void)self;
+  return 1;
+}
+
 static double constant_at(const void *self, size_t comp, const double *x, const double *y) {
   (void)x;
   (void)y;
@@ -105,6 +111,7 @@ const gs_kernel_type gs_kernel_constant = {
     .row = constant_row,
     .free = basic_free,
     .per_compartment = basic_per_compartment,
+    .cheap_row = basic_cheap_row,
     .at = constant_at,
     .form = constant_form,
 };
@@ -115,6 +122,7 @@ const gs_kernel_type gs_kernel_sum = {
     .row = sum_row,
     .free = basic_free,
     .per_compartment = basic_per_compartment,
+    .cheap_row = basic_cheap_row,
     .at = sum_at,
     .form = sum_form,
 };
@@ -125,6 +133,7 @@ const gs_kernel_type gs_kernel_product = {
     .row = product_row,
     .free = basic_free,
     .per_compartment = basic_per_compartment,
+    .cheap_row = basic_cheap_row,
     .at = product_at,
     .form = product_form,
 };

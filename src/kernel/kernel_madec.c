@@ -107,6 +107,15 @@ static void madec_row(const void *self, size_t comp, size_t a, size_t b0, size_t
 
 static int madec_per_compartment(const void *self) { return ((const madec_kernel *)self)->differ; }
 
+/* The linear case (alpha = delta = 1) is a few multiplications per pair on
+ * two per-cell arrays, which the row loop vectorises: as fast as reading a
+ * table, and a 3-D table is large (docs/performance.md, "Kernel tables").
+ * The general case calls pow twice per pair. */
+static int madec_cheap_row(const void *self) {
+  const madec_kernel *k = self;
+  return k->alpha == 1.0 && k->delta == 1.0;
+}
+
 /* V and c of a particle, as create() takes them at the pivots. */
 static double madec_content(const madec_kernel *k, const double *x, double *v) {
   *v = gs_size_of((1u << k->dim) - 1, k->dim, x);
@@ -131,6 +140,7 @@ const gs_kernel_type gs_kernel_madec = {
     .row = madec_row,
     .free = madec_free,
     .per_compartment = madec_per_compartment,
+    .cheap_row = madec_cheap_row,
     .at = madec_at,
     .form = madec_form,
 };

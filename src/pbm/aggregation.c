@@ -16,8 +16,10 @@
  * Work per right-hand side is one pass over the ncells (ncells+1)/2 pairs.
  * Everything that does not depend on the state is precomputed: the kernel
  * table (packed upper triangle, per compartment, when it fits in
- * `table_limit_mb`, else kernel rows are evaluated per cell), and per axis
- * the target cell of every pivot sum.  Internally the grid is padded to three
+ * `table_limit_mb` and the kernel's rows are dear, else kernel rows are
+ * evaluated per cell; a row of the table is filled when its cell first
+ * takes part, so the memory touched follows the occupied cells), and per
+ * axis the target cell of every pivot sum.  Internally the grid is padded to three
  * axes (padding axes of one cell at the front) so one loop nest serves 1-, 2-
  * and 3-D.  The pair loop is parallel over OpenMP threads with per-thread
  * accumulators.
@@ -73,6 +75,7 @@ typedef struct {
   double *fp_excess[3];  /* fixed pivot: sum minus last pivot where clamped, else 0 */
   double *table;         /* packed kernel, table_comps * ncells*(ncells+1)/2, or NULL */
   size_t table_size, table_comps; /* table_comps: ncomp, or 1 when beta is the same in all */
+  unsigned char *row_state; /* table_comps * ncells: ROW_* of each row of the table */
   double negligible;     /* cells holding less than this share of number and volume are skipped */
   size_t nrows;          /* rows along the last padded axis: n[0] * n[1] */
   /* per compartment, on whole pages (threads advancing neighbouring
@@ -109,6 +112,7 @@ static void agg_free(void *self) {
     free(A->fp_excess[q]);
   }
   free(A->table);
+  free(A->row_state);
   free(A->span);
   free(A->cs);
   free(A->pcar);
@@ -159,18 +163,39 @@ static int build_axis_maps(agg_t *A, const gs_grid *g, gs_error *err) {
 static int build_kernel_table(agg_t *A, double limit_mb, gs_error *err) {
   size_t per = A->ncells * (A->ncells + 1) / 2;
   const gs_kernel_type *kt = A->kernel.type;
+  /* a row as cheap as reading it: a table would only cost memory (and its
+   * reads miss the cache on large grids) */
+  if (kt->cheap_row && kt->cheap_row(A->kernel.self)) return GS_OK;
   A->table_comps = kt->per_compartment && kt->per_compartment(A->kernel.self) ? A->ncomp : 1;
   double mb = (double)(per * A->table_comps) * sizeof(double) / 1048576.0;
   if (mb > limit_mb) return GS_OK; /* evaluate rows on the fly */
   A->table_size = per;
+  /* Not filled here (table_row fills a row at its first use): pages of a
+   * large allocation are given memory only when written, so rows of cells
+   * that never hold particles cost address space alone. */
   A->table = gs_malloc(per * A->table_comps * sizeof(double), err);
-  if (!A->table) return GS_ENOMEM;
-  for (size_t c = 0; c < A->table_comps; c++)
-#pragma omp parallel for schedule(dynamic, 16)
-    for (size_t a = 0; a < A->ncells; a++)
-      A->kernel.type->row(A->kernel.self, c, a, a, A->ncells,
-                          A->table + c * per + packed_offset(a, A->ncells));
+  A->row_state = gs_calloc(A->table_comps * A->ncells, 1, err);
+  if (!A->table || !A->row_state) return GS_ENOMEM;
   return GS_OK;
+}
+
+enum { ROW_EMPTY = 0, ROW_FILLING = 1, ROW_READY = 2 };
+
+/* Row a of the table (beta against b >= a) for compartment comp, filled
+ * with the kernel's row() on first use; NULL while another thread fills it
+ * (threads evaluating compartments that share one table), and the caller
+ * then evaluates the row segments it needs itself: the same values. */
+static const double *table_row(const agg_t *A, size_t comp, size_t a) {
+  const size_t t = A->table_comps > 1 ? comp : 0;
+  unsigned char *state = A->row_state + t * A->ncells + a;
+  double *row = A->table + t * A->table_size + packed_offset(a, A->ncells);
+  if (__atomic_load_n(state, __ATOMIC_ACQUIRE) == ROW_READY) return row;
+  unsigned char empty = ROW_EMPTY;
+  if (!__atomic_compare_exchange_n(state, &empty, ROW_FILLING, 0, __ATOMIC_ACQUIRE, __ATOMIC_RELAXED))
+    return NULL;
+  A->kernel.type->row(A->kernel.self, t, a, a, A->ncells, row);
+  __atomic_store_n(state, ROW_READY, __ATOMIC_RELEASE);
+  return row;
 }
 
 /* wet: {min_content, partners: both | either, liquid: <carried quantity>} */
@@ -333,9 +358,8 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
   const size_t n0 = A->n[0], n1 = A->n[1], n2 = A->n[2], ncells = A->ncells;
   const size_t a0 = a / (n1 * n2), a1 = (a / n2) % n1, a2 = a % n2;
   /* kernel values against b >= a: from the table, or evaluated below per row segment */
-  const double *restrict beta =
-      A->table ? A->table + (A->table_comps > 1 ? comp : 0) * A->table_size + packed_offset(a, ncells) - a
-               : acc->row - a;
+  const double *tab = A->table ? table_row(A, comp, a) : NULL;
+  const double *restrict beta = tab ? tab - a : acc->row - a;
   const size_t *restrict span = A->span + comp * A->span_len;
   const int off = 3 - DIM;
   double *restrict death = acc->death, *restrict births = acc->births, *restrict fp = acc->fp;
@@ -373,7 +397,7 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
       const size_t row_start = (i0 == a0 && i1 == a1) ? a2 : span[2 * r];
       if (row_start >= row_end) continue; /* nothing in this row takes part */
       const size_t bbase = r * n2, tbase = T0[i0] + T1[i1];
-      if (!A->table)
+      if (!tab)
         A->kernel.type->row(A->kernel.self, comp, a, bbase + row_start, bbase + row_end,
                             acc->row + (bbase + row_start - a));
       const size_t lbase = L0[i0] + L1[i1];
