@@ -1,0 +1,120 @@
+/* gransim — studies over many runs of one case: variations of a case by
+ * dotted keys, designs (a full grid or a Latin hypercube) and the sweep that
+ * runs them all and gathers one row of outputs per run.
+ *
+ * A variation sets scalars of the case's configuration tree at dotted paths
+ * ("mechanisms.0.kernel.beta0", "solver.rtol", "output.end"); every run's
+ * case is built from its own copy of the tree (gs_cfg_copy), so the case
+ * reader validates a varied value exactly as if the file held it.  The whole
+ * design is checked (keys exist, every run's case builds) before any run
+ * starts. */
+#ifndef GRANSIM_STUDY_H
+#define GRANSIM_STUDY_H
+
+#include <stddef.h>
+
+#include "gransim/case.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One varied key: a list of values (--set KEY=V1,V2,...) or a range
+ * (--range KEY=LO:HI, or KEY=LO:HI:log for a range sampled uniformly in
+ * log(value), LO > 0). */
+typedef struct gs_study_axis {
+  char *key;
+  char **values; /* the listed values (text, set as written); NULL for a range */
+  size_t nvalues;
+  double lo, hi;
+  int log;
+} gs_study_axis;
+
+/* Parse "KEY=V1,V2,..." / "KEY=LO:HI[:log]"; a clear GS_EINPUT for an empty
+ * key or value, LO >= HI, a non-number or a log range with LO <= 0.  Free
+ * with gs_study_axis_free (also after a failure). */
+int gs_study_parse_set(const char *arg, gs_study_axis *a, gs_error *err);
+int gs_study_parse_range(const char *arg, gs_study_axis *a, gs_error *err);
+void gs_study_axis_free(gs_study_axis *a);
+
+/* The runs of a study: nruns rows of nkeys values (text). */
+typedef struct gs_design {
+  size_t nkeys, nruns;
+  char **keys;   /* dotted paths */
+  char **values; /* values[run * nkeys + k] */
+  double *unit;  /* Latin hypercube only: the point in [0,1)^nkeys of each run; NULL for a grid */
+} gs_design;
+
+/* Every combination of the listed values, the first axis varying slowest
+ * (nested loops in the order given).  All axes must be lists. */
+int gs_design_grid(const gs_study_axis *axes, size_t naxes, gs_design *d, gs_error *err);
+/* A Latin hypercube of n points over ranges: every axis's range split into n
+ * equal strata (in log(value) for log axes), each stratum holding exactly one
+ * point, strata paired at random (GSL mt19937 seeded with seed: the same
+ * seed gives the same design).  Values are written with 17 significant
+ * digits, so that the text set into the case is the number drawn. */
+int gs_design_lhs(const gs_study_axis *axes, size_t naxes, size_t n, unsigned long seed,
+                  gs_design *d, gs_error *err);
+void gs_design_free(gs_design *d);
+
+/* The case of run r: a copy of base with the run's values set, built by the
+ * case reader (which takes the copy over).  Errors name the run and its
+ * values. */
+int gs_study_case(const gs_cfg *base, const gs_design *d, size_t r, gs_case *c, gs_error *err);
+
+/* The outputs gathered per run, at the final output time: M0 (number, all
+ * compartments), M1_<coordinate> (total volume of each volume coordinate, all
+ * compartments), d10_c<j>, d50_c<j>, d90_c<j> per compartment j (1-based, as
+ * in summary.csv), then for every extra summary column NAME (M0, M1, M2, d10,
+ * d50, d90, mean_<coordinate>, total_<coordinate>) NAME_c<j> per
+ * compartment. */
+typedef struct gs_study_outputs {
+  size_t ncol;
+  char **names;
+  int *what;    /* per column: which statistic (internal code) */
+  int *index;   /* volume coordinate, where the statistic has one */
+  size_t *comp; /* compartment, where it has one */
+  size_t ncomp; /* the shape the columns were made for */
+  int nvol;
+} gs_study_outputs;
+
+int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *const *extra,
+                          size_t nextra, gs_error *err);
+/* GS_EINPUT when model m does not have the shape o was made for (a
+ * variation that changes the compartments or the volume coordinates). */
+int gs_study_outputs_fit(const gs_study_outputs *o, const gs_model *m, gs_error *err);
+/* values[0..ncol) from the state y (numbers and carried totals) of model m. */
+void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, const double *y,
+                           double *values);
+void gs_study_outputs_free(gs_study_outputs *o);
+
+typedef struct gs_sweep_options {
+  const char *out_dir; /* DIR: runs.csv (the journal) and sweep.csv */
+  int resume;          /* skip the runs DIR/runs.csv records as finished */
+  const char *const *outputs; /* extra summary columns (see gs_study_outputs) */
+  size_t noutputs;
+  int threads; /* runs at once (0: omp_get_max_threads()); each run single-threaded */
+} gs_sweep_options;
+
+typedef struct gs_sweep_report {
+  size_t runs;    /* in the design */
+  size_t skipped; /* finished before (resume) */
+  size_t ran;     /* run now */
+  size_t failed;  /* of all runs, recorded with status error */
+} gs_sweep_report;
+
+/* Check every run's case, then run those not yet finished (OpenMP over
+ * runs), appending each run's row to DIR/runs.csv as it finishes (one
+ * write() of a whole line: a killed sweep leaves whole rows, and --resume
+ * drops a torn last line), then write DIR/sweep.csv (rows in run order)
+ * under a temporary name renamed into place.  A run that fails (numerics,
+ * checks) is a row with status error and its message; the others go on.
+ * Returns an error only when the sweep itself cannot go on (a bad
+ * variation, files). */
+int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options *opt,
+                 gs_sweep_report *rep, gs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
