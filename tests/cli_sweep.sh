@@ -58,6 +58,15 @@ stderr_has "6 runs: 6 run now, 0 finished before" "4 ok, 2 failed" "$out/sweep.c
 grep -q '^3,error,1,1,nan,.*checks.max_loss' "$out/sweep.csv" || fail "run 3 (beta0 = 1) not recorded as failed"
 grep -q '^6,ok,2e-3,2,' "$out/sweep.csv" || fail "run 6 (beta0 = 2e-3, end 2) missing or failed"
 
+# sweep.h5: the same numbers as sweep.csv (17 digits), nan for the failed runs
+if command -v h5dump >/dev/null 2>&1; then
+  h5dump -y -w 0 -m %.17g -d /outputs/d50_c1 "$out/sweep.h5" |
+    awk '/DATA \{/ { f = 1; next } f && /\}/ { f = 0 } f' | tr -d ' \n' | tr ',' '\n' >"$WORK/h5col"
+  echo >>"$WORK/h5col"
+  awk -F, 'NR > 1 { print $8 }' "$out/sweep.csv" >"$WORK/csvcol"
+  cmp "$WORK/h5col" "$WORK/csvcol" || fail "sweep.h5's /outputs/d50_c1 differs from sweep.csv's d50_c1"
+fi
+
 # run 6 again with gransim run: the same final M0, M1, d10, d50, d90, M2
 sed -e 's/beta0: 1}/beta0: 2e-3}/' "$c" >"$WORK/run6.yaml"
 run_rc 0 "$BIN" run "$WORK/run6.yaml" --out "$WORK/run6" --threads 1 --quiet

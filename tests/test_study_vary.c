@@ -185,6 +185,16 @@ static void test_sweep(void) {
   CHECK(gs_sweep_run(base, &d, &opt, &rep, &e) == GS_OK);
   CHECK(rep.skipped == 5 && rep.ran == 0);
 
+  /* a sweep killed while writing the journal's header starts over */
+  f = fopen(journal, "w");
+  fputs("run,stat", f);
+  fclose(f);
+  CHECK(gs_sweep_run(base, &d, &opt, &rep, &e) == GS_OK);
+  CHECK(rep.skipped == 0 && rep.ran == 5);
+  free(second);
+  second = slurp(result);
+  CHECK(second && first && !strcmp(first, second));
+
   /* resuming with another design is refused */
   gs_study_axis other;
   gs_design d2;

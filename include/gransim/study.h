@@ -89,7 +89,7 @@ void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, const d
 void gs_study_outputs_free(gs_study_outputs *o);
 
 typedef struct gs_sweep_options {
-  const char *out_dir; /* DIR: runs.csv (the journal) and sweep.csv */
+  const char *out_dir; /* DIR: runs.csv (the journal), sweep.csv and sweep.h5 */
   int resume;          /* skip the runs DIR/runs.csv records as finished */
   const char *const *outputs; /* extra summary columns (see gs_study_outputs) */
   size_t noutputs;
@@ -107,12 +107,51 @@ typedef struct gs_sweep_report {
  * runs), appending each run's row to DIR/runs.csv as it finishes (one
  * write() of a whole line: a killed sweep leaves whole rows, and --resume
  * drops a torn last line), then write DIR/sweep.csv (rows in run order)
- * under a temporary name renamed into place.  A run that fails (numerics,
+ * and DIR/sweep.h5 (the same table, a dataset per column), each under a
+ * temporary name renamed into place.  A run that fails (numerics,
  * checks) is a row with status error and its message; the others go on.
  * Returns an error only when the sweep itself cannot go on (a bad
  * variation, files). */
 int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options *opt,
                  gs_sweep_report *rep, gs_error *err);
+
+/* ---- fitting ------------------------------------------------------------
+ * Measured summary quantities: a CSV with a header "time,NAME,..." and one
+ * row per time; NAME is an output column as above (M0, M1_<coordinate>,
+ * d50_c1, M2_c1, mean_liquid_c2, ...); every data time must be an output
+ * time of the case (list them in output.times). */
+typedef struct gs_fit_data {
+  size_t ntimes, ncols;
+  double *times;  /* ntimes */
+  char **names;   /* ncols */
+  double *values; /* values[time * ncols + col] */
+} gs_fit_data;
+int gs_fit_data_read(const char *path, gs_fit_data *d, gs_error *err);
+void gs_fit_data_free(gs_fit_data *d);
+
+typedef struct gs_fit_result {
+  size_t nparams, nresid;
+  double *x;        /* the estimates */
+  double *stderr_x; /* standard errors from the Jacobian (delta method through the bounds' map) */
+  double *corr;     /* correlations, nparams x nparams */
+  double chi2;      /* sum of squared scaled residuals */
+  double r2;        /* 1 - chi2 / (sum of squared scaled deviations from each column's mean) */
+  size_t iterations;
+  int converged; /* 0: stopped at the iteration limit or without progress */
+  long runs;     /* model runs */
+} gs_fit_result;
+
+/* Least squares (GSL multifit_nlinear, trust region, Levenberg-Marquardt)
+ * of the case's outputs at the data's times against the data, over the
+ * parameters' ranges (axes from gs_study_parse_range; each kept inside its
+ * range by a logistic map, in log for log ranges).  Residuals are (model -
+ * data) / RMS of the data column, so columns of different units weigh
+ * alike.  The start is the case's own value where it lies inside the range,
+ * else the range's middle.  The Jacobian is by forward differences, its p
+ * runs at once on the threads. */
+int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
+               const gs_fit_data *data, gs_fit_result *res, gs_error *err);
+void gs_fit_result_free(gs_fit_result *r);
 
 #ifdef __cplusplus
 }

@@ -1,4 +1,4 @@
-/* The gransim command: subcommands run, check, list, validate, sweep, dem, dem-reduce. */
+/* The gransim command: subcommands run, check, list, validate, sweep, fit, dem, dem-reduce. */
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -36,6 +36,8 @@ static void usage(FILE *fp) {
           "  sweep CASE --set KEY=V1,V2,... | --design lhs:N --range KEY=LO:HI ... --out DIR\n"
           "                         many runs of a case over a grid or a Latin hypercube of\n"
           "                         variations; one row per run in DIR/sweep.csv\n"
+          "  fit CASE --data FILE --params KEY=LO:HI ...\n"
+          "                         fit case parameters to measured d50, M0, ... over time\n"
           "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM)\n"
           "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n\n"
           "options: --help, --version; `gransim <command> --help` for details.\n"
@@ -217,6 +219,7 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 2, argv + 2);
   if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 2, argv + 2);
   if (!strcmp(argv[1], "sweep")) return gs_cmd_sweep(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "fit")) return gs_cmd_fit(argc - 2, argv + 2);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;

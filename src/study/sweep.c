@@ -17,6 +17,7 @@
 
 #include "gransim/run.h"
 #include "gransim/swa.h"
+#include "study/sweep_h5.h"
 
 #define JOURNAL "runs.csv"
 #define RESULT "sweep.csv"
@@ -91,7 +92,8 @@ typedef struct {
 
 /* Reads DIR/runs.csv left by an earlier sweep: checks its header and that
  * every row's values are this design's, keeps the whole rows and cuts a
- * torn last line (a write the kill interrupted) off the file. */
+ * torn last line (a write the kill interrupted) off the file; an empty or
+ * torn header leaves it empty (the caller writes the header again). */
 static int journal_read(const char *path, const char *header, const gs_design *d, rows_t *rows,
                         size_t *nfinished, gs_error *err) {
   FILE *f = fopen(path, "r");
@@ -138,7 +140,6 @@ static int journal_read(const char *path, const char *header, const gs_design *d
   }
   free(line);
   fclose(f);
-  if (!rc && lineno == 0) rc = gs_error_set(err, GS_EINPUT, "cannot resume: '%s' is empty", path);
   if (!rc && truncate(path, good_end))
     rc = gs_error_set(err, GS_EIO, "cannot cut the torn last row of '%s': %s", path, strerror(errno));
   return rc;
@@ -290,7 +291,8 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
   if (!rc) {
     fd = open(journal, O_WRONLY | O_APPEND | O_CREAT, 0666);
     if (fd < 0) rc = gs_error_set(err, GS_EIO, "cannot open '%s': %s", journal, strerror(errno));
-    else if (!exists && write(fd, header.s, header.n) != (ssize_t)header.n)
+    /* a new journal, or one cut to nothing (killed while writing its header) */
+    else if ((fstat(fd, &st) || st.st_size == 0) && write(fd, header.s, header.n) != (ssize_t)header.n)
       rc = gs_error_set(err, GS_EIO, "cannot write '%s': %s", journal, strerror(errno));
   }
 
@@ -320,6 +322,7 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
     for (size_t r = 0; r < d->nruns; r++)
       if (rows.row[r] && strncmp(strchr(rows.row[r], ',') + 1, "error", 5) == 0) rep->failed++;
     rc = write_result(opt->out_dir, header.s, &rows, err);
+    if (!rc) rc = gs_sweep_write_h5(opt->out_dir, d, &o, rows.row, err);
   }
   for (size_t r = 0; rows.row && r < d->nruns; r++) free(rows.row[r]);
   free(rows.row);
