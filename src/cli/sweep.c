@@ -116,6 +116,14 @@ int gs_cmd_sweep(int argc, char **argv) {
     if (err.msg[0]) fprintf(stderr, "gransim sweep: %s\n", err.msg);
     goto done;
   }
+  /* under mpirun every rank would run the whole sweep into the same files */
+  const char *ranks = getenv("OMPI_COMM_WORLD_SIZE") ? getenv("OMPI_COMM_WORLD_SIZE") : getenv("PMI_SIZE");
+  if (ranks && atoi(ranks) > 1) {
+    fprintf(stderr, "gransim sweep: started by mpirun with %s ranks: sweeps do not spread runs over "
+                    "MPI ranks yet; start it without mpirun (it uses all cores)\n", ranks);
+    rc = 2;
+    goto done;
+  }
   cfg = gs_cfg_load_file(path, &err);
   gs_sweep_report rep;
   if (!cfg || gs_sweep_run(cfg, &d, &opt, &rep, &err)) {
