@@ -54,6 +54,7 @@ stderr_has "started by mpirun with 2 ranks"
 out=$WORK/grid
 run_rc 0 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --outputs M2 --out "$out" --threads 2
 stderr_has "6 runs: 6 run now, 0 finished before" "4 ok, 2 failed" "$out/sweep.csv"
+stderr_lacks "runs done" # no progress line when stderr is no terminal
 [ "$(head -n 1 "$out/sweep.csv")" = "run,status,$B,output.end,M0,M1_solid,d10_c1,d50_c1,d90_c1,M2_c1,error" ] ||
   fail "sweep.csv header: $(head -n 1 "$out/sweep.csv")"
 [ "$(wc -l <"$out/sweep.csv")" -eq 7 ] || fail "sweep.csv has $(wc -l <"$out/sweep.csv") lines, expected 7"
@@ -88,8 +89,9 @@ stderr_has "holds the runs of an earlier sweep: add --resume"
 run_rc 0 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --outputs M2 --out "$out" --resume
 stderr_has "6 runs: 4 run now, 2 finished before" "4 ok, 2 failed"
 cmp "$out/sweep.csv" "$WORK/complete.csv" || fail "the resumed sweep.csv differs from the uninterrupted one"
-run_rc 0 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --outputs M2 --out "$out" --resume
+run_rc 0 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --outputs M2 --out "$out" --resume --progress
 stderr_has "6 runs: 0 run now, 6 finished before"
+stderr_lacks "runs done" # nothing run now
 run_rc 1 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --out "$out" --resume
 stderr_has "cannot resume" "other keys or outputs"
 

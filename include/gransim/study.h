@@ -94,6 +94,7 @@ typedef struct gs_sweep_options {
   const char *const *outputs; /* extra summary columns (see gs_study_outputs) */
   size_t noutputs;
   int threads; /* runs at once (0: omp_get_max_threads()); each run single-threaded */
+  int progress; /* a line on stderr as runs finish: -1 when stderr is a terminal, 0 off, 1 on */
 } gs_sweep_options;
 
 typedef struct gs_sweep_report {
@@ -118,8 +119,9 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
 /* ---- fitting ------------------------------------------------------------
  * Measured summary quantities: a CSV with a header "time,NAME,..." and one
  * row per time; NAME is an output column as above (M0, M1_<coordinate>,
- * d50_c1, M2_c1, mean_liquid_c2, ...); every data time must be an output
- * time of the case (list them in output.times). */
+ * d50_c1, M2_c1, mean_liquid_c2, ...; in a case of one compartment also
+ * without the _c1); every data time must be an output time of the case
+ * (list them in output.times). */
 typedef struct gs_fit_data {
   size_t ntimes, ncols;
   double *times;  /* ntimes */

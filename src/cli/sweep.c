@@ -29,7 +29,8 @@ static const char *const SWEEP_HELP =
     "                        (M0 M1 M2 d10 d50 d90 mean_<axis> total_<axis>)\n"
     "  --resume              continue a killed sweep: skip the runs DIR/runs.csv has\n"
     "  --threads N           runs at once (default: OMP_NUM_THREADS or all cores);\n"
-    "                        each run is single-threaded\n\n"
+    "                        each run is single-threaded\n"
+    "  --quiet, --progress   no progress line / one even when stderr is no terminal\n\n"
     "Columns: run (from 1), status (ok or error), the varied keys, M0 and\n"
     "M1_<coordinate> (all compartments), d10_c<j> d50_c<j> d90_c<j> per compartment j,\n"
     "the --outputs columns NAME_c<j>, and error (the message of a failed run, whose\n"
@@ -44,7 +45,7 @@ static int usage_error(const char *fmt, const char *a) {
 
 int gs_cmd_sweep(int argc, char **argv) {
   const char *path = NULL, *design = NULL;
-  gs_sweep_options opt = {0};
+  gs_sweep_options opt = {.progress = -1};
   gs_study_axis *axes = calloc((size_t)argc + 1, sizeof *axes);
   const char **outputs = calloc((size_t)argc + 1, sizeof *outputs);
   char *outputs_text = NULL;
@@ -84,6 +85,8 @@ int gs_cmd_sweep(int argc, char **argv) {
       for (char *s = strtok(outputs_text, ","); s; s = strtok(NULL, ",")) outputs[opt.noutputs++] = s;
       i++;
     } else if (!strcmp(a, "--resume")) opt.resume = 1;
+    else if (!strcmp(a, "--quiet")) opt.progress = 0;
+    else if (!strcmp(a, "--progress")) opt.progress = 1;
     else if (!strcmp(a, "--threads") && v) {
       opt.threads = atoi(argv[++i]);
       if (opt.threads < 1) rc = usage_error("--threads needs a positive integer, got '%s'", v);

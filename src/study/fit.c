@@ -290,7 +290,11 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
   if (!fc.col || !scale) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   for (size_t j = 0; j < data->ncols && !rc; j++) {
     size_t i = 0;
-    while (i < fc.out.ncol && strcmp(fc.out.names[i], data->names[j])) i++;
+    char alias[300]; /* one compartment: d50 means d50_c1 */
+    snprintf(alias, sizeof alias, "%s_c1", data->names[j]);
+    while (i < fc.out.ncol && strcmp(fc.out.names[i], data->names[j]) &&
+           (fc.out.ncomp != 1 || strcmp(fc.out.names[i], alias)))
+      i++;
     if (i == fc.out.ncol) {
       char known[1024];
       size_t at = 0;

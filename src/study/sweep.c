@@ -299,6 +299,8 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
   if (!rc) {
     gsl_error_handler_t *old = gsl_set_error_handler_off(); /* a GSL failure fails one run */
     int io_failed = 0;
+    const int show = opt->progress >= 0 ? opt->progress : isatty(STDERR_FILENO);
+    size_t nfailed = 0; /* of the runs run now, for the progress line */
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
     for (size_t r = 0; r < d->nruns; r++) {
       if (rows.row[r]) continue;
@@ -311,9 +313,16 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
         if (!row.s || write(fd, row.s, row.n) != (ssize_t)row.n) io_failed = errno ? errno : EIO;
         rows.row[r] = row.s;
         rep->ran++;
+        if (show) {
+          nfailed += row.s && strstr(row.s, ",error,") == strchr(row.s, ',');
+          fprintf(stderr, "\rgransim sweep: %zu of %zu runs done (%zu failed)   ",
+                  rep->skipped + rep->ran, d->nruns, nfailed);
+          fflush(stderr);
+        }
       }
     }
     gsl_set_error_handler(old);
+    if (show && rep->ran) fprintf(stderr, "\n");
     if (io_failed)
       rc = gs_error_set(err, GS_EIO, "cannot append to '%s': %s", journal, strerror(io_failed));
   }
