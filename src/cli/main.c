@@ -218,7 +218,12 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 2, argv + 2);
   if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 2, argv + 2);
   if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 2, argv + 2);
-  if (!strcmp(argv[1], "sweep")) return gs_cmd_sweep(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "sweep")) { /* under mpirun the ranks share the runs */
+    gs_parallel_init(&argc, &argv);
+    int rc = gs_cmd_sweep(argc - 2, argv + 2);
+    gs_parallel_finalize();
+    return rc;
+  }
   if (!strcmp(argv[1], "fit")) return gs_cmd_fit(argc - 2, argv + 2);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);

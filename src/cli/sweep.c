@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli/commands.h"
+#include "gransim/parallel.h"
 #include "gransim/study.h"
 
 static const char *const SWEEP_HELP =
@@ -43,7 +44,12 @@ static int usage_error(const char *fmt, const char *a) {
   return 2;
 }
 
+/* Under MPI every rank reads the same command line and checks the same
+ * design, so rank 0 alone speaks. */
+static int quiet_rank(void) { return gs_parallel_rank() > 0; }
+
 int gs_cmd_sweep(int argc, char **argv) {
+  if (quiet_rank() && !freopen("/dev/null", "w", stderr)) return 1;
   const char *path = NULL, *design = NULL;
   gs_sweep_options opt = {.progress = -1};
   gs_study_axis *axes = calloc((size_t)argc + 1, sizeof *axes);
@@ -119,11 +125,13 @@ int gs_cmd_sweep(int argc, char **argv) {
     if (err.msg[0]) fprintf(stderr, "gransim sweep: %s\n", err.msg);
     goto done;
   }
-  /* under mpirun every rank would run the whole sweep into the same files */
+  /* a gransim without MPI under mpirun: every rank would run the whole
+   * sweep into the same files */
   const char *ranks = getenv("OMPI_COMM_WORLD_SIZE") ? getenv("OMPI_COMM_WORLD_SIZE") : getenv("PMI_SIZE");
-  if (ranks && atoi(ranks) > 1) {
-    fprintf(stderr, "gransim sweep: started by mpirun with %s ranks: sweeps do not spread runs over "
-                    "MPI ranks yet; start it without mpirun (it uses all cores)\n", ranks);
+  if (!gs_parallel_have_mpi() && ranks && atoi(ranks) > 1) {
+    fprintf(stderr, "gransim sweep: started by mpirun with %s ranks, but this gransim was built "
+                    "without MPI; start it without mpirun (it uses all cores) or build with "
+                    "-DGRANSIM_MPI=ON\n", ranks);
     rc = 2;
     goto done;
   }

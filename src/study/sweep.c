@@ -15,6 +15,7 @@
 
 #include <gsl/gsl_errno.h>
 
+#include "gransim/parallel.h"
 #include "gransim/run.h"
 #include "gransim/swa.h"
 #include "study/sweep_h5.h"
@@ -158,7 +159,7 @@ static void run_one(const gs_cfg *base, const gs_design *d, size_t r, const gs_s
     v = gs_malloc(o->ncol * sizeof *v, &err);
     rc = y && v ? GS_OK : GS_ENOMEM;
   }
-  gs_run_options ropt = {.out_dir = NULL, .progress = 0};
+  gs_run_options ropt = {.out_dir = NULL, .progress = 0, .one_process = 1};
   gs_run_report rep;
   if (!rc) rc = gs_case_run(&c, &ropt, y, &rep, &err);
   if (!rc) gs_study_outputs_eval(o, &c.model, y, v);
@@ -273,37 +274,62 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
     return rc;
   }
 
+  /* under MPI (gransim built with it, started by mpirun) the ranks share the
+   * runs: rank 0 sets the journal up, every rank appends its own runs' rows,
+   * and rank 0 writes the tables once all are done */
+  const int rank = gs_parallel_rank(), size = gs_parallel_size();
   buf_t header = {0};
   rows_t rows = {.nruns = d->nruns, .row = calloc(d->nruns, sizeof(char *))};
+  double *done = calloc(d->nruns, sizeof *done);
   char journal[4096];
   snprintf(journal, sizeof journal, "%s/" JOURNAL, opt->out_dir);
-  if (header_of(d, &o, &header) || !rows.row) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-  if (!rc) rc = make_dir(opt->out_dir, err);
-  struct stat st;
-  const int exists = !rc && stat(journal, &st) == 0;
-  if (!rc && exists && !opt->resume)
-    rc = gs_error_set(err, GS_EINPUT,
-                      "'%s' holds the runs of an earlier sweep: add --resume to continue it, or "
-                      "choose another --out",
-                      journal);
-  if (!rc && exists) rc = journal_read(journal, header.s, d, &rows, &rep->skipped, err);
+  if (header_of(d, &o, &header) || !rows.row || !done)
+    rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   int fd = -1;
-  if (!rc) {
-    fd = open(journal, O_WRONLY | O_APPEND | O_CREAT, 0666);
-    if (fd < 0) rc = gs_error_set(err, GS_EIO, "cannot open '%s': %s", journal, strerror(errno));
-    /* a new journal, or one cut to nothing (killed while writing its header) */
-    else if ((fstat(fd, &st) || st.st_size == 0) && write(fd, header.s, header.n) != (ssize_t)header.n)
-      rc = gs_error_set(err, GS_EIO, "cannot write '%s': %s", journal, strerror(errno));
+  if (rank == 0) {
+    if (!rc) rc = make_dir(opt->out_dir, err);
+    struct stat st;
+    const int exists = !rc && stat(journal, &st) == 0;
+    if (!rc && exists && !opt->resume)
+      rc = gs_error_set(err, GS_EINPUT,
+                        "'%s' holds the runs of an earlier sweep: add --resume to continue it, or "
+                        "choose another --out",
+                        journal);
+    if (!rc && exists) rc = journal_read(journal, header.s, d, &rows, &rep->skipped, err);
+    if (!rc) {
+      fd = open(journal, O_WRONLY | O_APPEND | O_CREAT, 0666);
+      if (fd < 0) rc = gs_error_set(err, GS_EIO, "cannot open '%s': %s", journal, strerror(errno));
+      /* a new journal, or one cut to nothing (killed while writing its header) */
+      else if ((fstat(fd, &st) || st.st_size == 0) &&
+               write(fd, header.s, header.n) != (ssize_t)header.n)
+        rc = gs_error_set(err, GS_EIO, "cannot write '%s': %s", journal, strerror(errno));
+    }
+    for (size_t r = 0; !rc && r < d->nruns; r++) done[r] = rows.row[r] != NULL;
+  }
+  if (size > 1) {
+    if (gs_parallel_max(rc) && !rc) rc = gs_error_set(err, GS_EIO, "the sweep failed on MPI rank 0");
+    if (!rc) {
+      gs_parallel_broadcast(done, d->nruns);
+      if (rank && (fd = open(journal, O_WRONLY | O_APPEND)) < 0)
+        rc = gs_error_set(err, GS_EIO, "cannot open '%s': %s", journal, strerror(errno));
+    }
+  }
+  /* this rank's runs: every size-th of those not finished */
+  size_t *mine = rc ? NULL : malloc(d->nruns * sizeof *mine), nmine = 0, npending = 0;
+  if (!rc && !mine) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  for (size_t r = 0; !rc && r < d->nruns; r++) {
+    if (!done[r] && npending++ % (size_t)size == (size_t)rank) mine[nmine++] = r;
+    if (done[r] && rank) rep->skipped++;
   }
 
+  int io_failed = 0;
   if (!rc) {
     gsl_error_handler_t *old = gsl_set_error_handler_off(); /* a GSL failure fails one run */
-    int io_failed = 0;
-    const int show = opt->progress >= 0 ? opt->progress : isatty(STDERR_FILENO);
+    const int show = rank == 0 && (opt->progress >= 0 ? opt->progress : isatty(STDERR_FILENO));
     size_t nfailed = 0; /* of the runs run now, for the progress line */
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (size_t r = 0; r < d->nruns; r++) {
-      if (rows.row[r]) continue;
+    for (size_t i = 0; i < nmine; i++) {
+      const size_t r = mine[i];
       buf_t row = {0};
       run_one(base, d, r, &o, &row);
 #pragma omp critical(gs_sweep_journal)
@@ -315,24 +341,38 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
         rep->ran++;
         if (show) {
           nfailed += row.s && strstr(row.s, ",error,") == strchr(row.s, ',');
-          fprintf(stderr, "\rgransim sweep: %zu of %zu runs done (%zu failed)   ",
-                  rep->skipped + rep->ran, d->nruns, nfailed);
+          fprintf(stderr, "\rgransim sweep: %zu of %zu runs done (%zu failed%s)   ",
+                  rep->skipped + rep->ran, d->nruns, nfailed, size > 1 ? ", MPI rank 0" : "");
           fflush(stderr);
         }
       }
     }
     gsl_set_error_handler(old);
     if (show && rep->ran) fprintf(stderr, "\n");
-    if (io_failed)
-      rc = gs_error_set(err, GS_EIO, "cannot append to '%s': %s", journal, strerror(io_failed));
   }
   if (fd >= 0) close(fd);
-  if (!rc) {
+  free(mine);
+  if (!rc && io_failed)
+    rc = gs_error_set(err, GS_EIO, "cannot append to '%s': %s", journal, strerror(io_failed));
+  if (size > 1) { /* also the barrier: every rank's rows are in the journal */
+    double v[2] = {(double)rep->ran, (double)(rc != 0)};
+    gs_parallel_sum(v, 2);
+    rep->ran = (size_t)v[0];
+    if (v[1] && !rc) rc = gs_error_set(err, GS_EIO, "the sweep failed on another MPI rank");
+    if (!rc && rank == 0) { /* the other ranks' rows */
+      size_t more = 0;
+      rc = journal_read(journal, header.s, d, &rows, &more, err);
+    }
+  }
+  if (!rc && rank == 0) {
     for (size_t r = 0; r < d->nruns; r++)
       if (rows.row[r] && strncmp(strchr(rows.row[r], ',') + 1, "error", 5) == 0) rep->failed++;
     rc = write_result(opt->out_dir, header.s, &rows, err);
     if (!rc) rc = gs_sweep_write_h5(opt->out_dir, d, &o, rows.row, err);
   }
+  if (size > 1 && gs_parallel_max(rc) && !rc)
+    rc = gs_error_set(err, GS_EIO, "the sweep failed on MPI rank 0");
+  free(done);
   for (size_t r = 0; rows.row && r < d->nruns; r++) free(rows.row[r]);
   free(rows.row);
   free(header.s);
