@@ -96,6 +96,10 @@ stderr_has "6 runs: 0 run now, 6 finished before"
 stderr_lacks "runs done" # nothing run now
 run_rc 1 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --out "$out" --resume
 stderr_has "cannot resume" "other keys or outputs"
+cmp "$c" "$out/base-case.yaml" || fail "$out/base-case.yaml is not the case file"
+sed 's/count: 3/count: 4/' "$c" >"$WORK/edited.yaml"
+run_rc 1 "$BIN" sweep "$WORK/edited.yaml" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --outputs M2 --out "$out" --resume
+stderr_has "cannot resume: the case file '$WORK/edited.yaml' differs from '$out/base-case.yaml'"
 
 # a Latin hypercube: N rows, the same for the same seed, others for another
 for s in 7 7 8; do

@@ -89,7 +89,7 @@ void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, const d
 void gs_study_outputs_free(gs_study_outputs *o);
 
 typedef struct gs_sweep_options {
-  const char *out_dir; /* DIR: runs.csv (the journal), sweep.csv and sweep.h5 */
+  const char *out_dir; /* DIR: base-case.yaml, runs.csv (the journal), sweep.csv, sweep.h5 */
   int resume;          /* skip the runs DIR/runs.csv records as finished */
   const char *const *outputs; /* extra summary columns (see gs_study_outputs) */
   size_t noutputs;
@@ -111,8 +111,10 @@ typedef struct gs_sweep_report {
  * and DIR/sweep.h5 (the same table, a dataset per column), each under a
  * temporary name renamed into place.  A run that fails (numerics,
  * checks) is a row with status error and its message; the others go on.
- * Returns an error only when the sweep itself cannot go on (a bad
- * variation, files). */
+ * DIR/base-case.yaml keeps the case file as read; a resume with a case
+ * file that differs is refused.  Under MPI the ranks share the unfinished
+ * runs and rank 0 writes the tables.  Returns an error only when the sweep
+ * itself cannot go on (a bad variation, files). */
 int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options *opt,
                  gs_sweep_report *rep, gs_error *err);
 

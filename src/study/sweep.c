@@ -22,6 +22,7 @@
 
 #define JOURNAL "runs.csv"
 #define RESULT "sweep.csv"
+#define BASE_CASE "base-case.yaml"
 
 /* A growing text buffer (rows are built whole, then written with one write()). */
 typedef struct {
@@ -144,6 +145,43 @@ static int journal_read(const char *path, const char *header, const gs_design *d
   if (!rc && truncate(path, good_end))
     rc = gs_error_set(err, GS_EIO, "cannot cut the torn last row of '%s': %s", path, strerror(errno));
   return rc;
+}
+
+/* DIR/base-case.yaml: the case file the sweep started from, so that the
+ * directory records what its rows vary and a resume with an edited case
+ * (whose finished rows would no longer match) is refused. */
+static int keep_case(const char *dir, const gs_cfg *base, int resume, gs_error *err) {
+  char path[4096], tmp[4096];
+  snprintf(path, sizeof path, "%s/" BASE_CASE, dir);
+  const char *text = gs_cfg_source(base);
+  FILE *f = resume ? fopen(path, "rb") : NULL;
+  if (f) {
+    size_t len = strlen(text), n = 0;
+    char *buf = malloc(len + 2);
+    if (buf) n = fread(buf, 1, len + 1, f);
+    fclose(f);
+    int same = buf && n == len && memcmp(buf, text, len) == 0;
+    free(buf);
+    return same ? GS_OK
+                : gs_error_set(err, GS_EINPUT,
+                               "cannot resume: the case file '%s' differs from '%s', the case "
+                               "this sweep started from",
+                               gs_cfg_name(base), path);
+  }
+  snprintf(tmp, sizeof tmp, "%s/." BASE_CASE ".partial", dir);
+  f = fopen(tmp, "wb");
+  int bad = !f;
+  if (f) {
+    bad = fputs(text, f) < 0;
+    bad |= fclose(f) != 0;
+  }
+  if (!bad) bad = rename(tmp, path) != 0;
+  if (bad) {
+    int e = errno;
+    remove(tmp);
+    return gs_error_set(err, GS_EIO, "cannot write '%s': %s", path, strerror(e));
+  }
+  return GS_OK;
 }
 
 /* One run: build, run, gather; the row it leaves in *row (error rows too). */
@@ -295,6 +333,7 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
                         "'%s' holds the runs of an earlier sweep: add --resume to continue it, or "
                         "choose another --out",
                         journal);
+    if (!rc) rc = keep_case(opt->out_dir, base, exists, err);
     if (!rc && exists) rc = journal_read(journal, header.s, d, &rows, &rep->skipped, err);
     if (!rc) {
       fd = open(journal, O_WRONLY | O_APPEND | O_CREAT, 0666);
