@@ -21,6 +21,7 @@ swa swa
 demdata dem_data
 dem dem
 liggghts liggghts
+study study
 cli"
 declare -A rank_of_folder rank_of_header
 r=0

@@ -34,6 +34,12 @@ gs_cfg *gs_cfg_load_file(const char *path, gs_error *err);
 gs_cfg *gs_cfg_load_string(const char *text, const char *name, gs_error *err);
 void gs_cfg_free(gs_cfg *cfg);
 
+/* A fresh copy of a loaded document, parsed again from its text: same name,
+ * directory (relative paths resolve alike) and source, no key marked used.
+ * Studies build every run's case from its own copy, so that runs on several
+ * threads never share the marks the accessors set. */
+gs_cfg *gs_cfg_copy(const gs_cfg *cfg, gs_error *err);
+
 gs_cfg_node *gs_cfg_root(gs_cfg *cfg);   /* NULL for an empty document */
 const char *gs_cfg_source(const gs_cfg *cfg); /* full text of the file, for the case echo */
 const char *gs_cfg_name(const gs_cfg *cfg);   /* file name as given */
@@ -53,6 +59,18 @@ gs_cfg_node *gs_cfg_value_at(gs_cfg_node *map, size_t i); /* marks the key used 
 
 /* Look a key up in a map and mark it used.  NULL if absent (or n not a map). */
 gs_cfg_node *gs_cfg_get(gs_cfg_node *map, const char *key);
+
+/* The node at a dotted path of map keys and 0-based sequence indices
+ * ("mechanisms.0.kernel.beta0", "output.end"), or NULL with err saying which
+ * part is missing and what is there instead.  Marks nothing used. */
+gs_cfg_node *gs_cfg_find(gs_cfg *cfg, const char *dotted, gs_error *err);
+/* Replace the text of the scalar at a dotted path by value (as if the file
+ * said so); the case reader then validates it like any value it reads.  The
+ * path must exist and name a scalar: setting a key the file lacks would
+ * bypass the reader's unknown-key check on a typo.  gs_cfg_source (the case
+ * echo) still shows the file as read.  GS_EINPUT with a message naming the
+ * path otherwise. */
+int gs_cfg_set(gs_cfg *cfg, const char *dotted, const char *value, gs_error *err);
 
 /* Format an error about node n (file:line: path = 'value': message). */
 int gs_cfg_fail(const gs_cfg_node *n, gs_error *err, const char *fmt, ...)

@@ -61,6 +61,9 @@ typedef struct gs_run_options {
   int resume;          /* continue an interrupted run from its partial files */
   int progress;        /* -1 auto (when stderr is a terminal), 0 off, 1 on */
   int timings;         /* 1: print where each (MPI) rank spent its time, at the end */
+  /* 1: this process runs the case alone, whatever the MPI ranks (the ranks
+   * of a sweep each run their own cases) */
+  int one_process;
   /* more observers, called after the built-in ones (owned by the caller:
    * their free is not called) */
   const gs_observer *observers;

@@ -455,6 +455,23 @@ void gs_cfg_free(gs_cfg *cfg) {
   free(cfg);
 }
 
+gs_cfg *gs_cfg_copy(const gs_cfg *cfg, gs_error *err) {
+  if (!cfg) {
+    gs_error_set(err, GS_EINPUT, "no configuration to copy");
+    return NULL;
+  }
+  gs_cfg *c = gs_calloc(1, sizeof *c, err);
+  if (!c) return NULL;
+  c->source = gs_strdup(cfg->source, err);
+  c->name = gs_strdup(cfg->name, err);
+  c->dir = gs_strdup(cfg->dir, err);
+  if (!c->source || !c->name || !c->dir || gs_cfg_parse(c, c->source, strlen(c->source), err)) {
+    gs_cfg_free(c);
+    return NULL;
+  }
+  return c;
+}
+
 gs_cfg_node *gs_cfg_root(gs_cfg *cfg) { return cfg ? cfg->root : NULL; }
 const char *gs_cfg_source(const gs_cfg *cfg) { return cfg ? cfg->source : ""; }
 const char *gs_cfg_name(const gs_cfg *cfg) { return cfg ? cfg->name : ""; }
@@ -510,6 +527,97 @@ gs_cfg_node *gs_cfg_get(gs_cfg_node *map, const char *key) {
     }
   }
   return NULL;
+}
+
+/* --- dotted paths (studies vary one value of a case) ---------------------- */
+
+/* "a, b, c": the keys of map, for "it has: ..." hints. */
+static void gs_keys_of(const gs_cfg_node *map, char *buf, size_t size) {
+  size_t at = 0;
+  buf[0] = '\0';
+  for (size_t i = 0; i < map->n && at + 1 < size; i++) {
+    int w = snprintf(buf + at, size - at, "%s%s", i ? ", " : "", map->entries[i].key);
+    if (w < 0) break;
+    at += (size_t)w;
+  }
+}
+
+gs_cfg_node *gs_cfg_find(gs_cfg *cfg, const char *dotted, gs_error *err) {
+  gs_cfg_node *n = cfg ? cfg->root : NULL;
+  const char *p = dotted ? dotted : "";
+  if (!*p) {
+    gs_error_set(err, GS_EINPUT, "empty key");
+    return NULL;
+  }
+  if (!n) {
+    gs_error_set(err, GS_EINPUT, "key '%s': the case file is empty", dotted);
+    return NULL;
+  }
+  while (*p) {
+    size_t len = strcspn(p, ".");
+    char part[256];
+    if (len == 0 || len >= sizeof part) {
+      gs_error_set(err, GS_EINPUT, "key '%s': %s", dotted,
+                   len ? "a part is too long" : "empty part (two dots, or a dot at an end)");
+      return NULL;
+    }
+    memcpy(part, p, len);
+    part[len] = '\0';
+    const char *where = gs_path_shown(n);
+    if (n->kind == GS_CFG_MAP) {
+      gs_cfg_node *next = NULL;
+      for (size_t i = 0; i < n->n && !next; i++)
+        if (strcmp(n->entries[i].key, part) == 0) next = n->entries[i].value;
+      if (!next) {
+        char keys[512];
+        gs_keys_of(n, keys, sizeof keys);
+        gs_error_set(err, GS_EINPUT, "key '%s': the case has no '%s' in %s (it has: %s)", dotted,
+                     part, where, keys);
+        return NULL;
+      }
+      n = next;
+    } else if (n->kind == GS_CFG_SEQ) {
+      char *end = NULL;
+      unsigned long i = strtoul(part, &end, 10);
+      if (!isdigit((unsigned char)part[0]) || *end) {
+        gs_error_set(err, GS_EINPUT, "key '%s': %s is a list; expected an index (0, 1, ...), got '%s'",
+                     dotted, where, part);
+        return NULL;
+      }
+      if (i >= n->n) {
+        gs_error_set(err, GS_EINPUT, "key '%s': %s has %zu entr%s (indices from 0), no %lu", dotted,
+                     where, n->n, n->n == 1 ? "y" : "ies", i);
+        return NULL;
+      }
+      n = n->items[i];
+    } else {
+      gs_error_set(err, GS_EINPUT, "key '%s': %s is a value ('%s'), not a map or list", dotted,
+                   where, n->text);
+      return NULL;
+    }
+    p += len;
+    if (*p == '.') {
+      p++;
+      if (!*p) {
+        gs_error_set(err, GS_EINPUT, "key '%s': empty part (two dots, or a dot at an end)", dotted);
+        return NULL;
+      }
+    }
+  }
+  return n;
+}
+
+int gs_cfg_set(gs_cfg *cfg, const char *dotted, const char *value, gs_error *err) {
+  gs_cfg_node *n = gs_cfg_find(cfg, dotted, err);
+  if (!n) return GS_EINPUT;
+  if (n->kind != GS_CFG_SCALAR)
+    return gs_error_set(err, GS_EINPUT, "key '%s': %s is a %s, not a single value", dotted,
+                        gs_path_shown(n), n->kind == GS_CFG_MAP ? "map" : "list");
+  char *copy = gs_strdup(value ? value : "", err);
+  if (!copy) return GS_ENOMEM;
+  free(n->text);
+  n->text = copy;
+  return GS_OK;
 }
 
 /* --- messages ------------------------------------------------------------------ */

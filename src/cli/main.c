@@ -1,4 +1,4 @@
-/* The gransim command: subcommands run, check, list, validate. */
+/* The gransim command: subcommands run, check, list, validate, sweep, fit, dem, dem-reduce. */
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,6 +37,11 @@ static void usage(FILE *fp) {
           "  validate [--out FILE] [--quick] [--only IDS]\n"
           "                         grid-refinement study against analytical solutions;\n"
           "                         writes a markdown report (default docs/validation.md)\n"
+          "  sweep CASE --set KEY=V1,V2,... | --design lhs:N --range KEY=LO:HI ... --out DIR\n"
+          "                         many runs of a case over a grid or a Latin hypercube of\n"
+          "                         variations; one row per run in DIR/sweep.csv\n"
+          "  fit CASE --data FILE --params KEY=LO:HI ...\n"
+          "                         fit case parameters to measured d50, M0, ... over time\n"
           "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM)\n"
           "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n\n"
           "options: --help, --version; `gransim <command> --help` for details.\n"
@@ -252,6 +257,13 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 2, argv + 2);
   if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 2, argv + 2);
   if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "sweep")) { /* under mpirun the ranks share the runs */
+    gs_parallel_init(&argc, &argv);
+    int rc = gs_cmd_sweep(argc - 2, argv + 2);
+    gs_parallel_finalize();
+    return rc;
+  }
+  if (!strcmp(argv[1], "fit")) return gs_cmd_fit(argc - 2, argv + 2);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;

@@ -14,10 +14,10 @@
 
 static void *split_work_alloc(size_t n, int nr);
 
-int gs_dist_init(gs_dist *d, const gs_model *m, gs_error *err) {
+int gs_dist_init(gs_dist *d, const gs_model *m, int one_process, gs_error *err) {
   memset(d, 0, sizeof *d);
-  d->rank = gs_parallel_rank();
-  d->size = gs_parallel_size();
+  d->rank = one_process ? 0 : gs_parallel_rank();
+  d->size = one_process ? 1 : gs_parallel_size();
   d->m = m;
   const size_t ncomp = m->grid.ncomp;
   if ((size_t)d->size > ncomp)

@@ -43,8 +43,9 @@ typedef struct {
 #define GS_DIST_NSEND 16
 
 /* Split the compartments of m evenly over the ranks (this rank's block:
- * [lo[rank], lo[rank + 1])). */
-int gs_dist_init(gs_dist *d, const gs_model *m, gs_error *err);
+ * [lo[rank], lo[rank + 1])); one_process: this process alone holds them all,
+ * as without MPI. */
+int gs_dist_init(gs_dist *d, const gs_model *m, int one_process, gs_error *err);
 /* Another split: rank r owns [lo[r], lo[r + 1]) (size + 1 entries). */
 void gs_dist_resplit(gs_dist *d, const size_t *lo);
 /* The contiguous split of n compartments of the given costs over nr <= n

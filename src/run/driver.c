@@ -176,7 +176,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt_in, double *yout, gs_run_r
   int rc = (run.Y = gs_malloc(n * sizeof(double), err)) ? GS_OK : GS_ENOMEM;
   if (!rc) memcpy(run.Y, c->y0, n * sizeof(double));
   /* under MPI each rank evaluates its own block of compartments */
-  if (!rc) rc = gs_dist_init(&run.dist, &c->model, err);
+  if (!rc) rc = gs_dist_init(&run.dist, &c->model, opt.one_process, err);
   if (rc) {
     free(run.Y);
     return rc;

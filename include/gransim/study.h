@@ -1,0 +1,163 @@
+/* gransim — studies over many runs of one case: variations of a case by
+ * dotted keys, designs (a full grid or a Latin hypercube) and the sweep that
+ * runs them all and gathers one row of outputs per run.
+ *
+ * A variation sets scalars of the case's configuration tree at dotted paths
+ * ("mechanisms.0.kernel.beta0", "solver.rtol", "output.end"); every run's
+ * case is built from its own copy of the tree (gs_cfg_copy), so the case
+ * reader validates a varied value exactly as if the file held it.  The whole
+ * design is checked (keys exist, every run's case builds) before any run
+ * starts. */
+#ifndef GRANSIM_STUDY_H
+#define GRANSIM_STUDY_H
+
+#include <stddef.h>
+
+#include "gransim/case.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One varied key: a list of values (--set KEY=V1,V2,...) or a range
+ * (--range KEY=LO:HI, or KEY=LO:HI:log for a range sampled uniformly in
+ * log(value), LO > 0). */
+typedef struct gs_study_axis {
+  char *key;
+  char **values; /* the listed values (text, set as written); NULL for a range */
+  size_t nvalues;
+  double lo, hi;
+  int log;
+} gs_study_axis;
+
+/* Parse "KEY=V1,V2,..." / "KEY=LO:HI[:log]"; a clear GS_EINPUT for an empty
+ * key or value, LO >= HI, a non-number or a log range with LO <= 0.  Free
+ * with gs_study_axis_free (also after a failure). */
+int gs_study_parse_set(const char *arg, gs_study_axis *a, gs_error *err);
+int gs_study_parse_range(const char *arg, gs_study_axis *a, gs_error *err);
+void gs_study_axis_free(gs_study_axis *a);
+
+/* The runs of a study: nruns rows of nkeys values (text). */
+typedef struct gs_design {
+  size_t nkeys, nruns;
+  char **keys;   /* dotted paths */
+  char **values; /* values[run * nkeys + k] */
+  double *unit;  /* Latin hypercube only: the point in [0,1)^nkeys of each run; NULL for a grid */
+} gs_design;
+
+/* Every combination of the listed values, the first axis varying slowest
+ * (nested loops in the order given).  All axes must be lists. */
+int gs_design_grid(const gs_study_axis *axes, size_t naxes, gs_design *d, gs_error *err);
+/* A Latin hypercube of n points over ranges: every axis's range split into n
+ * equal strata (in log(value) for log axes), each stratum holding exactly one
+ * point, strata paired at random (GSL mt19937 seeded with seed: the same
+ * seed gives the same design).  Values are written with 17 significant
+ * digits, so that the text set into the case is the number drawn. */
+int gs_design_lhs(const gs_study_axis *axes, size_t naxes, size_t n, unsigned long seed,
+                  gs_design *d, gs_error *err);
+void gs_design_free(gs_design *d);
+
+/* The case of run r: a copy of base with the run's values set, built by the
+ * case reader (which takes the copy over).  Errors name the run and its
+ * values. */
+int gs_study_case(const gs_cfg *base, const gs_design *d, size_t r, gs_case *c, gs_error *err);
+
+/* The outputs gathered per run, at the final output time: M0 (number, all
+ * compartments), M1_<coordinate> (total volume of each volume coordinate, all
+ * compartments), d10_c<j>, d50_c<j>, d90_c<j> per compartment j (1-based, as
+ * in summary.csv), then for every extra summary column NAME (M0, M1, M2, d10,
+ * d50, d90, mean_<coordinate>, total_<coordinate>) NAME_c<j> per
+ * compartment. */
+typedef struct gs_study_outputs {
+  size_t ncol;
+  char **names;
+  int *what;    /* per column: which statistic (internal code) */
+  int *index;   /* volume coordinate, where the statistic has one */
+  size_t *comp; /* compartment, where it has one */
+  size_t ncomp; /* the shape the columns were made for */
+  int nvol;
+} gs_study_outputs;
+
+int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *const *extra,
+                          size_t nextra, gs_error *err);
+/* GS_EINPUT when model m does not have the shape o was made for (a
+ * variation that changes the compartments or the volume coordinates). */
+int gs_study_outputs_fit(const gs_study_outputs *o, const gs_model *m, gs_error *err);
+/* values[0..ncol) from the state y (numbers and carried totals) of model m. */
+void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, const double *y,
+                           double *values);
+void gs_study_outputs_free(gs_study_outputs *o);
+
+typedef struct gs_sweep_options {
+  const char *out_dir; /* DIR: base-case.yaml, runs.csv (the journal), sweep.csv, sweep.h5 */
+  int resume;          /* skip the runs DIR/runs.csv records as finished */
+  const char *const *outputs; /* extra summary columns (see gs_study_outputs) */
+  size_t noutputs;
+  int threads; /* runs at once (0: omp_get_max_threads()); each run single-threaded */
+  int progress; /* a line on stderr as runs finish: -1 when stderr is a terminal, 0 off, 1 on */
+} gs_sweep_options;
+
+typedef struct gs_sweep_report {
+  size_t runs;    /* in the design */
+  size_t skipped; /* finished before (resume) */
+  size_t ran;     /* run now */
+  size_t failed;  /* of all runs, recorded with status error */
+} gs_sweep_report;
+
+/* Check every run's case, then run those not yet finished (OpenMP over
+ * runs), appending each run's row to DIR/runs.csv as it finishes (one
+ * write() of a whole line: a killed sweep leaves whole rows, and --resume
+ * drops a torn last line), then write DIR/sweep.csv (rows in run order)
+ * and DIR/sweep.h5 (the same table, a dataset per column), each under a
+ * temporary name renamed into place.  A run that fails (numerics,
+ * checks) is a row with status error and its message; the others go on.
+ * DIR/base-case.yaml keeps the case file as read; a resume with a case
+ * file that differs is refused.  Under MPI the ranks share the unfinished
+ * runs and rank 0 writes the tables.  Returns an error only when the sweep
+ * itself cannot go on (a bad variation, files). */
+int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options *opt,
+                 gs_sweep_report *rep, gs_error *err);
+
+/* ---- fitting ------------------------------------------------------------
+ * Measured summary quantities: a CSV with a header "time,NAME,..." and one
+ * row per time; NAME is an output column as above (M0, M1_<coordinate>,
+ * d50_c1, M2_c1, mean_liquid_c2, ...; in a case of one compartment also
+ * without the _c1); every data time must be an output time of the case
+ * (list them in output.times). */
+typedef struct gs_fit_data {
+  size_t ntimes, ncols;
+  double *times;  /* ntimes */
+  char **names;   /* ncols */
+  double *values; /* values[time * ncols + col] */
+} gs_fit_data;
+int gs_fit_data_read(const char *path, gs_fit_data *d, gs_error *err);
+void gs_fit_data_free(gs_fit_data *d);
+
+typedef struct gs_fit_result {
+  size_t nparams, nresid;
+  double *x;        /* the estimates */
+  double *stderr_x; /* standard errors from the Jacobian (delta method through the bounds' map) */
+  double *corr;     /* correlations, nparams x nparams */
+  double chi2;      /* sum of squared scaled residuals */
+  double r2;        /* 1 - chi2 / (sum of squared scaled deviations from each column's mean) */
+  size_t iterations;
+  int converged; /* 0: stopped at the iteration limit or without progress */
+  long runs;     /* model runs */
+} gs_fit_result;
+
+/* Least squares (GSL multifit_nlinear, trust region, Levenberg-Marquardt)
+ * of the case's outputs at the data's times against the data, over the
+ * parameters' ranges (axes from gs_study_parse_range; each kept inside its
+ * range by a logistic map, in log for log ranges).  Residuals are (model -
+ * data) / RMS of the data column, so columns of different units weigh
+ * alike.  The start is the case's own value where it lies inside the range,
+ * else the range's middle.  The Jacobian is by forward differences, its p
+ * runs at once on the threads. */
+int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
+               const gs_fit_data *data, gs_fit_result *res, gs_error *err);
+void gs_fit_result_free(gs_fit_result *r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

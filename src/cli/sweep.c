@@ -1,0 +1,158 @@
+/* gransim sweep: many runs of one case over a grid or a Latin hypercube of
+ * variations (src/study, gransim/study.h). */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli/commands.h"
+#include "gransim/parallel.h"
+#include "gransim/study.h"
+
+static const char *const SWEEP_HELP =
+    "usage: gransim sweep CASE --set KEY=V1,V2,... [--set ...] --out DIR [options]\n"
+    "       gransim sweep CASE --design lhs:N --range KEY=LO:HI[:log] [--range ...]\n"
+    "                     [--seed S] --out DIR [options]\n\n"
+    "Runs CASE once per variation and gathers one row per run into DIR/sweep.csv.\n"
+    "KEY is a dotted path into the case file: map keys and list indices from 0,\n"
+    "e.g. mechanisms.0.kernel.beta0, solver.rtol, output.end.  The key must exist in\n"
+    "the case file, and every variation is checked by the case reader before any\n"
+    "run starts.\n\n"
+    "  --set KEY=V1,V2,...   values of KEY; several --set give every combination\n"
+    "                        (the first --set varies slowest)\n"
+    "  --design lhs:N        a Latin hypercube of N runs over the --range keys: each\n"
+    "                        range cut into N equal strata, each stratum used once\n"
+    "  --range KEY=LO:HI     the range of KEY (LO < HI); KEY=LO:HI:log strata in log\n"
+    "  --seed S              seed of the hypercube's random pairing (default 1)\n"
+    "  --out DIR             DIR/base-case.yaml (the case as read; a --resume with\n"
+    "                        another case is refused), DIR/runs.csv (a row per run as\n"
+    "                        it finishes), and at the end DIR/sweep.csv (all rows in\n"
+    "                        run order) and DIR/sweep.h5 (the same table in HDF5)\n"
+    "  --outputs A,B,...     more summary columns per compartment at the final time\n"
+    "                        (M0 M1 M2 d10 d50 d90 mean_<axis> total_<axis>)\n"
+    "  --resume              continue a killed sweep: skip the runs DIR/runs.csv has\n"
+    "  --threads N           runs at once (default: OMP_NUM_THREADS or all cores);\n"
+    "                        each run is single-threaded\n"
+    "  --quiet, --progress   no progress line / one even when stderr is no terminal\n\n"
+    "Columns: run (from 1), status (ok or error), the varied keys, M0 and\n"
+    "M1_<coordinate> (all compartments), d10_c<j> d50_c<j> d90_c<j> per compartment j,\n"
+    "the --outputs columns NAME_c<j>, and error (the message of a failed run, whose\n"
+    "outputs are nan).  A failed run does not stop the others.  docs/studies.md\n";
+
+static int usage_error(const char *fmt, const char *a) {
+  fprintf(stderr, "gransim sweep: ");
+  fprintf(stderr, fmt, a);
+  fprintf(stderr, " (see gransim sweep --help)\n");
+  return 2;
+}
+
+/* Under MPI every rank reads the same command line and checks the same
+ * design, so rank 0 alone speaks. */
+static int quiet_rank(void) { return gs_parallel_rank() > 0; }
+
+int gs_cmd_sweep(int argc, char **argv) {
+  if (quiet_rank() && !freopen("/dev/null", "w", stderr)) return 1;
+  const char *path = NULL, *design = NULL;
+  gs_sweep_options opt = {.progress = -1};
+  gs_study_axis *axes = calloc((size_t)argc + 1, sizeof *axes);
+  const char **outputs = calloc((size_t)argc + 1, sizeof *outputs);
+  char *outputs_text = NULL;
+  size_t naxes = 0, nsets = 0, nranges = 0;
+  unsigned long seed = 1;
+  gs_error err = {0};
+  gs_design d = {0};
+  gs_cfg *cfg = NULL;
+  int rc = 0;
+  if (!axes || !outputs) {
+    fprintf(stderr, "gransim sweep: out of memory\n");
+    rc = 1;
+    goto done;
+  }
+  for (int i = 0; i < argc && !rc; i++) {
+    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+    if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+      fputs(SWEEP_HELP, stdout);
+      goto done;
+    } else if (!strcmp(a, "--set") && v) {
+      if (gs_study_parse_set(v, &axes[naxes++], &err)) rc = 2;
+      nsets++, i++;
+    } else if (!strcmp(a, "--range") && v) {
+      if (gs_study_parse_range(v, &axes[naxes++], &err)) rc = 2;
+      nranges++, i++;
+    } else if (!strcmp(a, "--design") && v) design = argv[++i];
+    else if (!strcmp(a, "--seed") && v) {
+      char *end;
+      seed = strtoul(v, &end, 10);
+      if (!*v || *end) rc = usage_error("--seed needs a non-negative integer, got '%s'", v);
+      i++;
+    } else if (!strcmp(a, "--out") && v) opt.out_dir = argv[++i];
+    else if (!strcmp(a, "--outputs") && v) {
+      free(outputs_text);
+      outputs_text = strdup(v);
+      opt.noutputs = 0;
+      for (char *s = strtok(outputs_text, ","); s; s = strtok(NULL, ",")) outputs[opt.noutputs++] = s;
+      i++;
+    } else if (!strcmp(a, "--resume")) opt.resume = 1;
+    else if (!strcmp(a, "--quiet")) opt.progress = 0;
+    else if (!strcmp(a, "--progress")) opt.progress = 1;
+    else if (!strcmp(a, "--threads") && v) {
+      opt.threads = atoi(argv[++i]);
+      if (opt.threads < 1) rc = usage_error("--threads needs a positive integer, got '%s'", v);
+    } else if (a[0] == '-') rc = usage_error("unknown option or missing value: '%s'", a);
+    else if (!path) path = a;
+    else rc = usage_error("unexpected argument '%s'", a);
+  }
+  if (rc) {
+    if (err.msg[0]) fprintf(stderr, "gransim sweep: %s\n", err.msg);
+    goto done;
+  }
+  if (!path || !opt.out_dir) {
+    rc = usage_error("%s", "needs a CASE and --out DIR");
+    goto done;
+  }
+  opt.outputs = outputs;
+  if (design) {
+    char *end;
+    long n = strncmp(design, "lhs:", 4) ? 0 : strtol(design + 4, &end, 10);
+    if (strncmp(design, "lhs:", 4) || end == design + 4 || *end)
+      rc = usage_error("--design: expected lhs:N, got '%s'", design);
+    else if (n < 1) rc = usage_error("--design %s: N must be at least 1", design);
+    else if (nsets) rc = usage_error("%s", "--design lhs takes --range keys, not --set");
+    else if (!nranges) rc = usage_error("%s", "--design lhs needs at least one --range KEY=LO:HI");
+    else if (gs_design_lhs(axes, naxes, (size_t)n, seed, &d, &err)) rc = 2;
+  } else if (nranges) rc = usage_error("%s", "--range needs --design lhs:N (a grid takes --set lists)");
+  else if (!nsets) rc = usage_error("%s", "nothing to vary: give --set KEY=V1,V2,... or --design lhs:N --range ...");
+  else if (gs_design_grid(axes, naxes, &d, &err)) rc = 2;
+  if (rc) {
+    if (err.msg[0]) fprintf(stderr, "gransim sweep: %s\n", err.msg);
+    goto done;
+  }
+  /* a gransim without MPI under mpirun: every rank would run the whole
+   * sweep into the same files */
+  const char *ranks = getenv("OMPI_COMM_WORLD_SIZE") ? getenv("OMPI_COMM_WORLD_SIZE") : getenv("PMI_SIZE");
+  if (!gs_parallel_have_mpi() && ranks && atoi(ranks) > 1) {
+    fprintf(stderr, "gransim sweep: started by mpirun with %s ranks, but this gransim was built "
+                    "without MPI; start it without mpirun (it uses all cores) or build with "
+                    "-DGRANSIM_MPI=ON\n", ranks);
+    rc = 2;
+    goto done;
+  }
+  cfg = gs_cfg_load_file(path, &err);
+  gs_sweep_report rep;
+  if (!cfg || gs_sweep_run(cfg, &d, &opt, &rep, &err)) {
+    fprintf(stderr, "gransim sweep: %s\n", err.msg);
+    rc = 1;
+    goto done;
+  }
+  fprintf(stderr,
+          "gransim sweep: %s: %zu runs: %zu run now, %zu finished before (--resume); %zu ok, %zu "
+          "failed; results in %s/sweep.csv\n",
+          path, rep.runs, rep.ran, rep.skipped, rep.runs - rep.failed, rep.failed, opt.out_dir);
+done:
+  for (size_t k = 0; axes && k < naxes; k++) gs_study_axis_free(&axes[k]);
+  free(axes);
+  free(outputs);
+  free(outputs_text);
+  gs_design_free(&d);
+  gs_cfg_free(cfg);
+  return rc;
+}

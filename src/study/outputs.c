@@ -1,0 +1,155 @@
+/* The outputs a study gathers from a run's final state, and the case of one
+ * run (see gransim/study.h). */
+#include "gransim/study.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Statistics of a column; the per-compartment ones are summary.csv's. */
+enum { W_M0_ALL, W_M1_ALL, W_M0, W_M1, W_M2, W_D10, W_D50, W_D90, W_MEAN, W_TOTAL };
+
+static const char *const fixed_names[] = {"M0", "M1", "M2", "d10", "d50", "d90"};
+
+int gs_study_case(const gs_cfg *base, const gs_design *d, size_t r, gs_case *c, gs_error *err) {
+  memset(c, 0, sizeof *c);
+  gs_cfg *cfg = gs_cfg_copy(base, err);
+  if (!cfg) return err->code ? err->code : GS_ENOMEM;
+  int rc = GS_OK;
+  for (size_t k = 0; k < d->nkeys && !rc; k++)
+    rc = gs_cfg_set(cfg, d->keys[k], d->values[r * d->nkeys + k], err);
+  if (rc) {
+    gs_cfg_free(cfg);
+    return rc;
+  }
+  rc = gs_case_from_cfg(cfg, c, err); /* takes cfg over, also on failure */
+  if (rc) {
+    gs_case_free(c);
+    memset(c, 0, sizeof *c);
+  }
+  return rc;
+}
+
+static int add_col(gs_study_outputs *o, int what, int index, size_t comp, const char *fmt,
+                   const char *a, gs_error *err) {
+  char name[128];
+  if (comp == (size_t)-1) snprintf(name, sizeof name, fmt, a);
+  else snprintf(name, sizeof name, fmt, a, comp + 1);
+  size_t i = o->ncol++;
+  o->names[i] = malloc(strlen(name) + 1);
+  if (!o->names[i]) return gs_error_set(err, GS_ENOMEM, "out of memory for output names");
+  strcpy(o->names[i], name);
+  o->what[i] = what;
+  o->index[i] = index;
+  o->comp[i] = comp;
+  return GS_OK;
+}
+
+int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *const *extra,
+                          size_t nextra, gs_error *err) {
+  memset(o, 0, sizeof *o);
+  const size_t nc = m->grid.ncomp;
+  const int nvol = m->nvol;
+  size_t cap = 1 + (size_t)nvol + 3 * nc + nextra * nc;
+  o->names = gs_calloc(cap, sizeof *o->names, err);
+  o->what = gs_calloc(cap, sizeof *o->what, err);
+  o->index = gs_calloc(cap, sizeof *o->index, err);
+  o->comp = gs_calloc(cap, sizeof *o->comp, err);
+  o->ncomp = nc;
+  o->nvol = nvol;
+  if (!o->names || !o->what || !o->index || !o->comp) {
+    gs_study_outputs_free(o);
+    return GS_ENOMEM;
+  }
+  int rc = add_col(o, W_M0_ALL, 0, (size_t)-1, "%s", "M0", err);
+  for (int k = 0; k < nvol && !rc; k++)
+    rc = add_col(o, W_M1_ALL, k, (size_t)-1, "M1_%s", gs_model_vol_name(m, k), err);
+  for (int w = W_D10; w <= W_D90 && !rc; w++)
+    for (size_t j = 0; j < nc && !rc; j++)
+      rc = add_col(o, w, 0, j, "%s_c%zu", fixed_names[w - W_M0], err);
+  for (size_t e = 0; e < nextra && !rc; e++) {
+    int what = -1, index = 0;
+    int dup = !strcmp(extra[e], "d10") || !strcmp(extra[e], "d50") || !strcmp(extra[e], "d90");
+    for (size_t f = 0; f < e; f++) dup |= !strcmp(extra[e], extra[f]);
+    if (dup) continue; /* gathered already: one column per name */
+    for (int w = W_M0; w <= W_D90; w++)
+      if (!strcmp(extra[e], fixed_names[w - W_M0])) what = w;
+    for (int k = 0; k < nvol && what < 0; k++) {
+      char name[96];
+      snprintf(name, sizeof name, "mean_%s", gs_model_vol_name(m, k));
+      if (!strcmp(extra[e], name)) what = W_MEAN, index = k;
+      snprintf(name, sizeof name, "total_%s", gs_model_vol_name(m, k));
+      if (!strcmp(extra[e], name)) what = W_TOTAL, index = k;
+    }
+    if (what < 0) {
+      char known[512] = "M0, M1, M2, d10, d50, d90";
+      size_t at = strlen(known);
+      for (int k = 0; k < nvol && at < sizeof known; k++)
+        at += (size_t)snprintf(known + at, sizeof known - at, ", mean_%s, total_%s",
+                               gs_model_vol_name(m, k), gs_model_vol_name(m, k));
+      rc = gs_error_set(err, GS_EINPUT, "--outputs: unknown summary column '%s'; known: %s",
+                        extra[e], known);
+    }
+    for (size_t j = 0; j < nc && !rc; j++) rc = add_col(o, what, index, j, "%s_c%zu", extra[e], err);
+  }
+  if (rc) gs_study_outputs_free(o);
+  return rc;
+}
+
+int gs_study_outputs_fit(const gs_study_outputs *o, const gs_model *m, gs_error *err) {
+  if (m->grid.ncomp != o->ncomp)
+    return gs_error_set(err, GS_EINPUT,
+                        "the variation changes the number of compartments (%zu, the case has %zu): "
+                        "the runs of a study must share the outputs' columns",
+                        m->grid.ncomp, o->ncomp);
+  if (m->nvol != o->nvol)
+    return gs_error_set(err, GS_EINPUT,
+                        "the variation changes the volume coordinates (%d, the case has %d): the "
+                        "runs of a study must share the outputs' columns",
+                        m->nvol, o->nvol);
+  return GS_OK;
+}
+
+void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, const double *y,
+                           double *values) {
+  const size_t nc = m->grid.ncomp;
+  gs_summary *s = calloc(nc, sizeof *s);
+  if (!s) { /* no memory for the statistics: the row says so, the run still counts */
+    for (size_t i = 0; i < o->ncol; i++) values[i] = NAN;
+    return;
+  }
+  for (size_t j = 0; j < nc; j++) gs_summarize(m, y, j, &s[j]);
+  for (size_t i = 0; i < o->ncol; i++) {
+    const gs_summary *c = &s[o->comp[i] < nc ? o->comp[i] : 0];
+    double v = 0;
+    switch (o->what[i]) {
+    case W_M0_ALL:
+      for (size_t j = 0; j < nc; j++) v += s[j].m0;
+      break;
+    case W_M1_ALL:
+      for (size_t j = 0; j < nc; j++) v += s[j].total[o->index[i]];
+      break;
+    case W_M0: v = c->m0; break;
+    case W_M1: v = c->m1; break;
+    case W_M2: v = c->m2; break;
+    case W_D10: v = c->d10; break;
+    case W_D50: v = c->d50; break;
+    case W_D90: v = c->d90; break;
+    case W_MEAN: v = c->mean[o->index[i]]; break;
+    default: v = c->total[o->index[i]]; break;
+    }
+    values[i] = v;
+  }
+  free(s);
+}
+
+void gs_study_outputs_free(gs_study_outputs *o) {
+  if (!o) return;
+  for (size_t i = 0; o->names && i < o->ncol; i++) free(o->names[i]);
+  free(o->names);
+  free(o->what);
+  free(o->index);
+  free(o->comp);
+  memset(o, 0, sizeof *o);
+}
