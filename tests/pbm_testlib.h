@@ -47,6 +47,26 @@ TL_FN int tl_case_try(const char *yaml, const char *name, gs_case *c, gs_error *
   return rc;
 }
 
+/* A case that must fail to build with status code and a message holding
+ * every string of the NULL-terminated parts (EXPECT_INPUT below). */
+TL_FN void tl_expect_input(const char *yaml, int code, const char *const *parts) {
+  gs_case c;
+  gs_error err;
+  int rc = tl_case_try(yaml, "bad.yaml", &c, &err);
+  if (rc != code) {
+    fprintf(stderr, "expected status %d, got %d (%s) for:\n%s\n", code, rc, rc ? err.msg : "built", yaml);
+    check_failures++;
+    if (!rc) gs_case_free(&c);
+    return;
+  }
+  for (size_t i = 0; parts[i]; i++)
+    if (!strstr(err.msg, parts[i])) {
+      fprintf(stderr, "message lacks '%s':\n  %s\n", parts[i], err.msg);
+      check_failures++;
+    }
+}
+#define EXPECT_INPUT(yaml, ...) tl_expect_input(yaml, GS_EINPUT, (const char *const[]){__VA_ARGS__, NULL})
+
 TL_FN int tl_case(const char *yaml, gs_case *c) {
   gs_error err;
   int rc = tl_case_try(yaml, "t.yaml", c, &err);

@@ -37,18 +37,6 @@ static void grow_free(void *self) {
   free(G);
 }
 
-static int axis_key(gs_cfg_node *node, const gs_grid *g, const char *key, const char *def,
-                    int *out, gs_error *err) {
-  const char *name;
-  int rc = def ? gs_cfg_string_opt(node, key, def, &name, err) : gs_cfg_string_req(node, key, &name, err);
-  if (rc) return rc;
-  *out = gs_grid_axis_by_name(g, name);
-  if (*out >= 0) return GS_OK;
-  gs_cfg_node *n = gs_cfg_get(node, key);
-  if (n) return gs_cfg_fail(n, err, "expected the name of a grid axis");
-  return gs_cfg_fail(node, err, "needs a grid axis named '%s' (or set '%s')", def ? def : "?", key);
-}
-
 /* Solid axes: key solid_axes, default every axis that is not liquid or gas. */
 static int solid_axes(gs_cfg_node *node, const gs_grid *g, grow_t *G, gs_error *err) {
   gs_cfg_node *list = gs_cfg_get(node, "solid_axes");
@@ -75,12 +63,6 @@ static int solid_axes(gs_cfg_node *node, const gs_grid *g, grow_t *G, gs_error *
   return GS_OK;
 }
 
-static int read_window(gs_cfg_node *node, grow_t *G, gs_error *err) {
-  int rc = gs_cfg_double_range(node, "start", 0, 0, -HUGE_VAL, 0, HUGE_VAL, 0, &G->start, err);
-  if (!rc) rc = gs_cfg_double_range(node, "end", 0, HUGE_VAL, G->start, 1, HUGE_VAL, 0, &G->end, err);
-  return rc;
-}
-
 static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, int kind,
                             gs_error *err) {
   const gs_grid *g = &m->grid;
@@ -100,15 +82,15 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
     rc = gs_cfg_fail(node, err, "growth along an axis cannot be combined with carried quantities "
                                 "(grid.carried); use spray / pore_consolidation for carried liquid and gas");
   if (!rc && kind == KIND_GROWTH) {
-    rc = axis_key(node, g, "axis", NULL, &G->axis, err);
+    rc = gs_growth_axis_key(node, g, "axis", NULL, &G->axis, err);
     if (!rc) rc = gs_cfg_double_opt(node, "constant", 0, &G->g0, err);
     if (!rc) rc = gs_cfg_double_opt(node, "linear", 0, &G->sigma, err);
-    if (!rc) rc = read_window(node, G, err);
+    if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
     for (size_t c = 0; !rc && c < g->ncells; c++)
       G->G[c] = G->g0 + G->sigma * g->x[c * (size_t)g->dim + (size_t)G->axis];
   } else if (!rc && kind == KIND_LIQUID) {
     size_t nq = 0;
-    rc = axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
+    rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
     G->axis = G->liquid;
     G->gas = gs_grid_axis_by_name(g, "gas");
     if (!rc) rc = gs_cfg_doubles_req(node, "rate", 1, &G->q, &nq, err);
@@ -124,11 +106,11 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
         for (size_t i = 1; i < g->ncomp; i++) G->q[i] = G->q[0];
       }
     }
-    if (!rc) rc = read_window(node, G, err);
+    if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
     if (!rc) rc = solid_axes(node, g, G, err);
   } else if (!rc) {
-    rc = axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
-    if (!rc) rc = axis_key(node, g, "gas_axis", "gas", &G->gas, err);
+    rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
+    if (!rc) rc = gs_growth_axis_key(node, g, "gas_axis", "gas", &G->gas, err);
     G->axis = G->gas;
     if (!rc) rc = gs_cfg_double_range(node, "rate", 1, 0, 0, 0, HUGE_VAL, 0, &G->c, err);
     if (!rc) rc = gs_cfg_double_range(node, "min_porosity", 1, 0, 0, 0, 1, 1, &G->emin, err);
