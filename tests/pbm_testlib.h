@@ -77,6 +77,17 @@ TL_FN int tl_case(const char *yaml, gs_case *c) {
   return rc;
 }
 
+/* Build a case and evaluate its rates at the initial state into *d (nstate)
+ * and *dl (nledger), both malloc'ed; returns 0, or non-zero (counted as a
+ * failed check, nothing to free) when the case does not build. */
+TL_FN int tl_rates_at_start(const char *yaml, gs_case *c, double **d, double **dl) {
+  if (tl_case(yaml, c)) return 1;
+  *d = calloc(c->model.nstate, sizeof **d);
+  *dl = calloc(c->model.nledger, sizeof **dl);
+  gs_model_rhs(&c->model, &c->eval, 0, c->y0, *d, *dl);
+  return 0;
+}
+
 /* Run a built case; returns the final state (nstate + nledger, malloc'ed) or
  * NULL on failure (counted as a failed check unless expect_fail). */
 TL_FN double *tl_run(gs_case *c, gs_run_report *rep, int *rc_out, gs_error *err_out) {

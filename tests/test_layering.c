@@ -130,14 +130,13 @@ static void test_moisture_factor(void) {
                       " moisture_width: %g, critical_moisture: %g}\n"
                       "output: {end: 1}\n", gmax, alpha, xwc);
   gs_case c;
-  if (tl_case(yaml, &c)) {
+  double *d, *dl;
+  if (tl_rates_at_start(yaml, &c, &d, &dl)) {
     free(yaml);
     return;
   }
   const gs_model *m = &c.model;
   const gs_grid *g = &m->grid;
-  double *d = calloc(m->nstate, sizeof *d), *dl = calloc(m->nledger, sizeof *dl);
-  gs_model_rhs(m, &c.eval, 0, c.y0, d, dl);
   double got = 0, want = 0, dn = 0;
   for (size_t i = 0; i < g->ncells; i++) {
     const double s = g->x[2 * i], l = g->x[2 * i + 1];
