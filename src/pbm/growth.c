@@ -4,15 +4,18 @@
  *   liquid_addition G_l = Q(comp) s / sum(N s)             spray shared in proportion to solid
  *                                                          volume (Sampat et al. 2018, eq. 5), in [start, end)
  *   consolidation   G_g = -c (s+l+g)(1-e_min)/s * max(0, l + g - e_min s/(1-e_min))
- *                   (Chaudhury 2015, eq. 2.12 with the sign of "negative growth"; see docs/models.md) */
+ *                   (Chaudhury 2015, eq. 2.12 with the sign of "negative growth"; see docs/models.md)
+ *   drying          G_l = -E(d) per granule, evaporation driven by the humidity difference
+ *                   (Chaudhury 2015, eqs. 2.19-2.22; drying.c), in [start, end) */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "gransim/pbm.h"
+#include "pbm/drying.h"
 #include "pbm/growth_scheme.h"
 
-enum { KIND_GROWTH, KIND_LIQUID, KIND_CONSOLIDATION };
+enum { KIND_GROWTH, KIND_LIQUID, KIND_CONSOLIDATION, KIND_DRYING };
 
 typedef struct {
   int kind, axis, liquid, gas;
@@ -108,6 +111,11 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
     }
     if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
     if (!rc) rc = solid_axes(node, g, G, err);
+  } else if (!rc && kind == KIND_DRYING) {
+    rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
+    G->axis = G->liquid;
+    if (!rc) rc = gs_drying_read(node, m, G->G, err);
+    if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
   } else if (!rc) {
     rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
     if (!rc) rc = gs_growth_axis_key(node, g, "gas_axis", "gas", &G->gas, err);
@@ -189,6 +197,9 @@ static int liquid_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *
 static int consol_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
   return grow_create_kind(n, m, s, KIND_CONSOLIDATION, e);
 }
+static int drying_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
+  return grow_create_kind(n, m, s, KIND_DRYING, e);
+}
 
 const gs_mech_type gs_mech_growth = {
     .name = "growth",
@@ -212,6 +223,15 @@ const gs_mech_type gs_mech_consolidation = {
     .name = "consolidation",
     .summary = "loss of gas down to a minimum porosity (Chaudhury 2015, eq. 2.12, corrected sign)",
     .create = consol_create,
+    .rates = grow_rates,
+    .free = grow_free,
+    .precondition = grow_precondition,
+    .next_switch = grow_switch,
+};
+const gs_mech_type gs_mech_drying = {
+    .name = "drying",
+    .summary = "evaporation of granules' liquid at a fixed bed temperature and air humidity (Chaudhury 2015, eqs. 2.19-2.22)",
+    .create = drying_create,
     .rates = grow_rates,
     .free = grow_free,
     .precondition = grow_precondition,
