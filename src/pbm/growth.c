@@ -28,6 +28,7 @@ typedef struct {
   size_t row_len;        /* liquid_addition: stride of the slots' rows, whole pages (GS_APART) */
   double *solid_vol;     /* per cell solid volume */
   double *work;          /* preconditioner: 2 * cells along the axis */
+  gs_bed *bed;           /* drying with the bed's balances (NULL: fixed conditions) */
 } grow_t;
 
 static void grow_free(void *self) {
@@ -37,6 +38,7 @@ static void grow_free(void *self) {
   free(G->G);
   free(G->solid_vol);
   free(G->work);
+  gs_bed_free(G->bed);
   free(G);
 }
 
@@ -76,7 +78,8 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
   /* liquid_addition recomputes the rates per compartment: one row per slot
    * (gs_model.slot), on pages of their own as threads write them at once;
    * the others' stay in the first */
-  const size_t rows = kind == KIND_LIQUID && m->nslots > 1 ? (size_t)m->nslots : 1;
+  const int per_comp = kind == KIND_LIQUID || (kind == KIND_DRYING && gs_cfg_get(node, "bed"));
+  const size_t rows = per_comp && m->nslots > 1 ? (size_t)m->nslots : 1;
   G->row_len = rows > 1 ? gs_doubles_apart(g->ncells) : g->ncells;
   G->G = rows > 1 ? gs_calloc_apart(rows * G->row_len * sizeof(double), err)
                   : gs_calloc(g->ncells, sizeof(double), err);
@@ -114,7 +117,7 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
   } else if (!rc && kind == KIND_DRYING) {
     rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
     G->axis = G->liquid;
-    if (!rc) rc = gs_drying_read(node, m, G->G, err);
+    if (!rc) rc = gs_drying_read(node, m, G->liquid, G->G, &G->bed, err);
     if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
   } else if (!rc) {
     rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
@@ -149,8 +152,9 @@ static int active(const grow_t *G, const gs_eval *ev, double t) {
 static const double *compartment_rates(grow_t *G, const gs_model *m, const gs_eval *ev,
                                        size_t comp, const double *N) {
   const gs_grid *g = &m->grid;
-  if (G->kind != KIND_LIQUID) return G->G; /* precomputed */
+  if (G->kind != KIND_LIQUID && !G->bed) return G->G; /* precomputed */
   double *rates = G->G + (ev->slot > 0 ? (size_t)ev->slot : 0) * G->row_len;
+  if (G->bed) return gs_bed_rates(G->bed, g->ncells, N, rates) ? rates : NULL;
   /* share the spray in proportion to solid volume */
   double solid = 0;
   for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
@@ -230,7 +234,7 @@ const gs_mech_type gs_mech_consolidation = {
 };
 const gs_mech_type gs_mech_drying = {
     .name = "drying",
-    .summary = "evaporation of granules' liquid at a fixed bed temperature and air humidity (Chaudhury 2015, eqs. 2.19-2.22)",
+    .summary = "evaporation of granules' liquid, bed temperature and humidity fixed or from the bed's balances (Chaudhury 2015, eqs. 2.18-2.25)",
     .create = drying_create,
     .rates = grow_rates,
     .free = grow_free,
