@@ -57,14 +57,19 @@ double gs_bed_solve(const gs_bed *b, double wet, double *T, double *x) {
   return evap;
 }
 
-int gs_bed_rates(const gs_bed *b, size_t ncells, const double *N, double *G) {
-  double wet = 0, T, x;
-  for (size_t c = 0; c < ncells; c++) wet += N[c] * b->d[c];
-  if (!(wet > 0)) return 0;
-  gs_bed_solve(b, wet, &T, &x);
-  const double drive = gs_saturation_humidity(T, b->P) - x;
-  if (!(drive > 0)) return 0;
-  const double k = b->k0 * drive / b->rho_l;
+int gs_bed_rates(const gs_bed *b, size_t ncells, const double *N, int hold, double *drive,
+                 double *G) {
+  if (!hold || isnan(*drive)) {
+    double wet = 0, T, x;
+    for (size_t c = 0; c < ncells; c++) wet += N[c] * b->d[c];
+    *drive = 0;
+    if (wet > 0) {
+      gs_bed_solve(b, wet, &T, &x);
+      *drive = fmax(gs_saturation_humidity(T, b->P) - x, 0.0);
+    }
+  }
+  if (!(*drive > 0)) return 0;
+  const double k = b->k0 * *drive / b->rho_l;
   for (size_t c = 0; c < ncells; c++) G[c] = -k * b->d[c];
   return 1;
 }

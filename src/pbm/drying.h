@@ -36,6 +36,11 @@ void gs_bed_free(gs_bed *b);
  * granules that dry; returns the evaporation (kg/s). */
 double gs_bed_solve(const gs_bed *b, double wet, double *T, double *x);
 /* Per-cell liquid rates of one compartment's numbers N into G (ncells);
- * 0 when nothing dries. */
-int gs_bed_rates(const gs_bed *b, size_t ncells, const double *N, double *G);
+ * 0 when nothing dries.  *drive: the compartment's humidity difference
+ * x_sat(T) - x_out, solved afresh and stored, or, when hold is set and it
+ * holds one (not NaN), kept: an implicit integrator's Jacobian-vector
+ * difference quotients then see rates linear in N, not the bisection's
+ * last-bit steps, and its Newton updates keep the volume balance. */
+int gs_bed_rates(const gs_bed *b, size_t ncells, const double *N, int hold, double *drive,
+                 double *G);
 #endif

@@ -29,6 +29,7 @@ typedef struct {
   double *solid_vol;     /* per cell solid volume */
   double *work;          /* preconditioner: 2 * cells along the axis */
   gs_bed *bed;           /* drying with the bed's balances (NULL: fixed conditions) */
+  double *drive;         /* bed: per compartment, the humidity difference of the last evaluation */
 } grow_t;
 
 static void grow_free(void *self) {
@@ -39,6 +40,7 @@ static void grow_free(void *self) {
   free(G->solid_vol);
   free(G->work);
   gs_bed_free(G->bed);
+  free(G->drive);
   free(G);
 }
 
@@ -118,6 +120,8 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
     rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
     G->axis = G->liquid;
     if (!rc) rc = gs_drying_read(node, m, G->liquid, G->G, &G->bed, err);
+    if (!rc && G->bed && !(G->drive = gs_malloc(g->ncomp * sizeof(double), err))) rc = GS_ENOMEM;
+    for (size_t i = 0; !rc && G->bed && i < g->ncomp; i++) G->drive[i] = NAN; /* none yet */
     if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
   } else if (!rc) {
     rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
@@ -154,7 +158,7 @@ static const double *compartment_rates(grow_t *G, const gs_model *m, const gs_ev
   const gs_grid *g = &m->grid;
   if (G->kind != KIND_LIQUID && !G->bed) return G->G; /* precomputed */
   double *rates = G->G + (ev->slot > 0 ? (size_t)ev->slot : 0) * G->row_len;
-  if (G->bed) return gs_bed_rates(G->bed, g->ncells, N, rates) ? rates : NULL;
+  if (G->bed) return gs_bed_rates(G->bed, g->ncells, N, ev->hold, &G->drive[comp], rates) ? rates : NULL;
   /* share the spray in proportion to solid volume */
   double solid = 0;
   for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
