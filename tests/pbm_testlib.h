@@ -47,6 +47,26 @@ TL_FN int tl_case_try(const char *yaml, const char *name, gs_case *c, gs_error *
   return rc;
 }
 
+/* A case that must fail to build with status code and a message holding
+ * every string of the NULL-terminated parts (EXPECT_INPUT below). */
+TL_FN void tl_expect_input(const char *yaml, int code, const char *const *parts) {
+  gs_case c;
+  gs_error err;
+  int rc = tl_case_try(yaml, "bad.yaml", &c, &err);
+  if (rc != code) {
+    fprintf(stderr, "expected status %d, got %d (%s) for:\n%s\n", code, rc, rc ? err.msg : "built", yaml);
+    check_failures++;
+    if (!rc) gs_case_free(&c);
+    return;
+  }
+  for (size_t i = 0; parts[i]; i++)
+    if (!strstr(err.msg, parts[i])) {
+      fprintf(stderr, "message lacks '%s':\n  %s\n", parts[i], err.msg);
+      check_failures++;
+    }
+}
+#define EXPECT_INPUT(yaml, ...) tl_expect_input(yaml, GS_EINPUT, (const char *const[]){__VA_ARGS__, NULL})
+
 TL_FN int tl_case(const char *yaml, gs_case *c) {
   gs_error err;
   int rc = tl_case_try(yaml, "t.yaml", c, &err);
@@ -55,6 +75,17 @@ TL_FN int tl_case(const char *yaml, gs_case *c) {
     check_failures++;
   }
   return rc;
+}
+
+/* Build a case and evaluate its rates at the initial state into *d (nstate)
+ * and *dl (nledger), both malloc'ed; returns 0, or non-zero (counted as a
+ * failed check, nothing to free) when the case does not build. */
+TL_FN int tl_rates_at_start(const char *yaml, gs_case *c, double **d, double **dl) {
+  if (tl_case(yaml, c)) return 1;
+  *d = calloc(c->model.nstate, sizeof **d);
+  *dl = calloc(c->model.nledger, sizeof **dl);
+  gs_model_rhs(&c->model, &c->eval, 0, c->y0, *d, *dl);
+  return 0;
 }
 
 /* Run a built case; returns the final state (nstate + nledger, malloc'ed) or

@@ -14,23 +14,6 @@
 
 /* The case must fail to build with code `code` and a message containing
  * every string of the NULL-terminated list. */
-static void expect_input_error(const char *yaml, int code, const char *const *parts) {
-  gs_case c;
-  gs_error err;
-  int rc = tl_case_try(yaml, "bad.yaml", &c, &err);
-  if (rc != code) {
-    fprintf(stderr, "expected status %d, got %d (%s) for:\n%s\n", code, rc, rc ? err.msg : "built", yaml);
-    check_failures++;
-    if (!rc) gs_case_free(&c);
-    return;
-  }
-  for (size_t i = 0; parts[i]; i++)
-    if (!strstr(err.msg, parts[i])) {
-      fprintf(stderr, "message lacks '%s':\n  %s\n", parts[i], err.msg);
-      check_failures++;
-    }
-}
-#define EXPECT_INPUT(yaml, ...) expect_input_error(yaml, GS_EINPUT, (const char *const[]){__VA_ARGS__, NULL})
 
 #define GRID1 "grid: {axes: [{name: v, type: geometric, min: 0.01, ratio: 1.5, cells: 20}]}\n"
 
@@ -132,7 +115,7 @@ static void test_table_errors(void) {
       fclose(f);
     }
     char *yaml = tl_fmt(GRID1 "output: {end: 1}\nmechanisms:\n  - {type: aggregation, kernel: {type: table, file: %s}}\n", path);
-    expect_input_error(yaml, T[i].code,
+    tl_expect_input(yaml, T[i].code,
                        (const char *const[]){"bad.yaml:4:", "mechanisms[0].kernel.file", T[i].part1, T[i].part2, NULL});
     free(yaml);
     if (T[i].text) unlink(path);

@@ -4,15 +4,18 @@
  *   liquid_addition G_l = Q(comp) s / sum(N s)             spray shared in proportion to solid
  *                                                          volume (Sampat et al. 2018, eq. 5), in [start, end)
  *   consolidation   G_g = -c (s+l+g)(1-e_min)/s * max(0, l + g - e_min s/(1-e_min))
- *                   (Chaudhury 2015, eq. 2.12 with the sign of "negative growth"; see docs/models.md) */
+ *                   (Chaudhury 2015, eq. 2.12 with the sign of "negative growth"; see docs/models.md)
+ *   drying          G_l = -E(d) per granule, evaporation driven by the humidity difference
+ *                   (Chaudhury 2015, eqs. 2.19-2.22; drying.c), in [start, end) */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "gransim/pbm.h"
+#include "pbm/drying.h"
 #include "pbm/growth_scheme.h"
 
-enum { KIND_GROWTH, KIND_LIQUID, KIND_CONSOLIDATION };
+enum { KIND_GROWTH, KIND_LIQUID, KIND_CONSOLIDATION, KIND_DRYING };
 
 typedef struct {
   int kind, axis, liquid, gas;
@@ -25,6 +28,8 @@ typedef struct {
   size_t row_len;        /* liquid_addition: stride of the slots' rows, whole pages (GS_APART) */
   double *solid_vol;     /* per cell solid volume */
   double *work;          /* preconditioner: 2 * cells along the axis */
+  gs_bed *bed;           /* drying with the bed's balances (NULL: fixed conditions) */
+  double *drive;         /* bed: per compartment, the humidity difference of the last evaluation */
 } grow_t;
 
 static void grow_free(void *self) {
@@ -34,19 +39,9 @@ static void grow_free(void *self) {
   free(G->G);
   free(G->solid_vol);
   free(G->work);
+  gs_bed_free(G->bed);
+  free(G->drive);
   free(G);
-}
-
-static int axis_key(gs_cfg_node *node, const gs_grid *g, const char *key, const char *def,
-                    int *out, gs_error *err) {
-  const char *name;
-  int rc = def ? gs_cfg_string_opt(node, key, def, &name, err) : gs_cfg_string_req(node, key, &name, err);
-  if (rc) return rc;
-  *out = gs_grid_axis_by_name(g, name);
-  if (*out >= 0) return GS_OK;
-  gs_cfg_node *n = gs_cfg_get(node, key);
-  if (n) return gs_cfg_fail(n, err, "expected the name of a grid axis");
-  return gs_cfg_fail(node, err, "needs a grid axis named '%s' (or set '%s')", def ? def : "?", key);
 }
 
 /* Solid axes: key solid_axes, default every axis that is not liquid or gas. */
@@ -75,12 +70,6 @@ static int solid_axes(gs_cfg_node *node, const gs_grid *g, grow_t *G, gs_error *
   return GS_OK;
 }
 
-static int read_window(gs_cfg_node *node, grow_t *G, gs_error *err) {
-  int rc = gs_cfg_double_range(node, "start", 0, 0, -HUGE_VAL, 0, HUGE_VAL, 0, &G->start, err);
-  if (!rc) rc = gs_cfg_double_range(node, "end", 0, HUGE_VAL, G->start, 1, HUGE_VAL, 0, &G->end, err);
-  return rc;
-}
-
 static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, int kind,
                             gs_error *err) {
   const gs_grid *g = &m->grid;
@@ -91,7 +80,8 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
   /* liquid_addition recomputes the rates per compartment: one row per slot
    * (gs_eval.slot), on pages of their own as threads write them at once;
    * the others' stay in the first */
-  const size_t rows = kind == KIND_LIQUID && m->nslots > 1 ? (size_t)m->nslots : 1;
+  const int per_comp = kind == KIND_LIQUID || (kind == KIND_DRYING && gs_cfg_get(node, "bed"));
+  const size_t rows = per_comp && m->nslots > 1 ? (size_t)m->nslots : 1;
   G->row_len = rows > 1 ? gs_doubles_apart(g->ncells) : g->ncells;
   G->G = rows > 1 ? gs_calloc_apart(rows * G->row_len * sizeof(double), err)
                   : gs_calloc(g->ncells, sizeof(double), err);
@@ -100,15 +90,15 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
     rc = gs_cfg_fail(node, err, "growth along an axis cannot be combined with carried quantities "
                                 "(grid.carried); use spray / pore_consolidation for carried liquid and gas");
   if (!rc && kind == KIND_GROWTH) {
-    rc = axis_key(node, g, "axis", NULL, &G->axis, err);
+    rc = gs_growth_axis_key(node, g, "axis", NULL, &G->axis, err);
     if (!rc) rc = gs_cfg_double_opt(node, "constant", 0, &G->g0, err);
     if (!rc) rc = gs_cfg_double_opt(node, "linear", 0, &G->sigma, err);
-    if (!rc) rc = read_window(node, G, err);
+    if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
     for (size_t c = 0; !rc && c < g->ncells; c++)
       G->G[c] = G->g0 + G->sigma * g->x[c * (size_t)g->dim + (size_t)G->axis];
   } else if (!rc && kind == KIND_LIQUID) {
     size_t nq = 0;
-    rc = axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
+    rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
     G->axis = G->liquid;
     G->gas = gs_grid_axis_by_name(g, "gas");
     if (!rc) rc = gs_cfg_doubles_req(node, "rate", 1, &G->q, &nq, err);
@@ -124,11 +114,18 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
         for (size_t i = 1; i < g->ncomp; i++) G->q[i] = G->q[0];
       }
     }
-    if (!rc) rc = read_window(node, G, err);
+    if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
     if (!rc) rc = solid_axes(node, g, G, err);
+  } else if (!rc && kind == KIND_DRYING) {
+    rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
+    G->axis = G->liquid;
+    if (!rc) rc = gs_drying_read(node, m, G->liquid, G->G, &G->bed, err);
+    if (!rc && G->bed && !(G->drive = gs_malloc(g->ncomp * sizeof(double), err))) rc = GS_ENOMEM;
+    for (size_t i = 0; !rc && G->bed && i < g->ncomp; i++) G->drive[i] = NAN; /* none yet */
+    if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
   } else if (!rc) {
-    rc = axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
-    if (!rc) rc = axis_key(node, g, "gas_axis", "gas", &G->gas, err);
+    rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
+    if (!rc) rc = gs_growth_axis_key(node, g, "gas_axis", "gas", &G->gas, err);
     G->axis = G->gas;
     if (!rc) rc = gs_cfg_double_range(node, "rate", 1, 0, 0, 0, HUGE_VAL, 0, &G->c, err);
     if (!rc) rc = gs_cfg_double_range(node, "min_porosity", 1, 0, 0, 0, 1, 1, &G->emin, err);
@@ -159,8 +156,9 @@ static int active(const grow_t *G, const gs_eval *ev, double t) {
 static const double *compartment_rates(grow_t *G, const gs_model *m, const gs_eval *ev,
                                        size_t comp, const double *N) {
   const gs_grid *g = &m->grid;
-  if (G->kind != KIND_LIQUID) return G->G; /* precomputed */
+  if (G->kind != KIND_LIQUID && !G->bed) return G->G; /* precomputed */
   double *rates = G->G + (ev->slot > 0 ? (size_t)ev->slot : 0) * G->row_len;
+  if (G->bed) return gs_bed_rates(G->bed, g->ncells, N, ev->hold, &G->drive[comp], rates) ? rates : NULL;
   /* share the spray in proportion to solid volume */
   double solid = 0;
   for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
@@ -207,6 +205,9 @@ static int liquid_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *
 static int consol_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
   return grow_create_kind(n, m, s, KIND_CONSOLIDATION, e);
 }
+static int drying_create(gs_cfg_node *n, const gs_model *m, void **s, gs_error *e) {
+  return grow_create_kind(n, m, s, KIND_DRYING, e);
+}
 
 const gs_mech_type gs_mech_growth = {
     .name = "growth",
@@ -230,6 +231,15 @@ const gs_mech_type gs_mech_consolidation = {
     .name = "consolidation",
     .summary = "loss of gas down to a minimum porosity (Chaudhury 2015, eq. 2.12, corrected sign)",
     .create = consol_create,
+    .rates = grow_rates,
+    .free = grow_free,
+    .precondition = grow_precondition,
+    .next_switch = grow_switch,
+};
+const gs_mech_type gs_mech_drying = {
+    .name = "drying",
+    .summary = "evaporation of granules' liquid, bed temperature and humidity fixed or from the bed's balances (Chaudhury 2015, eqs. 2.18-2.25)",
+    .create = drying_create,
     .rates = grow_rates,
     .free = grow_free,
     .precondition = grow_precondition,

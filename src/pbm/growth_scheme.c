@@ -78,3 +78,21 @@ void gs_growth_solve(const gs_grid *g, int axis, const double *G, double gamma, 
     }
   }
 }
+
+int gs_growth_axis_key(gs_cfg_node *node, const gs_grid *g, const char *key, const char *def,
+                       int *out, gs_error *err) {
+  const char *name;
+  int rc = def ? gs_cfg_string_opt(node, key, def, &name, err) : gs_cfg_string_req(node, key, &name, err);
+  if (rc) return rc;
+  *out = gs_grid_axis_by_name(g, name);
+  if (*out >= 0) return GS_OK;
+  gs_cfg_node *n = gs_cfg_get(node, key);
+  if (n) return gs_cfg_fail(n, err, "expected the name of a grid axis");
+  return gs_cfg_fail(node, err, "needs a grid axis named '%s' (or set '%s')", def ? def : "?", key);
+}
+
+int gs_mech_read_window(gs_cfg_node *node, double *start, double *end, gs_error *err) {
+  int rc = gs_cfg_double_range(node, "start", 0, 0, -HUGE_VAL, 0, HUGE_VAL, 0, start, err);
+  if (!rc) rc = gs_cfg_double_range(node, "end", 0, HUGE_VAL, *start, 1, HUGE_VAL, 0, end, err);
+  return rc;
+}

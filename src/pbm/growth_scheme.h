@@ -23,4 +23,14 @@ void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *
  * dominant.  work: 2 * (cells along the axis) doubles. */
 void gs_growth_solve(const gs_grid *g, int axis, const double *G, double gamma, double *z,
                      double *work);
+
+/* Helpers of the mechanisms that grow along an axis (growth.c, layering.c,
+ * nucleation.c).  The grid axis named by key (default def; NULL: required)
+ * into *out, with an error naming the key when the grid has no such axis. */
+#include "gransim/cfg.h"
+int gs_growth_axis_key(gs_cfg_node *node, const gs_grid *g, const char *key, const char *def,
+                       int *out, gs_error *err);
+/* The time window [start, end) of keys `start` (default 0) and `end`
+ * (default unbounded, > start). */
+int gs_mech_read_window(gs_cfg_node *node, double *start, double *end, gs_error *err);
 #endif
