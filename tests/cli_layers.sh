@@ -20,6 +20,7 @@ run run
 swa swa
 demdata dem_data
 dem dem
+couple couple
 cli"
 declare -A rank_of_folder rank_of_header
 r=0

@@ -34,7 +34,9 @@ static void usage(FILE *fp) {
           "                         grid-refinement study against analytical solutions;\n"
           "                         writes a markdown report (default docs/validation.md)\n"
           "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM)\n"
-          "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n\n"
+          "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n"
+          "  couple CASE --out DIR  run a coupled PBM-DEM case (coupling: {mode: one_way}): the DEM\n"
+          "                         with classes from the PBM grid, then the PBM with its tables\n\n"
           "options: --help, --version; `gransim <command> --help` for details.\n"
           "Case file format: docs/case-files.md\n",
           GRANSIM_VERSION);
@@ -133,6 +135,15 @@ static int cmd_check(int argc, char **argv) {
   gs_case c;
   gs_cfg *cfg = gs_cfg_load_file(argv[0], &err);
   if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_check_swa(cfg, argv[0]);
+  /* a coupled case (a `coupling:` section) is checked stage by stage; the keys
+   * are scanned, not asked for, so that other cases' messages do not offer it */
+  int coupled = 0;
+  for (size_t i = 0; cfg && i < gs_cfg_size(gs_cfg_root(cfg)); i++)
+    coupled |= gs_cfg_kind_of(gs_cfg_root(cfg)) == GS_CFG_MAP && !strcmp(gs_cfg_key_at(gs_cfg_root(cfg), i), "coupling");
+  if (coupled) {
+    gs_cfg_free(cfg);
+    return gs_cmd_couple_check(argv[0]);
+  }
   memset(&c, 0, sizeof c);
   int rc = cfg ? gs_case_from_cfg(cfg, &c, &err) : err.code;
   if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
@@ -213,6 +224,7 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 2, argv + 2);
   if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 2, argv + 2);
   if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "couple")) return gs_cmd_couple(argc - 2, argv + 2);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;
