@@ -27,6 +27,8 @@ typedef struct {
   gs_cfg *dem_cfg;    /* the DEM case when `dem:` names a file */
   gs_cfg_node *dem;   /* root of the DEM case */
   char dem_dir[4096]; /* its directory, for relative mesh paths */
+  const char *path;   /* the coupled case, and the line of its dem section, for messages */
+  int dem_line;
   gs_couple_settings s;
   gs_couple_classes cl;
 } couple;
@@ -77,6 +79,8 @@ static int couple_load(const char *path, couple *k, int progress, gs_error *err)
   if (!rc) rc = read_settings(root, &k->s, &cls, err);
   if (rc) return rc;
   gs_cfg_node *dem = gs_cfg_get(root, "dem");
+  k->path = path;
+  k->dem_line = gs_cfg_line(dem);
   if (!dem)
     return gs_cfg_fail(root, err, "missing key 'dem' (the DEM case: a `gransim dem` case inline, or its file name)");
   if (gs_cfg_scalar(dem)) { /* a file name, relative to the coupled case */
@@ -162,6 +166,47 @@ static int write_dem_case(couple *k, const char *path, gs_error *err) {
   return rc;
 }
 
+/* The node at a key path ("fill[0].fractions", ending at ' ', ':' or '='), or NULL. */
+static gs_cfg_node *find_path(gs_cfg_node *n, const char *p) {
+  while (n && *p && !strchr(" :=", *p)) {
+    size_t len = strcspn(p, ".[ :=");
+    char key[128];
+    if (len == 0 || len >= sizeof key) return NULL;
+    memcpy(key, p, len);
+    key[len] = 0;
+    n = gs_cfg_kind_of(n) == GS_CFG_MAP ? gs_cfg_get(n, key) : NULL;
+    p += len;
+    while (n && *p == '[') {
+      char *end;
+      long i = strtol(p + 1, &end, 10);
+      if (*end != ']') return NULL;
+      n = gs_cfg_item(n, (size_t)i);
+      p = end + 1;
+    }
+    if (*p == '.') p++;
+  }
+  return n;
+}
+
+/* The DEM reader names the written file; name the coupled case's dem section
+ * instead (the key path stays, e.g. fill[0].fractions). */
+static int dem_error(const couple *k, const char *written, gs_error *err) {
+  size_t n = strlen(written);
+  char rest[sizeof err->msg];
+  const char *m = err->msg;
+  if (!strncmp(m, written, n) && m[n] == ':') {
+    m += n + 1;
+    m += strspn(m, "0123456789");
+    if (*m == ':') m++;
+    m += strspn(m, " ");
+  }
+  snprintf(rest, sizeof rest, "%s", m);
+  /* the line of the key the message names (a path such as fill[0].fractions) */
+  const gs_cfg_node *at = find_path(k->dem, rest);
+  return gs_error_set(err, GS_EINPUT, "%s:%d: dem: %s", at ? gs_cfg_file(at) : k->path,
+                      at ? gs_cfg_line(at) : k->dem_line, rest);
+}
+
 /* Placeholder tables of the derived classes, for `check` (no DEM run). */
 static int write_placeholders(const couple *k, const char *kernel, const char *impacts, gs_error *err) {
   FILE *a = fopen(kernel, "w"), *b = fopen(impacts, "w");
@@ -200,7 +245,7 @@ int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
   if (!rc) rc = write_dem_case(&k, dcase, err);
   if (!rc) {
     gs_dem_case *dc = gs_dem_case_load(dcase, err);
-    if (!dc) rc = gs_error_prefix(err, "dem section (as written for the DEM): ");
+    if (!dc) rc = dem_error(&k, dcase, err);
     else gs_dem_case_describe(dc, dd, sizeof dd);
     gs_dem_case_free(dc);
   }
@@ -264,7 +309,7 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
     snprintf(dcase, sizeof dcase, "%s/case.yaml", part);
     if (!rc) rc = write_dem_case(&k, dcase, err);
     gs_dem_case *dc = rc ? NULL : gs_dem_case_load(dcase, err);
-    if (!rc && !dc) rc = err->code;
+    if (!rc && !dc) rc = dem_error(&k, dcase, err);
     if (!rc) {
       if (opt->progress) fprintf(stderr, "gransim couple: DEM stage (%g s at most) in %s\n", k.s.max_time, part);
       rc = gs_dem_case_run(dc, part, opt->progress, err);
@@ -300,9 +345,18 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
     rc = gs_error_set(err, GS_EINPUT, "%s: no %s (coupling.impacts.wall names no wall of the DEM case?)", dem, impname);
   gs_case c;
   memset(&c, 0, sizeof c);
+  /* the PBM resumes from its partial files; a finished one on tables that were
+   * not rerun is complete; otherwise (new tables) it starts again */
+  int pbm_resume = opt->resume && exists(out, ".result.h5.partial");
+  if (!rc && have && opt->resume && !pbm_resume && exists(out, "result.h5")) {
+    if (opt->progress) fprintf(stderr, "gransim couple: --resume: PBM stage complete in %s, nothing to do\n", out);
+    couple_free(&k);
+    return GS_OK;
+  }
   if (!rc) rc = pbm_case(&k, kt, it, &c, err);
   if (!rc) {
-    gs_run_options ro = {.out_dir = out, .resume = opt->resume, .progress = opt->progress ? -1 : 0};
+    if (pbm_resume && !have) pbm_resume = 0; /* partial files of the old tables' run */
+    gs_run_options ro = {.out_dir = out, .resume = pbm_resume, .progress = opt->progress ? -1 : 0};
     gs_run_report rep;
     rc = gs_case_run(&c, &ro, NULL, &rep, err);
     if (!rc && opt->progress)
