@@ -44,20 +44,20 @@ walls:
 fill:
   - region: {cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.013, from: 0.002, to: 0.018}}
     count: 250
-    fractions: [0.5, 0.5]'
+    fractions: [0.3, 0.4, 0.3]'
 coupling='coupling:
   mode: one_way
-  classes: {min_diameter: 2.0e-3, max_diameter: 4.0e-3, count: 2, material: granule}
+  classes: {min_diameter: 2.0e-3, max_diameter: 4.0e-3, count: 3, material: granule}
   steady: {window: 3, tolerance: 0.5, sample_every: 0.005, max_time: 0.07}'
 { echo "$pbm"; mechs "" ""; echo "dem:"; echo "$demcase" | sed 's/^/  /'; echo "$coupling"; } > "$WORK/tiny.yaml"
 
 run_rc 0 "$BIN" check "$WORK/tiny.yaml"
-stdout_has "valid. one_way: 2 DEM classes from the grid"
+stdout_has "valid. one_way: 3 DEM classes from the grid"
 run_rc 0 "$BIN" couple --check "$WORK/tiny.yaml"
 stdout_has "12 PBM cells outside: nearest class"
 
 run_rc 0 "$BIN" couple "$WORK/tiny.yaml" --out "$WORK/out"
-stderr_has "2 DEM classes from the grid"
+stderr_has "3 DEM classes from the grid"
 stderr_has "take the nearest class (coupling.classes.outside: nearest)"
 stderr_has "DEM steady at t = "
 for f in dem/case.yaml dem/collision_kernel.csv dem/impact_table.csv dem/steady.csv dem/timeseries.csv \
@@ -67,19 +67,21 @@ done
 [ ! -e "$WORK/out/dem.partial" ] || fail "dem.partial left after a complete DEM stage"
 
 # Classes from the grid: the pivots 1.5e-10 * 2^k m^3 with diameters in
-# [2, 4] mm are k = 5, 6, 7; two classes take {k=5} and {k=6, 7}, edges half a
-# (geometric) step outside the outer diameters and between the runs.
+# [2, 4] mm are k = 5, 6, 7; three classes of equal width in ln d take one
+# each, edges halfway (geometric) between them and half a step outside.
 awk 'function d(v) { return (6 * v / 3.141592653589793)^(1 / 3) }
      BEGIN { d0 = d(1.5e-10 * 32); d1 = d(1.5e-10 * 64); d2 = d(1.5e-10 * 128)
-             printf "%.6g %.6g %.6g\n", d0 / sqrt(d1 / d0) / 2, sqrt(d0 * d1) / 2, d2 * sqrt(d2 / d1) / 2 }' \
+             printf "%.6g %.6g %.6g %.6g\n", d0 / sqrt(d1 / d0) / 2, sqrt(d0 * d1) / 2, sqrt(d1 * d2) / 2,
+                    d2 * sqrt(d2 / d1) / 2 }' \
   > "$WORK/expected-radii"
 sed -n 's/.*radius: \[\([^,]*\), \([^]]*\)\].*/\1 \2/p' "$WORK/out/dem/case.yaml" |
   awk '{ printf "%.6g %.6g\n", $1, $2 }' | tr '\n' ' ' > "$WORK/radii"
-read -r e0 e1 e2 < "$WORK/expected-radii"
-[ "$(cat "$WORK/radii")" = "$e0 $e1 $e1 $e2 " ] || fail "derived radii $(cat "$WORK/radii"), expected $e0 $e1 | $e1 $e2"
+read -r e0 e1 e2 e3 < "$WORK/expected-radii"
+[ "$(cat "$WORK/radii")" = "$e0 $e1 $e1 $e2 $e2 $e3 " ] ||
+  fail "derived radii $(cat "$WORK/radii"), expected $e0 $e1 | $e1 $e2 | $e2 $e3"
 grep -q '^edges' "$WORK/out/dem/collision_kernel.csv" || fail "collision_kernel.csv has no edges line"
-[ "$(grep '^edges' "$WORK/out/dem/collision_kernel.csv" | tr ',' '\n' | wc -l)" = 4 ] ||
-  fail "collision_kernel.csv: expected 2 classes"
+[ "$(grep '^edges' "$WORK/out/dem/collision_kernel.csv" | tr ',' '\n' | wc -l)" = 5 ] ||
+  fail "collision_kernel.csv: expected 3 classes"
 
 # The detector fired and its figures are written.
 grep -q '^# steady$' "$WORK/out/dem/steady.csv" || fail "steady.csv does not say steady"
@@ -120,7 +122,7 @@ cmp -s "$WORK/out/dem/collision_kernel.csv" "$WORK/manual-dem/collision_kernel.c
 echo "$demcase" > "$WORK/drum-dem.yaml"
 { echo "$pbm"; mechs "" ""; echo "dem: drum-dem.yaml"; echo "$coupling"; } > "$WORK/byname.yaml"
 run_rc 0 "$BIN" couple --check "$WORK/byname.yaml"
-stdout_has "2 size classes, 3 walls"
+stdout_has "3 size classes, 3 walls"
 
 # The detector not firing: a clear error with its last figures, no tables in dem/.
 sed 's/max_time: 0.07/max_time: 0.015/' "$WORK/tiny.yaml" > "$WORK/short.yaml"
@@ -137,9 +139,9 @@ bad() { # bad NAME SED_SCRIPT EXPECTED_STDERR
   run_rc 1 "$BIN" check "$WORK/$1.yaml"
   stderr_has "$3"
 }
-bad fractions 's/fractions: \[0.5, 0.5\]/fractions: [0.3, 0.3, 0.4]/' \
-  "$WORK/fractions.yaml:30: dem: fill[0].fractions: expected 2 fractions (one per class), got 3"
-bad count 's/count: 2,/count: 5,/' "count = 5 classes but only 3 distinct PBM cell diameters lie in"
+bad fractions 's/fractions: \[0.3, 0.4, 0.3\]/fractions: [0.5, 0.5]/' \
+  "$WORK/fractions.yaml:30: dem: fill[0].fractions: expected 3 fractions (one per class), got 2"
+bad count 's/count: 3,/count: 5,/' "count = 5 classes but only 3 distinct PBM cell diameters lie in"
 bad outside 's/material: granule}$/material: granule, outside: error}/' \
   "PBM cell 1 (diameter 0.000457078 m) lies outside the DEM classes"
 bad window 's/min_diameter: 2.0e-3, max_diameter: 4.0e-3/min_diameter: 1.0, max_diameter: 2.0/' \

@@ -1,8 +1,9 @@
 /* DEM size classes derived from the PBM grid (docs/models.md, "Coupled
  * cases"): every cell's size measure as a volume-equivalent diameter; the
- * distinct diameters inside the window the DEM can afford are split into
- * `count` runs of consecutive values, so every DEM class holds PBM cells and a
- * 1-D grid with count = cells gives one DEM class per PBM cell. */
+ * diameters inside the window the DEM can afford are binned into `count`
+ * classes of equal width in ln d (a geometric 1-D grid with count = its cells
+ * in the window gives one DEM class per PBM cell); a class without a PBM cell
+ * is an error, since its DEM particles would represent nothing. */
 #include <math.h>
 #include <stdlib.h>
 
@@ -44,14 +45,18 @@ int gs_couple_classes_derive(const gs_grid *g, unsigned mask, const gs_couple_se
     return rc;
   }
   cl->n = n;
-  /* class k takes distinct diameters [k*u/n, (k+1)*u/n); edges halfway (geometric) between runs */
-  double lo_step = u > 1 ? sqrt(d[1] / d[0]) : 1.05, hi_step = u > 1 ? sqrt(d[u - 1] / d[u - 2]) : 1.05;
-  cl->edges[0] = d[0] / lo_step;
-  for (size_t k = 1; k < n; k++) {
-    size_t first = k * u / n;
-    cl->edges[k] = sqrt(d[first - 1] * d[first]);
+  /* n classes of equal width in ln d, centred on the smallest and the largest
+   * diameter: on a geometric 1-D grid with one class per cell, each class is
+   * one cell; on 2-D grids, whose sums cluster, classes follow the sizes */
+  double lo = log(d[0]), hi = log(d[u - 1]);
+  double h = n > 1 ? (hi - lo) / (double)(n - 1) : 0;
+  if (!(h > 0)) h = n > 1 ? log(1.1) : 2 * log(1.05) + (hi - lo); /* one class: the whole span */
+  if (n > 1)
+    for (size_t k = 0; k <= n; k++) cl->edges[k] = exp(lo + h * ((double)k - 0.5));
+  else {
+    cl->edges[0] = exp(lo) / 1.05;
+    cl->edges[1] = exp(hi) * 1.05;
   }
-  cl->edges[n] = d[u - 1] * hi_step;
   free(d);
   /* which cells each class holds, and how many fall outside (nearest class) */
   cl->outside = 0;
@@ -73,5 +78,9 @@ int gs_couple_classes_derive(const gs_grid *g, unsigned mask, const gs_couple_se
     while (k + 1 < n && dc >= cl->edges[k + 1]) k++;
     cl->cells_in[k]++;
   }
+  for (size_t k = 0; k < n; k++)
+    if (!cl->cells_in[k])
+      return gs_cfg_fail(where, err, "DEM class %zu of %zu, diameters [%g, %g] m, holds no PBM cell; lower count",
+                         k + 1, n, cl->edges[k], cl->edges[k + 1]);
   return GS_OK;
 }
