@@ -162,4 +162,7 @@ sed 's/kernel: {type: table, /kernel: {type: constant, /; s/type: dem_impact, /t
   "$WORK/tiny.yaml" > "$WORK/notable.yaml"
 run_rc 1 "$BIN" check "$WORK/notable.yaml"
 stderr_has "needs a \`table\` aggregation kernel or a \`dem_impact\` breakage selection"
+# The CoriMix example validates (its run, ~3 s, is in the README).
+run_rc 0 "$BIN" check "$SRC/examples/corimix-coupled.yaml"
+stdout_has "valid. one_way: 3 DEM classes from the grid"
 echo "cli_couple: ok"
