@@ -56,7 +56,7 @@ stdout_has "valid. one_way: 3 DEM classes from the grid"
 run_rc 0 "$BIN" couple --check "$WORK/tiny.yaml"
 stdout_has "12 PBM cells outside: nearest class"
 
-run_rc 0 "$BIN" couple "$WORK/tiny.yaml" --out "$WORK/out"
+run_rc 0 "$BIN" couple "$WORK/tiny.yaml" --out "$WORK/out" --threads 2
 stderr_has "3 DEM classes from the grid"
 stderr_has "take the nearest class (coupling.classes.outside: nearest)"
 stderr_has "DEM steady at t = "
@@ -162,6 +162,10 @@ sed 's/kernel: {type: table, /kernel: {type: constant, /; s/type: dem_impact, /t
   "$WORK/tiny.yaml" > "$WORK/notable.yaml"
 run_rc 1 "$BIN" check "$WORK/notable.yaml"
 stderr_has "needs a \`table\` aggregation kernel or a \`dem_impact\` breakage selection"
+# gransim run points at gransim couple
+run_rc 1 "$BIN" run "$WORK/tiny.yaml" --out "$WORK/x"
+stderr_has "is a coupled PBM-DEM case (a \`coupling:\` section): run it with \`gransim couple"
+
 # The CoriMix example validates (its run, ~3 s, is in the README).
 run_rc 0 "$BIN" check "$SRC/examples/corimix-coupled.yaml"
 stdout_has "valid. one_way: 3 DEM classes from the grid"

@@ -1,4 +1,5 @@
 /* `gransim couple`: run a coupled PBM-DEM case (docs/case-files.md, "Coupled cases"). */
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -8,7 +9,7 @@
 
 static void couple_usage(FILE *fp) {
   fprintf(fp,
-          "usage: gransim couple CASE --out DIR [--resume] [--quiet]\n"
+          "usage: gransim couple CASE --out DIR [--resume] [--quiet] [--threads N]\n"
           "       gransim couple --check CASE\n\n"
           "Runs a coupled case (PBM keys, a `dem:` section and `coupling: {mode: one_way, ...}`):\n"
           "the DEM with size classes derived from the PBM grid until its steady-state detector\n"
@@ -18,7 +19,8 @@ static void couple_usage(FILE *fp) {
           "                       steady.csv (the detector's figures); dem.partial/ until complete\n"
           "  result.h5, summary.csv  the PBM run\n"
           "--resume skips a complete DEM stage and resumes the PBM from its partial files.\n"
-          "--check validates CASE (derived classes, DEM case, PBM case) without running it.\n");
+          "--check validates CASE (derived classes, DEM case, PBM case) without running it.\n"
+          "--threads sets the OpenMP threads of both stages (default: OMP_NUM_THREADS or all).\n");
 }
 
 int gs_cmd_couple_check(const char *path) {
@@ -44,6 +46,14 @@ int gs_cmd_couple(int argc, char **argv) {
     else if (!strcmp(argv[i], "--check")) check = 1;
     else if (!strcmp(argv[i], "--resume")) opt.resume = 1;
     else if (!strcmp(argv[i], "--quiet")) opt.progress = 0;
+    else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
+      int n = atoi(argv[++i]);
+      if (n < 1) {
+        fprintf(stderr, "gransim couple: --threads needs a positive integer, got '%s'\n", argv[i]);
+        return 2;
+      }
+      omp_set_num_threads(n);
+    }
     else if (argv[i][0] == '-') {
       fprintf(stderr, "gransim couple: unknown option '%s' (see gransim couple --help)\n", argv[i]);
       return 2;

@@ -42,6 +42,15 @@ static void usage(FILE *fp) {
           GRANSIM_VERSION);
 }
 
+/* A coupled case (a `coupling:` key at the top level).  The keys are scanned,
+ * not asked for, so that other cases' unknown-key messages do not offer it. */
+static int is_coupled(gs_cfg *cfg) {
+  gs_cfg_node *root = gs_cfg_root(cfg);
+  for (size_t i = 0; gs_cfg_kind_of(root) == GS_CFG_MAP && i < gs_cfg_size(root); i++)
+    if (!strcmp(gs_cfg_key_at(root, i), "coupling")) return 1;
+  return 0;
+}
+
 static int cmd_run(int argc, char **argv) {
   const char *path = NULL, *out = NULL;
   gs_run_options opt = {.progress = -1};
@@ -90,6 +99,12 @@ static int cmd_run(int argc, char **argv) {
   gs_case c;
   gs_cfg *cfg = gs_cfg_load_file(path, &err);
   if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_run_swa(cfg, path, out, opt.progress, opt.resume);
+  if (cfg && is_coupled(cfg)) {
+    fprintf(stderr, "gransim: %s is a coupled PBM-DEM case (a `coupling:` section): run it with "
+            "`gransim couple %s --out %s`\n", path, path, out);
+    gs_cfg_free(cfg);
+    return 1;
+  }
   memset(&c, 0, sizeof c);
   if (!cfg || gs_case_from_cfg(cfg, &c, &err)) {
     fprintf(stderr, "gransim: %s\n", err.msg);
@@ -135,12 +150,7 @@ static int cmd_check(int argc, char **argv) {
   gs_case c;
   gs_cfg *cfg = gs_cfg_load_file(argv[0], &err);
   if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_check_swa(cfg, argv[0]);
-  /* a coupled case (a `coupling:` section) is checked stage by stage; the keys
-   * are scanned, not asked for, so that other cases' messages do not offer it */
-  int coupled = 0;
-  for (size_t i = 0; cfg && i < gs_cfg_size(gs_cfg_root(cfg)); i++)
-    coupled |= gs_cfg_kind_of(gs_cfg_root(cfg)) == GS_CFG_MAP && !strcmp(gs_cfg_key_at(gs_cfg_root(cfg), i), "coupling");
-  if (coupled) {
+  if (cfg && is_coupled(cfg)) { /* checked stage by stage */
     gs_cfg_free(cfg);
     return gs_cmd_couple_check(argv[0]);
   }
