@@ -118,6 +118,23 @@ run_rc 0 "$BIN" couple "$WORK/tiny.yaml" --out "$WORK/out" --resume --quiet
 [ -s "$WORK/out/dem/collision_kernel.csv" ] || fail "--resume did not rerun an incomplete DEM stage"
 cmp -s "$WORK/out/dem/collision_kernel.csv" "$WORK/manual-dem/collision_kernel.csv" || fail "rerun DEM stage differs"
 
+# Killed in the PBM stage: --resume skips the DEM and continues the PBM from its
+# partial files, ending where an uninterrupted run ends (more output times and
+# shorter steps than above, so that the PBM lasts long enough to be killed).
+sed 's/output: {end: 10, count: 6}/output: {end: 10, count: 41, checkpoint: 0}\nsolver: {method: rk, max_step: 1.0e-4}/' \
+  "$WORK/tiny.yaml" > "$WORK/slow.yaml"
+run_rc 0 "$BIN" couple "$WORK/slow.yaml" --out "$WORK/slow-ref" --quiet --threads 1
+"$BIN" couple "$WORK/slow.yaml" --out "$WORK/slow" --quiet --threads 1 2>"$WORK/killed.err" &
+pid=$!
+BG_PIDS+=("$pid")
+kill_part_way "$pid" "$WORK/slow/.summary.csv.partial" "$WORK/killed.err"
+wait "$pid" 2>/dev/null || true
+[ -s "$WORK/slow/dem/collision_kernel.csv" ] || fail "the DEM stage was not complete when the PBM ran"
+[ ! -e "$WORK/slow/summary.csv" ] || fail "the killed run wrote summary.csv"
+run_rc 0 "$BIN" couple "$WORK/slow.yaml" --out "$WORK/slow" --resume --threads 1
+stderr_has "DEM stage complete"
+cmp -s "$WORK/slow/summary.csv" "$WORK/slow-ref/summary.csv" || fail "the resumed PBM differs from an uninterrupted one"
+
 # The dem section as a file name (relative to the coupled case).
 echo "$demcase" > "$WORK/drum-dem.yaml"
 { echo "$pbm"; mechs "" ""; echo "dem: drum-dem.yaml"; echo "$coupling"; } > "$WORK/byname.yaml"
