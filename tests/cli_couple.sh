@@ -169,6 +169,8 @@ bad duration 's/^    time_step: 5.0e-6/&\n    duration: 1/' \
   "set by the coupling (coupling.steady.max_time) in a coupled case"
 bad file 's/type: table, /type: table, file: x.csv, /' \
   "mechanisms[0].kernel.file = 'x.csv': set by the coupling in a coupled case"
+bad wall 's/  steady: {window/  impacts: {wall: lid}\n  steady: {window/' "coupling.impacts: wall 'lid' is not a wall of the DEM case"
+bad nomode 's/mode: one_way/mode_: one_way/' "missing key 'mode' (one_way)"
 bad mode 's/mode: one_way/mode: two_way/' "coupling.mode = 'two_way'"
 bad nodem '/^dem:/,/^coupling:/{/^coupling:/!d}' "missing key 'dem' (the DEM case"
 bad nosteady '/steady: {window/d' "missing key 'steady' in coupling"

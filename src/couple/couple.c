@@ -98,6 +98,17 @@ static int couple_load(const char *path, couple *k, int progress, gs_error *err)
     char abs[PATH_MAX];
     if (realpath(k->dem_dir, abs)) snprintf(k->dem_dir, sizeof k->dem_dir, "%.4000s", abs);
   }
+  if (k->s.wall) { /* a wall of the DEM case, known before the DEM runs */
+    gs_cfg_node *walls = gs_cfg_kind_of(k->dem) == GS_CFG_MAP ? gs_cfg_get(k->dem, "walls") : NULL;
+    int found = 0;
+    for (size_t i = 0; i < gs_cfg_size(walls) && !found; i++) {
+      const char *name = gs_cfg_scalar(gs_cfg_get(gs_cfg_item(walls, i), "name"));
+      found = name && !strcmp(name, k->s.wall);
+    }
+    if (!found)
+      return gs_cfg_fail(gs_cfg_get(gs_cfg_get(root, "coupling"), "impacts"), err,
+                         "wall '%s' is not a wall of the DEM case", k->s.wall);
+  }
   gs_grid g;
   int mask = 0;
   memset(&g, 0, sizeof g);
