@@ -6,6 +6,7 @@
 
 #include "cli/commands.h"
 #include "gransim/couple.h"
+#include "gransim/parallel.h"
 
 static void couple_usage(FILE *fp) {
   fprintf(fp,
@@ -68,6 +69,13 @@ int gs_cmd_couple(int argc, char **argv) {
     return 2;
   }
   if (check) return gs_cmd_couple_check(path);
+  /* each rank would run its own DEM stage into the same folder */
+  if (gs_parallel_size() > 1) {
+    if (gs_parallel_rank() == 0)
+      fprintf(stderr, "gransim couple: runs on one process (not under mpirun with several ranks); its stages use "
+              "OpenMP threads (--threads)\n");
+    return 2;
+  }
   gs_error err = {0};
   if (gs_couple_run(path, &opt, &err)) {
     fprintf(stderr, "gransim: %s\n", err.msg);

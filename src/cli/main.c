@@ -234,7 +234,13 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 2, argv + 2);
   if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 2, argv + 2);
   if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 2, argv + 2);
-  if (!strcmp(argv[1], "couple")) return gs_cmd_couple(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "couple")) {
+    /* MPI started only to see the ranks: gransim couple refuses more than one */
+    gs_parallel_init(&argc, &argv);
+    int rc = gs_cmd_couple(argc - 2, argv + 2);
+    gs_parallel_finalize();
+    return rc;
+  }
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;
