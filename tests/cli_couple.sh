@@ -79,6 +79,9 @@ sed -n 's/.*radius: \[\([^,]*\), \([^]]*\)\].*/\1 \2/p' "$WORK/out/dem/case.yaml
 read -r e0 e1 e2 e3 < "$WORK/expected-radii"
 [ "$(cat "$WORK/radii")" = "$e0 $e1 $e1 $e2 $e2 $e3 " ] ||
   fail "derived radii $(cat "$WORK/radii"), expected $e0 $e1 | $e1 $e2 | $e2 $e3"
+[ "$(grep -v '^#' "$WORK/out/dem/classes.csv" | cut -d, -f1,2,5 | tr '\n' ' ')" = "class,name,pbm_cells 1,c1,1 2,c2,1 3,c3,1 " ] ||
+  fail "classes.csv: $(cat "$WORK/out/dem/classes.csv")"
+grep -q '12 PBM cells outside them take the nearest class' "$WORK/out/dem/classes.csv" || fail "classes.csv lacks the outside count"
 grep -q '^edges' "$WORK/out/dem/collision_kernel.csv" || fail "collision_kernel.csv has no edges line"
 [ "$(grep '^edges' "$WORK/out/dem/collision_kernel.csv" | tr ',' '\n' | wc -l)" = 5 ] ||
   fail "collision_kernel.csv: expected 3 classes"

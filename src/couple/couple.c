@@ -281,6 +281,22 @@ int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
   return rc;
 }
 
+/* classes.csv: the derived classes and how many PBM cells each holds, so that
+ * a user sees what the DEM sampled and what was extrapolated. */
+static int write_classes(const couple *k, const char *dir, gs_error *err) {
+  char p[4400];
+  snprintf(p, sizeof p, "%s/classes.csv", dir);
+  FILE *fp = fopen(p, "w");
+  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", p, strerror(errno));
+  fprintf(fp, "# DEM classes derived from the PBM grid (volume-equivalent diameters of grid.size_axes, "
+          "window [%g, %g] m); %zu PBM cells outside them take the nearest class (coupling.classes.outside: %s)\n"
+          "class,name,d_lo,d_hi,pbm_cells\n", k->s.dmin, k->s.dmax, k->cl.outside,
+          k->s.outside_error ? "error" : "nearest");
+  for (size_t c = 0; c < k->cl.n; c++)
+    fprintf(fp, "%zu,c%zu,%.9g,%.9g,%zu\n", c + 1, c + 1, k->cl.edges[c], k->cl.edges[c + 1], k->cl.cells_in[c]);
+  return fclose(fp) ? gs_error_set(err, GS_EIO, "%s: cannot write", p) : GS_OK;
+}
+
 static int rm_entry(const char *p, const struct stat *sb, int flag, struct FTW *f) {
   (void)sb;
   (void)flag;
@@ -319,6 +335,7 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
     if (mkdir(part, 0777)) rc = gs_error_set(err, GS_EIO, "%s: cannot create: %s", part, strerror(errno));
     snprintf(dcase, sizeof dcase, "%s/case.yaml", part);
     if (!rc) rc = write_dem_case(&k, dcase, err);
+    if (!rc) rc = write_classes(&k, part, err);
     gs_dem_case *dc = rc ? NULL : gs_dem_case_load(dcase, err);
     if (!rc && !dc) rc = dem_error(&k, dcase, err);
     if (!rc) {
