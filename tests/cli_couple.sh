@@ -91,6 +91,8 @@ grep -q '^# steady$' "$WORK/out/dem/steady.csv" || fail "steady.csv does not say
 head -2 "$WORK/out/dem/steady.csv" | grep -q 'holdup_mean,holdup_deviation,collisions_mean,collisions_deviation,steady' ||
   fail "steady.csv header: $(head -2 "$WORK/out/dem/steady.csv")"
 grep -q ',1$' "$WORK/out/dem/steady.csv" || fail "no steady row in steady.csv"
+grep -q '^# drift of the window means from the firing to the end: hold-up mass 0 %' "$WORK/out/dem/steady.csv" ||
+  fail "steady.csv lacks the drift after the firing (the closed drum's hold-up is constant)"
 
 # The same two commands by hand: the DEM case as written, then the PBM with its tables.
 run_rc 0 "$BIN" dem "$WORK/out/dem/case.yaml" --out "$WORK/manual-dem" --quiet
@@ -188,7 +190,7 @@ stderr_has "needs a \`table\` aggregation kernel or a \`dem_impact\` breakage se
 run_rc 1 "$BIN" run "$WORK/tiny.yaml" --out "$WORK/x"
 stderr_has "is a coupled PBM-DEM case (a \`coupling:\` section): run it with \`gransim couple"
 
-# The CoriMix example validates (its run, ~3 s, is in the README).
+# The CoriMix example validates (its run, ~5 s, is in the README).
 run_rc 0 "$BIN" check "$SRC/examples/corimix-coupled.yaml"
 stdout_has "valid. one_way: 3 DEM classes from the grid"
 echo "cli_couple: ok"
