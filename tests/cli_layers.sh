@@ -22,6 +22,7 @@ demdata dem_data
 dem dem
 liggghts liggghts
 study study
+couple couple
 cli"
 declare -A rank_of_folder rank_of_header
 r=0

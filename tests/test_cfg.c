@@ -491,6 +491,31 @@ static void test_value_excerpt(void) {
   gs_cfg_free(c);
 }
 
+/* gs_cfg_set_scalar: replaces a value (a map too) or adds a key; the new
+ * scalar reads through the accessors, names its path, and counts as unused
+ * until asked for. */
+static void test_set_scalar(void) {
+  gs_error e = {0};
+  gs_cfg *c = gs_cfg_load_string("k: {type: table, file: [a, b]}\n", "set.yaml", &e);
+  CHECK(c != NULL);
+  if (!c) return;
+  gs_cfg_node *k = gs_cfg_get(gs_cfg_root(c), "k");
+  const char *s = NULL;
+  CHECK(gs_cfg_set_scalar(k, "file", "/tmp/t.csv", &e) == GS_OK);
+  CHECK(gs_cfg_set_scalar(k, "measure", "diameter", &e) == GS_OK);
+  CHECK(gs_cfg_size(k) == 3);
+  CHECK(gs_cfg_string_req(k, "file", &s, &e) == GS_OK && strcmp(s, "/tmp/t.csv") == 0);
+  CHECK(strcmp(gs_cfg_path(gs_cfg_get(k, "measure")), "k.measure") == 0);
+  CHECK(gs_cfg_line(gs_cfg_get(k, "measure")) == 1);
+  gs_cfg_node *t = gs_cfg_get(k, "type");
+  (void)t;
+  CHECK(gs_cfg_check_unused(k, &e) == GS_OK);
+  CHECK(gs_cfg_set_scalar(k, "extra", "1", &e) == GS_OK);
+  CHECK(gs_cfg_check_unused(k, &e) == GS_EINPUT && has(&e, "unknown key 'extra'"));
+  CHECK(gs_cfg_set_scalar(gs_cfg_get(k, "file"), "x", "1", &e) == GS_EINPUT);
+  gs_cfg_free(c);
+}
+
 int main(void) {
   test_structure();
   test_root_sequence_paths();
@@ -512,5 +537,6 @@ int main(void) {
   test_load_errors();
   test_files();
   test_value_excerpt();
+  test_set_scalar();
   TEST_EXIT();
 }

@@ -113,6 +113,11 @@ int gs_cfg_per_comp(gs_cfg_node *map, const char *key, int required, double def,
 /* Parse a scalar node as a number (helper for sequences). */
 int gs_cfg_node_double(const gs_cfg_node *n, double *out, gs_error *err);
 
+/* Set key of map to a scalar (replacing its value, or adding the key): a
+ * coupled case points its kernels at the tables it wrote before the case is
+ * read (src/couple).  The new node takes map's file and line for messages. */
+int gs_cfg_set_scalar(gs_cfg_node *map, const char *key, const char *text, gs_error *err);
+
 /* Report the first key of map that no accessor asked for:
  *   case.yaml:7: unknown key 'ratoi' in grid.axes[0]; expected one of: name, type, cells, ratio
  * Also fails if map is not a map.  Call after reading all keys of a section. */

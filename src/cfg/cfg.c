@@ -620,6 +620,33 @@ int gs_cfg_set(gs_cfg *cfg, const char *dotted, const char *value, gs_error *err
   return GS_OK;
 }
 
+int gs_cfg_set_scalar(gs_cfg_node *map, const char *key, const char *text, gs_error *err) {
+  if (!map || map->kind != GS_CFG_MAP) return gs_error_set(err, GS_EINPUT, "gs_cfg_set_scalar: not a map");
+  char *path = gs_path_key(map->path, key, err);
+  if (!path) return GS_ENOMEM;
+  gs_cfg_node *n = gs_node_new(GS_CFG_SCALAR, map->line, map->file, path, err);
+  free(path);
+  if (!n) return GS_ENOMEM;
+  if (!(n->text = gs_strdup(text, err))) {
+    gs_node_free(n);
+    return GS_ENOMEM;
+  }
+  for (size_t i = 0; i < map->n; i++)
+    if (strcmp(map->entries[i].key, key) == 0) {
+      gs_node_free(map->entries[i].value);
+      map->entries[i].value = n;
+      return GS_OK;
+    }
+  char *k = gs_strdup(key, err);
+  if (!k || gs_grow((void **)&map->entries, &map->cap, map->n + 1, sizeof *map->entries, err)) {
+    free(k);
+    gs_node_free(n);
+    return GS_ENOMEM;
+  }
+  map->entries[map->n++] = (gs_cfg_entry){.key = k, .line = map->line, .used = 0, .value = n};
+  return GS_OK;
+}
+
 /* --- messages ------------------------------------------------------------------ */
 
 /* The scalar's text as quoted in messages: first line only, length-capped. */

@@ -6,6 +6,9 @@ int gs_cmd_dem(int argc, char **argv);
 int gs_cmd_dem_reduce(int argc, char **argv); /* src/cli/dem_reduce.c */
 int gs_cmd_sweep(int argc, char **argv);      /* src/cli/sweep.c */
 int gs_cmd_fit(int argc, char **argv);        /* src/cli/fit.c */
+/* Coupled PBM-DEM cases (src/cli/couple_cmd.c). */
+int gs_cmd_couple(int argc, char **argv);
+int gs_cmd_couple_check(const char *path);
 /* Cases with solver.method = swa (src/cli/swa_cmd.c); both take over cfg. */
 typedef struct gs_cfg gs_cfg;
 int gs_cmd_run_swa(gs_cfg *cfg, const char *path, const char *out, int progress, int resume);

@@ -43,10 +43,21 @@ static void usage(FILE *fp) {
           "  fit CASE --data FILE --params KEY=LO:HI ...\n"
           "                         fit case parameters to measured d50, M0, ... over time\n"
           "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM)\n"
-          "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n\n"
+          "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n"
+          "  couple CASE --out DIR  run a coupled PBM-DEM case (coupling: {mode: one_way}): the DEM\n"
+          "                         with classes from the PBM grid, then the PBM with its tables\n\n"
           "options: --help, --version; `gransim <command> --help` for details.\n"
           "Case file format: docs/case-files.md\n",
           GRANSIM_VERSION);
+}
+
+/* A coupled case (a `coupling:` key at the top level).  The keys are scanned,
+ * not asked for, so that other cases' unknown-key messages do not offer it. */
+static int is_coupled(gs_cfg *cfg) {
+  gs_cfg_node *root = gs_cfg_root(cfg);
+  for (size_t i = 0; gs_cfg_kind_of(root) == GS_CFG_MAP && i < gs_cfg_size(root); i++)
+    if (!strcmp(gs_cfg_key_at(root, i), "coupling")) return 1;
+  return 0;
 }
 
 static int cmd_run(int argc, char **argv) {
@@ -98,6 +109,12 @@ static int cmd_run(int argc, char **argv) {
   gs_case c;
   gs_cfg *cfg = gs_cfg_load_file(path, &err);
   if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_run_swa(cfg, path, out, opt.progress, opt.resume);
+  if (cfg && is_coupled(cfg)) {
+    fprintf(stderr, "gransim: %s is a coupled PBM-DEM case (a `coupling:` section): run it with "
+            "`gransim couple %s --out %s`\n", path, path, out);
+    gs_cfg_free(cfg);
+    return 1;
+  }
   memset(&c, 0, sizeof c);
   if (!cfg || gs_case_from_cfg(cfg, &c, &err)) {
     fprintf(stderr, "gransim: %s\n", err.msg);
@@ -143,6 +160,10 @@ static int cmd_check(int argc, char **argv) {
   gs_case c;
   gs_cfg *cfg = gs_cfg_load_file(argv[0], &err);
   if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_check_swa(cfg, argv[0]);
+  if (cfg && is_coupled(cfg)) { /* checked stage by stage */
+    gs_cfg_free(cfg);
+    return gs_cmd_couple_check(argv[0]);
+  }
   memset(&c, 0, sizeof c);
   int rc = cfg ? gs_case_from_cfg(cfg, &c, &err) : err.code;
   if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
@@ -264,6 +285,13 @@ int main(int argc, char **argv) {
     return rc;
   }
   if (!strcmp(argv[1], "fit")) return gs_cmd_fit(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "couple")) {
+    /* MPI started only to see the ranks: gransim couple refuses more than one */
+    gs_parallel_init(&argc, &argv);
+    int rc = gs_cmd_couple(argc - 2, argv + 2);
+    gs_parallel_finalize();
+    return rc;
+  }
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;

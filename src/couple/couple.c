@@ -1,0 +1,396 @@
+/* `gransim couple`: a coupled PBM-DEM case with `mode: one_way` (see
+ * include/gransim/couple.h).  Stages: read the coupling section and the PBM
+ * grid, derive the DEM classes from the grid, write and run the DEM case into
+ * DIR/dem.partial (renamed to DIR/dem once its tables are complete and
+ * steady, so a complete stage is recognisable after a kill), point the PBM's
+ * `table` kernels and `dem_impact` selections at its tables in the cfg tree,
+ * and run the PBM with gs_case_run into DIR. */
+#define _XOPEN_SOURCE 700
+#include <errno.h>
+#include <ftw.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "couple/couple_internal.h"
+#include "gransim/case.h"
+#include "gransim/couple.h"
+#include "gransim/dem.h"
+#include "gransim/run.h"
+
+typedef struct {
+  gs_cfg *cfg;        /* the coupled case; handed to the PBM case at the end */
+  gs_cfg *dem_cfg;    /* the DEM case when `dem:` names a file */
+  gs_cfg_node *dem;   /* root of the DEM case */
+  char dem_dir[4096]; /* its directory, for relative mesh paths */
+  const char *path;   /* the coupled case, and the line of its dem section, for messages */
+  int dem_line;
+  gs_couple_settings s;
+  gs_couple_classes cl;
+} couple;
+
+static int read_settings(gs_cfg_node *root, gs_couple_settings *s, gs_cfg_node **classes, gs_error *err) {
+  gs_cfg_node *cp, *cls, *st, *im;
+  static const char *const modes[] = {"one_way", NULL}, *const outside[] = {"nearest", "error", NULL};
+  int mode, rc;
+  memset(s, 0, sizeof *s);
+  if ((rc = gs_cfg_map_req(root, "coupling", &cp, err)) ||
+      (rc = gs_cfg_enum_opt(cp, "mode", modes, -1, &mode, err)))
+    return rc;
+  if (mode < 0) return gs_cfg_fail(cp, err, "missing key 'mode' (one_way)");
+  if ((rc = gs_cfg_map_req(cp, "classes", &cls, err)) ||
+      (rc = gs_cfg_double_range(cls, "min_diameter", 1, 0, 0, 0, HUGE_VAL, 0, &s->dmin, err)) ||
+      (rc = gs_cfg_double_range(cls, "max_diameter", 1, 0, s->dmin, 0, HUGE_VAL, 0, &s->dmax, err)) ||
+      (rc = gs_cfg_long_range(cls, "count", 0, 0, 1, GS_COUPLE_MAX_CLASSES, &s->count, err)) ||
+      (rc = gs_cfg_string_req(cls, "material", &s->material, err)) ||
+      (rc = gs_cfg_enum_opt(cls, "outside", outside, 0, &s->outside_error, err)) ||
+      (rc = gs_cfg_check_unused(cls, err)))
+    return rc;
+  if ((rc = gs_cfg_map_req(cp, "steady", &st, err)) ||
+      (rc = gs_cfg_long_range(st, "window", 0, 5, 2, 100000, &s->window, err)) ||
+      (rc = gs_cfg_double_range(st, "tolerance", 0, 0.1, 0, 0, 1, 0, &s->tolerance, err)) ||
+      (rc = gs_cfg_double_range(st, "sample_every", 1, 0, 0, 0, HUGE_VAL, 0, &s->sample_every, err)) ||
+      (rc = gs_cfg_double_range(st, "max_time", 1, 0, 0, 0, HUGE_VAL, 0, &s->max_time, err)) ||
+      (rc = gs_cfg_check_unused(st, err)))
+    return rc;
+  if ((im = gs_cfg_get(cp, "impacts")) &&
+      ((rc = gs_cfg_string_opt(im, "wall", NULL, &s->wall, err)) || (rc = gs_cfg_check_unused(im, err))))
+    return rc;
+  *classes = cls;
+  return gs_cfg_check_unused(cp, err);
+}
+
+static void couple_free(couple *k) {
+  gs_cfg_free(k->cfg);
+  gs_cfg_free(k->dem_cfg);
+}
+
+/* Load the case, its coupling section, the grid and the DEM section; derive the classes. */
+static int couple_load(const char *path, couple *k, int progress, gs_error *err) {
+  memset(k, 0, sizeof *k);
+  if (!(k->cfg = gs_cfg_load_file(path, err))) return err->code;
+  gs_cfg_node *root = gs_cfg_root(k->cfg), *cls = NULL, *section;
+  if (!root) return gs_error_set(err, GS_EINPUT, "%s: empty case file", path);
+  int rc = gs_cfg_require_kind(root, GS_CFG_MAP, err);
+  if (!rc) rc = read_settings(root, &k->s, &cls, err);
+  if (rc) return rc;
+  gs_cfg_node *dem = gs_cfg_get(root, "dem");
+  k->path = path;
+  k->dem_line = gs_cfg_line(dem);
+  if (!dem)
+    return gs_cfg_fail(root, err, "missing key 'dem' (the DEM case: a `gransim dem` case inline, or its file name)");
+  if (gs_cfg_scalar(dem)) { /* a file name, relative to the coupled case */
+    const char *f = gs_cfg_scalar(dem);
+    char p[4200];
+    snprintf(p, sizeof p, "%s%s%s", f[0] == '/' ? "" : gs_cfg_dir(k->cfg), f[0] == '/' ? "" : "/", f);
+    if (!(k->dem_cfg = gs_cfg_load_file(p, err))) return gs_error_prefix(err, "%s:%d: dem: ", path, gs_cfg_line(dem));
+    k->dem = gs_cfg_root(k->dem_cfg);
+    snprintf(k->dem_dir, sizeof k->dem_dir, "%s", gs_cfg_dir(k->dem_cfg));
+  } else {
+    k->dem = dem;
+    snprintf(k->dem_dir, sizeof k->dem_dir, "%s", gs_cfg_dir(k->cfg));
+  }
+  if (k->dem_dir[0] != '/') { /* the DEM case is written elsewhere: make its paths absolute */
+    char abs[PATH_MAX];
+    if (realpath(k->dem_dir, abs)) snprintf(k->dem_dir, sizeof k->dem_dir, "%.4000s", abs);
+  }
+  if (k->s.wall) { /* a wall of the DEM case, known before the DEM runs */
+    gs_cfg_node *walls = gs_cfg_kind_of(k->dem) == GS_CFG_MAP ? gs_cfg_get(k->dem, "walls") : NULL;
+    int found = 0;
+    for (size_t i = 0; i < gs_cfg_size(walls) && !found; i++) {
+      const char *name = gs_cfg_scalar(gs_cfg_get(gs_cfg_item(walls, i), "name"));
+      found = name && !strcmp(name, k->s.wall);
+    }
+    if (!found)
+      return gs_cfg_fail(gs_cfg_get(gs_cfg_get(root, "coupling"), "impacts"), err,
+                         "wall '%s' is not a wall of the DEM case", k->s.wall);
+  }
+  gs_grid g;
+  int mask = 0;
+  memset(&g, 0, sizeof g);
+  rc = gs_case_read_grid_only(root, &g, &mask, &section, err);
+  if (!rc) rc = gs_couple_classes_derive(&g, (unsigned)mask, &k->s, cls, &k->cl, err);
+  size_t ncells = g.ncells;
+  gs_grid_free(&g);
+  if (!rc && progress) {
+    fprintf(stderr, "gransim couple: %zu DEM classes from the grid, diameters [%g, %g] m", k->cl.n, k->cl.edges[0],
+            k->cl.edges[k->cl.n]);
+    if (k->cl.outside)
+      fprintf(stderr, "; %zu of %zu PBM cells lie outside them and take the nearest class "
+              "(coupling.classes.outside: nearest)", k->cl.outside, ncells);
+    fputc('\n', stderr);
+  }
+  return rc;
+}
+
+/* Point every `table` kernel and `dem_impact` selection at the DEM's tables. */
+static int point_at_tables(gs_cfg_node *root, const char *kernel, const char *impacts, gs_error *err) {
+  gs_cfg_node *mechs = gs_cfg_get(root, "mechanisms");
+  int found = 0, rc = GS_OK;
+  for (size_t i = 0; i < gs_cfg_size(mechs) && !rc; i++) {
+    gs_cfg_node *m = gs_cfg_item(mechs, i), *kn;
+    const char *file = NULL;
+    gs_cfg_node *t = gs_cfg_get(m, "kernel");
+    if (t && gs_cfg_scalar(gs_cfg_get(t, "type")) && !strcmp(gs_cfg_scalar(gs_cfg_get(t, "type")), "table"))
+      file = kernel;
+    else if ((t = gs_cfg_get(m, "selection")) && gs_cfg_scalar(gs_cfg_get(t, "type")) &&
+             !strcmp(gs_cfg_scalar(gs_cfg_get(t, "type")), "dem_impact"))
+      file = impacts;
+    if (!file) continue;
+    static const char *const taken[] = {"file", "measure", "axes", NULL};
+    for (const char *const *q = taken; *q && !rc; q++)
+      if ((kn = gs_cfg_get(t, *q)))
+        rc = gs_cfg_fail(kn, err, "set by the coupling in a coupled case (the DEM's table, classes measured "
+                         "in diameter of grid.size_axes); remove it");
+    if (!rc) rc = gs_cfg_set_scalar(t, "file", file, err);
+    if (!rc) rc = gs_cfg_set_scalar(t, "measure", "diameter", err);
+    found++;
+  }
+  if (!rc && !found)
+    rc = gs_cfg_fail(root, err, "a coupled case needs a `table` aggregation kernel or a `dem_impact` breakage "
+                     "selection to receive the DEM's tables; the mechanisms have neither");
+  return rc;
+}
+
+/* grid.size_axes also measures the PBM's classes: the kernels may not choose other axes */
+static int pbm_case(couple *k, const char *kernel, const char *impacts, gs_case *c, gs_error *err) {
+  int rc = point_at_tables(gs_cfg_root(k->cfg), kernel, impacts, err);
+  memset(c, 0, sizeof *c);
+  gs_cfg *cfg = k->cfg;
+  k->cfg = NULL; /* taken over by the case, also on failure */
+  if (rc) {
+    gs_cfg_free(cfg);
+    return rc;
+  }
+  return gs_case_from_cfg(cfg, c, err);
+}
+
+static int write_dem_case(couple *k, const char *path, gs_error *err) {
+  FILE *fp = fopen(path, "w");
+  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  int rc = gs_couple_write_dem_case(fp, k->dem, k->dem_dir, &k->s, &k->cl, err);
+  if (fclose(fp) && !rc) rc = gs_error_set(err, GS_EIO, "%s: cannot write", path);
+  return rc;
+}
+
+/* The node at a key path ("fill[0].fractions", ending at ' ', ':' or '='), or NULL. */
+static gs_cfg_node *find_path(gs_cfg_node *n, const char *p) {
+  while (n && *p && !strchr(" :=", *p)) {
+    size_t len = strcspn(p, ".[ :=");
+    char key[128];
+    if (len == 0 || len >= sizeof key) return NULL;
+    memcpy(key, p, len);
+    key[len] = 0;
+    n = gs_cfg_kind_of(n) == GS_CFG_MAP ? gs_cfg_get(n, key) : NULL;
+    p += len;
+    while (n && *p == '[') {
+      char *end;
+      long i = strtol(p + 1, &end, 10);
+      if (*end != ']') return NULL;
+      n = gs_cfg_item(n, (size_t)i);
+      p = end + 1;
+    }
+    if (*p == '.') p++;
+  }
+  return n;
+}
+
+/* The DEM reader names the written file; name the coupled case's dem section
+ * instead (the key path stays, e.g. fill[0].fractions). */
+static int dem_error(const couple *k, const char *written, gs_error *err) {
+  size_t n = strlen(written);
+  char rest[sizeof err->msg];
+  const char *m = err->msg;
+  if (!strncmp(m, written, n) && m[n] == ':') {
+    m += n + 1;
+    m += strspn(m, "0123456789");
+    if (*m == ':') m++;
+    m += strspn(m, " ");
+  }
+  snprintf(rest, sizeof rest, "%s", m);
+  /* the line of the key the message names (a path such as fill[0].fractions) */
+  const gs_cfg_node *at = find_path(k->dem, rest);
+  return gs_error_set(err, GS_EINPUT, "%s:%d: dem: %s", at ? gs_cfg_file(at) : k->path,
+                      at ? gs_cfg_line(at) : k->dem_line, rest);
+}
+
+/* Placeholder tables of the derived classes, for `check` (no DEM run). */
+static int write_placeholders(const couple *k, const char *kernel, const char *impacts, gs_error *err) {
+  FILE *a = fopen(kernel, "w"), *b = fopen(impacts, "w");
+  for (size_t r = 0; a && b && r <= 3 * k->cl.n + 1; r++) {
+    fputs(r == 0 ? "edges" : "", a);
+    fputs(r == 0 ? "edges" : "", b);
+    for (size_t j = 0; j < k->cl.n + (r == 0); j++) {
+      if (r == 0) { /* outer edges wide: the outside cells are logged once, by couple_load */
+        double e = j == 0 ? 0 : j == k->cl.n ? k->cl.edges[j] * 1e6 : k->cl.edges[j];
+        fprintf(a, ", %.17g", e);
+        fprintf(b, ", %.17g", e);
+        continue;
+      }
+      if (r <= k->cl.n) fprintf(a, "%s1", j ? ", " : "");
+      if (r <= 3) fprintf(b, "%s%s", j ? ", " : "", r == 2 ? "0" : "1");
+    }
+    if (r <= k->cl.n) fputc('\n', a);
+    if (r <= 3) fputc('\n', b);
+  }
+  int rc = !a || !b ? gs_error_set(err, GS_EIO, "cannot write placeholder tables: %s", strerror(errno)) : GS_OK;
+  if (a) fclose(a);
+  if (b) fclose(b);
+  return rc;
+}
+
+int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
+  couple k;
+  int rc = couple_load(path, &k, 0, err);
+  char tmp[] = "/tmp/gransim-couple-XXXXXX", dcase[64], kt[64], it[64];
+  int have_tmp = !rc && mkdtemp(tmp);
+  if (!rc && !have_tmp) rc = gs_error_set(err, GS_EIO, "cannot create a temporary folder: %s", strerror(errno));
+  snprintf(dcase, sizeof dcase, "%s/dem.yaml", tmp);
+  snprintf(kt, sizeof kt, "%s/collision_kernel.csv", tmp);
+  snprintf(it, sizeof it, "%s/impact_table.csv", tmp);
+  char dd[512] = "";
+  if (!rc) rc = write_dem_case(&k, dcase, err);
+  if (!rc) {
+    gs_dem_case *dc = gs_dem_case_load(dcase, err);
+    if (!dc) rc = dem_error(&k, dcase, err);
+    else gs_dem_case_describe(dc, dd, sizeof dd);
+    gs_dem_case_free(dc);
+  }
+  if (!rc) rc = write_placeholders(&k, kt, it, err);
+  gs_case c;
+  memset(&c, 0, sizeof c);
+  size_t nclass = k.cl.n, outside = k.cl.outside;
+  double lo = k.cl.edges[0], hi = k.cl.edges[k.cl.n];
+  if (!rc) rc = pbm_case(&k, kt, it, &c, err);
+  if (!rc)
+    snprintf(desc, n, "one_way: %zu DEM classes from the grid, diameters [%.4g, %.4g] m (%zu PBM cells outside: "
+             "nearest class); PBM %zu cells x %zu compartments, %zu mechanisms; DEM: %s",
+             nclass, lo, hi, outside, c.model.grid.ncells, c.model.grid.ncomp, c.model.nmech, dd);
+  gs_case_free(&c);
+  couple_free(&k);
+  if (have_tmp) {
+    unlink(dcase);
+    unlink(kt);
+    unlink(it);
+    rmdir(tmp);
+  }
+  return rc;
+}
+
+/* classes.csv: the derived classes and how many PBM cells each holds, so that
+ * a user sees what the DEM sampled and what was extrapolated. */
+static int write_classes(const couple *k, const char *dir, gs_error *err) {
+  char p[4400];
+  snprintf(p, sizeof p, "%s/classes.csv", dir);
+  FILE *fp = fopen(p, "w");
+  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", p, strerror(errno));
+  fprintf(fp, "# DEM classes derived from the PBM grid (volume-equivalent diameters of grid.size_axes, "
+          "window [%g, %g] m); %zu PBM cells outside them take the nearest class (coupling.classes.outside: %s)\n"
+          "class,name,d_lo,d_hi,pbm_cells\n", k->s.dmin, k->s.dmax, k->cl.outside,
+          k->s.outside_error ? "error" : "nearest");
+  for (size_t c = 0; c < k->cl.n; c++)
+    fprintf(fp, "%zu,c%zu,%.9g,%.9g,%zu\n", c + 1, c + 1, k->cl.edges[c], k->cl.edges[c + 1], k->cl.cells_in[c]);
+  return fclose(fp) ? gs_error_set(err, GS_EIO, "%s: cannot write", p) : GS_OK;
+}
+
+static int rm_entry(const char *p, const struct stat *sb, int flag, struct FTW *f) {
+  (void)sb;
+  (void)flag;
+  (void)f;
+  return remove(p);
+}
+
+static int exists(const char *dir, const char *name) {
+  char p[4400];
+  struct stat sb;
+  snprintf(p, sizeof p, "%s/%s", dir, name);
+  return stat(p, &sb) == 0;
+}
+
+int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err) {
+  /* the whole case first, so that a PBM error does not wait for the DEM stage */
+  char desc[1024];
+  couple k;
+  memset(&k, 0, sizeof k);
+  int rc = gs_couple_check(path, desc, sizeof desc, err);
+  if (rc) return rc;
+  rc = couple_load(path, &k, opt->progress, err);
+  const char *out = opt->out_dir;
+  char dem[4200], part[4200], kt[4400], it[4400], dcase[4400];
+  snprintf(dem, sizeof dem, "%s/dem", out);
+  snprintf(part, sizeof part, "%s/dem.partial", out);
+  if (!rc && mkdir(out, 0777) && errno != EEXIST)
+    rc = gs_error_set(err, GS_EIO, "%s: cannot create output folder: %s", out, strerror(errno));
+  char impname[300] = "impact_table.csv";
+  if (k.s.wall) snprintf(impname, sizeof impname, "impact_table_%s.csv", k.s.wall);
+  int have = !rc && opt->resume && exists(dem, "collision_kernel.csv") && exists(dem, impname) && exists(dem, "steady.csv");
+  if (!rc && have && opt->progress) fprintf(stderr, "gransim couple: --resume: DEM stage complete in %s, skipped\n", dem);
+  if (!rc && !have) {
+    nftw(part, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
+    nftw(dem, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
+    if (mkdir(part, 0777)) rc = gs_error_set(err, GS_EIO, "%s: cannot create: %s", part, strerror(errno));
+    snprintf(dcase, sizeof dcase, "%s/case.yaml", part);
+    if (!rc) rc = write_dem_case(&k, dcase, err);
+    if (!rc) rc = write_classes(&k, part, err);
+    gs_dem_case *dc = rc ? NULL : gs_dem_case_load(dcase, err);
+    if (!rc && !dc) rc = dem_error(&k, dcase, err);
+    if (!rc) {
+      if (opt->progress) fprintf(stderr, "gransim couple: DEM stage (%g s at most) in %s\n", k.s.max_time, part);
+      rc = gs_dem_case_run(dc, part, opt->progress, err);
+    }
+    gs_dem_case_free(dc);
+    double ts;
+    if (!rc) rc = gs_couple_steady_report(part, &k.s, &ts, err);
+    if (!rc && opt->progress) fprintf(stderr, "gransim couple: DEM steady at t = %g s; tables in %s\n", ts, dem);
+    /* the stage is complete only once renamed: a kill before leaves dem.partial */
+    if (!rc && rename(part, dem)) rc = gs_error_set(err, GS_EIO, "%s: cannot rename to %s: %s", part, dem, strerror(errno));
+  }
+  /* the tables must have the classes the grid gives now (the case may have changed since) */
+  /* absolute: the PBM resolves relative table names against the case file's folder */
+  char cwd[2048] = "";
+  if (out[0] != '/' && !getcwd(cwd, sizeof cwd)) cwd[0] = 0;
+  snprintf(kt, sizeof kt, "%s%s%s/collision_kernel.csv", cwd, cwd[0] ? "/" : "", dem);
+  snprintf(it, sizeof it, "%s%s%s/%s", cwd, cwd[0] ? "/" : "", dem, impname);
+  if (!rc) {
+    FILE *fp = fopen(kt, "r");
+    char line[8192] = "";
+    size_t ne = 0;
+    while (fp && fgets(line, sizeof line, fp))
+      if (!strncmp(line, "edges", 5)) {
+        for (char *q = line; *q; q++) ne += *q == ',';
+        break;
+      }
+    if (fp) fclose(fp);
+    if (ne != k.cl.n + 1)
+      rc = gs_error_set(err, GS_EINPUT, "%s: %zu classes, but the grid and coupling.classes give %zu: the case changed "
+                        "since the DEM stage; rerun without --resume", kt, ne ? ne - 1 : 0, k.cl.n);
+  }
+  if (!rc && !exists(dem, impname))
+    rc = gs_error_set(err, GS_EINPUT, "%s: no %s (coupling.impacts.wall names no wall of the DEM case?)", dem, impname);
+  gs_case c;
+  memset(&c, 0, sizeof c);
+  /* the PBM resumes from its partial files; a finished one on tables that were
+   * not rerun is complete; otherwise (new tables) it starts again */
+  int pbm_resume = opt->resume && exists(out, ".result.h5.partial");
+  if (!rc && have && opt->resume && !pbm_resume && exists(out, "result.h5")) {
+    if (opt->progress) fprintf(stderr, "gransim couple: --resume: PBM stage complete in %s, nothing to do\n", out);
+    couple_free(&k);
+    return GS_OK;
+  }
+  if (!rc) rc = pbm_case(&k, kt, it, &c, err);
+  if (!rc) {
+    if (pbm_resume && !have) pbm_resume = 0; /* partial files of the old tables' run */
+    gs_run_options ro = {.out_dir = out, .resume = pbm_resume, .progress = opt->progress ? -1 : 0};
+    gs_run_report rep;
+    rc = gs_case_run(&c, &ro, NULL, &rep, err);
+    if (!rc && opt->progress)
+      fprintf(stderr, "gransim couple: PBM to t = %g in %.2f s; results in %s\n", rep.t_end, rep.wall_seconds, out);
+  }
+  gs_case_free(&c);
+  couple_free(&k);
+  return rc;
+}

@@ -1,0 +1,113 @@
+/* The DEM stage's case file: the `dem:` section of a coupled case written
+ * out as a `gransim dem` case (the embedded DEM reads its cases from files),
+ * with the classes derived from the grid and the duration, sampling and
+ * steady-state settings of `coupling.steady`.  Scalars are written
+ * double-quoted (the reader takes a scalar's text whatever its style), in
+ * flow style, one top-level key per line; mesh paths are made absolute,
+ * since the file lives in the output folder. */
+#include <string.h>
+
+#include "couple/couple_internal.h"
+
+static void put_scalar(FILE *fp, const char *t) {
+  fputc('"', fp);
+  for (; *t; t++) {
+    if (*t == '"' || *t == '\\') fprintf(fp, "\\%c", *t);
+    else if (*t == '\n') fputs("\\n", fp);
+    else fputc(*t, fp);
+  }
+  fputc('"', fp);
+}
+
+static void put_node(FILE *fp, gs_cfg_node *n, const char *dir) {
+  if (gs_cfg_kind_of(n) == GS_CFG_MAP) {
+    fputc('{', fp);
+    for (size_t i = 0; i < gs_cfg_size(n); i++) {
+      const char *key = gs_cfg_key_at(n, i);
+      gs_cfg_node *v = gs_cfg_value_at(n, i);
+      fprintf(fp, "%s%s: ", i ? ", " : "", key);
+      const char *t = gs_cfg_scalar(v);
+      if (!strcmp(key, "mesh") && t && t[0] != '/') {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/%s", dir, t);
+        put_scalar(fp, path);
+      } else put_node(fp, v, dir);
+    }
+    fputc('}', fp);
+  } else if (gs_cfg_kind_of(n) == GS_CFG_SEQ) {
+    fputc('[', fp);
+    for (size_t i = 0; i < gs_cfg_size(n); i++) {
+      if (i) fputs(", ", fp);
+      put_node(fp, gs_cfg_item(n, i), dir);
+    }
+    fputc(']', fp);
+  } else put_scalar(fp, gs_cfg_scalar(n) ? gs_cfg_scalar(n) : "");
+}
+
+/* A map's keys except those the coupling sets, which are errors there. */
+static int put_map_except(FILE *fp, gs_cfg_node *m, const char *dir, const char *const *taken,
+                          const char *by, int *first, gs_error *err) {
+  if (gs_cfg_require_kind(m, GS_CFG_MAP, err)) return GS_EINPUT;
+  for (size_t i = 0; i < gs_cfg_size(m); i++) {
+    const char *key = gs_cfg_key_at(m, i);
+    gs_cfg_node *v = gs_cfg_value_at(m, i);
+    for (const char *const *t = taken; *t; t++)
+      if (!strcmp(key, *t))
+        return gs_cfg_fail(v, err, "set by the coupling (%s) in a coupled case; remove it", by);
+    fprintf(fp, "%s%s: ", *first ? "" : ", ", key);
+    put_node(fp, v, dir);
+    *first = 0;
+  }
+  return GS_OK;
+}
+
+int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const gs_couple_settings *s,
+                             const gs_couple_classes *cl, gs_error *err) {
+  if (gs_cfg_require_kind(root, GS_CFG_MAP, err)) return GS_EINPUT;
+  int rc = GS_OK, have_dem = 0, have_stats = 0, have_out = 0;
+  fprintf(fp, "# written by gransim couple: the dem section with the classes derived from the PBM grid\n");
+  for (size_t i = 0; i < gs_cfg_size(root) && !rc; i++) {
+    const char *key = gs_cfg_key_at(root, i);
+    gs_cfg_node *v = gs_cfg_value_at(root, i);
+    int first = 1;
+    if (!strcmp(key, "classes"))
+      return gs_cfg_fail(v, err, "the DEM classes of a coupled case come from the PBM grid "
+                         "(coupling.classes); remove this list");
+    if (!strcmp(key, "dem")) {
+      static const char *const taken[] = {"duration", NULL};
+      fputs("dem: {", fp);
+      rc = put_map_except(fp, v, dir, taken, "coupling.steady.max_time", &first, err);
+      fprintf(fp, "%sduration: %.17g}\n", first ? "" : ", ", s->max_time);
+      have_dem = 1;
+    } else if (!strcmp(key, "statistics")) {
+      static const char *const taken[] = {"start", "sample_every", "steady", NULL};
+      fputs("statistics: {", fp);
+      rc = put_map_except(fp, v, dir, taken, "coupling.steady", &first, err);
+      fprintf(fp, "%sstart: steady, sample_every: %.17g, steady: {window: %ld, tolerance: %.17g}}\n",
+              first ? "" : ", ", s->sample_every, s->window, s->tolerance);
+      have_stats = 1;
+    } else if (!strcmp(key, "output")) {
+      static const char *const taken[] = {"every", NULL};
+      fputs("output: {", fp);
+      rc = put_map_except(fp, v, dir, taken, "coupling.steady.sample_every", &first, err);
+      fprintf(fp, "%severy: %.17g}\n", first ? "" : ", ", s->sample_every);
+      have_out = 1;
+    } else {
+      fprintf(fp, "%s: ", key);
+      put_node(fp, v, dir);
+      fputc('\n', fp);
+    }
+  }
+  if (rc) return rc;
+  if (!have_dem) return gs_cfg_fail(root, err, "missing key 'dem' (time_step, box, ...) in the DEM case");
+  if (!have_stats)
+    fprintf(fp, "statistics: {start: steady, sample_every: %.17g, steady: {window: %ld, tolerance: %.17g}}\n",
+            s->sample_every, s->window, s->tolerance);
+  /* one output row per sample, so that the time series holds the detector's samples */
+  if (!have_out) fprintf(fp, "output: {every: %.17g}\n", s->sample_every);
+  fputs("classes:\n", fp);
+  for (size_t k = 0; k < cl->n; k++)
+    fprintf(fp, "  - {name: c%zu, radius: [%.17g, %.17g], material: \"%s\"}\n", k + 1, cl->edges[k] / 2,
+            cl->edges[k + 1] / 2, s->material);
+  return ferror(fp) ? gs_error_set(err, GS_EIO, "cannot write the DEM case") : GS_OK;
+}
