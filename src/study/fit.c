@@ -14,6 +14,7 @@
 #include <gsl/gsl_multifit_nlinear.h>
 
 #include "gransim/run.h"
+#include "study/study_internal.h"
 
 /* ---- measured data ------------------------------------------------------- */
 
@@ -108,23 +109,6 @@ typedef struct {
   gs_error err; /* the first failed model evaluation */
 } fit_ctx;
 
-/* The logistic map from an unbounded z to (LO, HI) (in log for log ranges):
- * every trial point is a valid case; and its derivative dx/dz. */
-static double to_x(const gs_study_axis *a, double z, double *dxdz) {
-  double s = 1 / (1 + exp(-z));
-  double lo = a->log ? log(a->lo) : a->lo, hi = a->log ? log(a->hi) : a->hi;
-  double u = lo + (hi - lo) * s, du = (hi - lo) * s * (1 - s);
-  double x = a->log ? exp(u) : u;
-  if (dxdz) *dxdz = a->log ? x * du : du;
-  return x;
-}
-
-static double to_z(const gs_study_axis *a, double x) {
-  double lo = a->log ? log(a->lo) : a->lo, hi = a->log ? log(a->hi) : a->hi;
-  double s = ((a->log ? log(x) : x) - lo) / (hi - lo);
-  return log(s / (1 - s));
-}
-
 /* Records the outputs at the data's times. */
 typedef struct {
   const fit_ctx *fc;
@@ -154,7 +138,7 @@ static int model_residuals(fit_ctx *fc, const double *z, double *r, gs_error *er
   char *keys[64], *values[64], text[64][40];
   for (size_t k = 0; k < fc->np; k++) {
     keys[k] = fc->params[k].key;
-    snprintf(text[k], sizeof text[k], "%.17g", to_x(&fc->params[k], z[k], NULL));
+    snprintf(text[k], sizeof text[k], "%.17g", gs_study_to_x(&fc->params[k], z[k], NULL));
     values[k] = text[k];
   }
   d.keys = keys;
@@ -264,7 +248,7 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
       rc = node ? gs_error_set(err, GS_EINPUT, "key '%s' is not a single value", params[k].key)
                 : GS_EINPUT;
     else if (gs_cfg_node_double(node, &x, err)) rc = gs_error_prefix(err, "key '%s': ", params[k].key);
-    else z0[k] = x > params[k].lo && x < params[k].hi ? to_z(&params[k], x) : 0;
+    else z0[k] = x > params[k].lo && x < params[k].hi ? gs_study_to_z(&params[k], x) : 0;
   }
   gs_cfg_free(probe);
   if (rc) return rc;
@@ -272,16 +256,9 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
   gs_design d0 = {.nkeys = 0, .nruns = 1};
   gs_case c;
   if ((rc = gs_study_case(base, &d0, 0, &c, err))) return rc;
-  const char *extra[6 + 2 * 8] = {"M0", "M1", "M2", "d10", "d50", "d90"};
-  char names[16][80];
-  size_t nextra = 6;
-  for (int k = 0; k < c.model.nvol && k < 8; k++) {
-    snprintf(names[2 * k], sizeof names[0], "mean_%s", gs_model_vol_name(&c.model, k));
-    snprintf(names[2 * k + 1], sizeof names[0], "total_%s", gs_model_vol_name(&c.model, k));
-    extra[nextra++] = names[2 * k];
-    extra[nextra++] = names[2 * k + 1];
-  }
-  rc = gs_study_outputs_init(&fc.out, &c.model, extra, nextra, err);
+  gs_study_extras extra;
+  gs_study_extras_all(&c.model, &extra);
+  rc = gs_study_outputs_init(&fc.out, &c.model, extra.name, extra.n, err);
   gs_case_free(&c);
   if (rc) return rc;
   fc.col = calloc(data->ncols, sizeof *fc.col);
@@ -289,22 +266,8 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
   fc.scale = scale;
   if (!fc.col || !scale) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   for (size_t j = 0; j < data->ncols && !rc; j++) {
-    size_t i = 0;
-    char alias[300]; /* one compartment: d50 means d50_c1 */
-    snprintf(alias, sizeof alias, "%s_c1", data->names[j]);
-    while (i < fc.out.ncol && strcmp(fc.out.names[i], data->names[j]) &&
-           (fc.out.ncomp != 1 || strcmp(fc.out.names[i], alias)))
-      i++;
-    if (i == fc.out.ncol) {
-      char known[1024];
-      size_t at = 0;
-      for (size_t q = 0; q < fc.out.ncol && at < sizeof known; q++)
-        at += (size_t)snprintf(known + at, sizeof known - at, "%s%s", q ? ", " : "", fc.out.names[q]);
-      rc = gs_error_set(err, GS_EINPUT, "data column '%s' is no output of the case; known: %s",
-                        data->names[j], known);
+    if ((rc = gs_study_outputs_find(&fc.out, data->names[j], "data column", &fc.col[j], err)))
       break;
-    }
-    fc.col[j] = i;
     /* columns of different units weigh alike: each scaled by its RMS */
     double s = 0;
     for (size_t t = 0; t < data->ntimes; t++) s += pow(data->values[t * data->ncols + j], 2);
@@ -346,7 +309,7 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
     res->corr = malloc(np * np * sizeof *res->corr);
     for (size_t k = 0; k < np; k++) {
       double dxdz;
-      res->x[k] = to_x(&params[k], gsl_vector_get(z, k), &dxdz);
+      res->x[k] = gs_study_to_x(&params[k], gsl_vector_get(z, k), &dxdz);
       /* the delta method: the covariance of z carried to x by dx/dz */
       res->stderr_x[k] = fabs(dxdz) * sqrt(s2 * gsl_matrix_get(covar, k, k));
       for (size_t q = 0; q < np; q++)

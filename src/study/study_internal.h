@@ -1,0 +1,30 @@
+/* Helpers shared by the study layer's fit, optimisation and sensitivity
+ * (not part of the public API). */
+#ifndef GRANSIM_STUDY_INTERNAL_H
+#define GRANSIM_STUDY_INTERNAL_H
+
+#include "gransim/study.h"
+
+/* Every extra statistic a study may name (M0 M1 M2 d10 d50 d90, then
+ * mean_<coordinate> and total_<coordinate> per volume coordinate of m):
+ * names point into buf; returns how many (at most GS_STUDY_MAX_EXTRA). */
+#define GS_STUDY_MAX_EXTRA 22
+typedef struct {
+  const char *name[GS_STUDY_MAX_EXTRA];
+  char buf[16][80];
+  size_t n;
+} gs_study_extras;
+void gs_study_extras_all(const gs_model *m, gs_study_extras *x);
+
+/* The column of output o called name (a sweep column; with one compartment
+ * also without the _c1); GS_EINPUT naming the known columns otherwise.
+ * what says what the name is ("data column", "--outputs"). */
+int gs_study_outputs_find(const gs_study_outputs *o, const char *name, const char *what,
+                          size_t *col, gs_error *err);
+
+/* The logistic map from an unbounded z to (LO, HI) (in log for log ranges),
+ * so that every trial point of an unconstrained method is a valid case;
+ * *dxdz (if not NULL) its derivative.  gs_study_to_z is its inverse. */
+double gs_study_to_x(const gs_study_axis *a, double z, double *dxdz);
+double gs_study_to_z(const gs_study_axis *a, double x);
+#endif
