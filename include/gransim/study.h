@@ -164,6 +164,41 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
                const gs_fit_data *data, gs_fit_result *res, gs_error *err);
 void gs_fit_result_free(gs_fit_result *r);
 
+/* ---- optimisation --------------------------------------------------------
+ * Controls (dotted keys over ranges) chosen so that the case's outputs at a
+ * target's times come closest to the target (a CSV as gs_fit_data):
+ * minimises sum_j w_j sum_t ((model - target) / RMS_j)^2, RMS_j the target
+ * column's RMS (columns of different units weigh alike), w_j the weights. */
+typedef enum gs_opt_method {
+  GS_OPT_NELDER_MEAD = 1, /* GSL nmsimplex2 over the logistic map of each range */
+  GS_OPT_BOUNDED = 2      /* NLopt BOBYQA inside the box (each range mapped to [0,1]) */
+} gs_opt_method;
+
+typedef struct gs_opt_options {
+  gs_opt_method method;
+  const double *weights; /* per target column; NULL: all 1 */
+  size_t max_runs;       /* model runs at most (0: 4000) */
+  double tol;            /* stop when the step (in [0,1] units of the ranges) is below (0: 1e-9) */
+} gs_opt_options;
+
+typedef struct gs_opt_result {
+  size_t ncontrols;
+  double *x;        /* the controls found */
+  double objective; /* at x */
+  double start_objective;
+  long runs;
+  long failed_runs;       /* trial runs that failed (treated as very bad points) */
+  gs_error first_failure; /* the first one's message */
+  int converged;          /* 0: stopped at max_runs */
+} gs_opt_result;
+
+/* GS_EINPUT for no controls, a list instead of a range, a negative weight,
+ * unknown keys or target columns (before any run). */
+int gs_optimise_run(const gs_cfg *base, const gs_study_axis *controls, size_t nc,
+                    const gs_fit_data *target, const gs_opt_options *opt, gs_opt_result *res,
+                    gs_error *err);
+void gs_opt_result_free(gs_opt_result *r);
+
 /* ---- global sensitivity ------------------------------------------------
  * Variance-based (Sobol') indices by Saltelli sampling and Morris's
  * elementary-effects screening, over ranges (axes from gs_study_parse_range)

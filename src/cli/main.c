@@ -44,6 +44,8 @@ static void usage(FILE *fp) {
           "                         fit case parameters to measured d50, M0, ... over time\n"
           "  sensitivity CASE --range KEY=LO:HI ... --outputs COLS --method sobol:N|morris:R --out DIR\n"
           "                         global sensitivity: Sobol' indices or Morris screening\n"
+          "  optimise CASE --target FILE --controls KEY=LO:HI ... [--method nelder-mead|bounded]\n"
+          "                         choose controls so that outputs come closest to a target\n"
           "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM)\n"
           "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n\n"
           "options: --help, --version; `gransim <command> --help` for details.\n"
@@ -267,6 +269,7 @@ int main(int argc, char **argv) {
   }
   if (!strcmp(argv[1], "fit")) return gs_cmd_fit(argc - 2, argv + 2);
   if (!strcmp(argv[1], "sensitivity")) return gs_cmd_sensitivity(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "optimise")) return gs_cmd_optimise(argc - 2, argv + 2);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;

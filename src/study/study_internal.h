@@ -27,4 +27,26 @@ int gs_study_outputs_find(const gs_study_outputs *o, const char *name, const cha
  * *dxdz (if not NULL) its derivative.  gs_study_to_z is its inverse. */
 double gs_study_to_x(const gs_study_axis *a, double z, double *dxdz);
 double gs_study_to_z(const gs_study_axis *a, double x);
+
+/* Case outputs at measured times as residuals (model - data) / RMS of the
+ * data column: fit's least squares and optimise's objective. */
+typedef struct {
+  const gs_cfg *base;
+  const gs_study_axis *params;
+  size_t np;
+  const gs_fit_data *data;
+  double *scale; /* per data column */
+  size_t *col;   /* data column -> output column */
+  gs_study_outputs out;
+  long runs;
+  gs_error err; /* the first failed model evaluation */
+} gs_fit_problem;
+/* Checks the parameters' keys and the data's columns against the case;
+ * x0: the start, the case's own values where they lie inside the ranges,
+ * else the ranges' middles. */
+int gs_fit_problem_init(gs_fit_problem *fc, const gs_cfg *base, const gs_study_axis *params,
+                        size_t np, const gs_fit_data *data, double *x0, gs_error *err);
+/* r[ntimes * ncols] at parameter values x[np] (one run of the case). */
+int gs_fit_problem_residuals(gs_fit_problem *fc, const double *x, double *r, gs_error *err);
+void gs_fit_problem_free(gs_fit_problem *fc);
 #endif
