@@ -26,6 +26,11 @@ stderr_has "nope"
 run_rc 2 "$BIN" sensitivity "$WORK/hs.yaml" "${R[@]}" --outputs d55 --method morris:2 --out "$WORK/x"
 stderr_has "--outputs column 'd55' is no output of the case; known: M0"
 
+# not under mpirun: every rank would run the whole sample into DIR
+OMPI_COMM_WORLD_SIZE=2 run_rc 2 "$BIN" sensitivity "$WORK/hs.yaml" "${R[@]}" --outputs d50 \
+  --method morris:2 --out "$WORK/mpi"
+stderr_has "started by mpirun with 2 ranks"
+
 run_rc 0 "$BIN" sensitivity "$WORK/hs.yaml" "${R[@]}" --outputs d50,M0 --method morris:2 \
   --out "$WORK/morris" --threads 2 --quiet
 stdout_has "mechanisms.0.kernel.alpha" "6 runs"

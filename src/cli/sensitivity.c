@@ -115,6 +115,15 @@ int gs_cmd_sensitivity(int argc, char **argv) {
     if (err.msg[0]) fprintf(stderr, "gransim sensitivity: %s\n", err.msg);
     goto done;
   }
+  /* under mpirun every rank would run the whole sample into the same DIR:
+   * the analysis does not share its runs over ranks yet */
+  const char *ranks = getenv("OMPI_COMM_WORLD_SIZE") ? getenv("OMPI_COMM_WORLD_SIZE") : getenv("PMI_SIZE");
+  if (ranks && atoi(ranks) > 1) {
+    fprintf(stderr, "gransim sensitivity: started by mpirun with %s ranks; it runs on the threads "
+                    "of one process (--threads), start it without mpirun\n", ranks);
+    rc = 2;
+    goto done;
+  }
   char csv[4200];
   snprintf(csv, sizeof csv, "%s/sensitivity.csv", sw.out_dir);
   if (!(cfg = gs_cfg_load_file(path, &err)) ||
