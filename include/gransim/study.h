@@ -55,6 +55,13 @@ int gs_design_grid(const gs_study_axis *axes, size_t naxes, gs_design *d, gs_err
  * digits, so that the text set into the case is the number drawn. */
 int gs_design_lhs(const gs_study_axis *axes, size_t naxes, size_t n, unsigned long seed,
                   gs_design *d, gs_error *err);
+/* A design of n given points x[n * naxes] (the values of the axes' keys,
+ * written with 17 digits): the runs of a sensitivity analysis. */
+int gs_design_values(const gs_study_axis *axes, size_t naxes, const double *x, size_t n,
+                     gs_design *d, gs_error *err);
+/* The value of a range axis at u in [0,1]: LO + (HI - LO) u, in log(value)
+ * for a log range; clamped into [LO, HI] against rounding. */
+double gs_study_axis_value(const gs_study_axis *a, double u);
 void gs_design_free(gs_design *d);
 
 /* The case of run r: a copy of base with the run's values set, built by the
@@ -156,6 +163,95 @@ typedef struct gs_fit_result {
 int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
                const gs_fit_data *data, gs_fit_result *res, gs_error *err);
 void gs_fit_result_free(gs_fit_result *r);
+
+/* ---- optimisation --------------------------------------------------------
+ * Controls (dotted keys over ranges) chosen so that the case's outputs at a
+ * target's times come closest to the target (a CSV as gs_fit_data):
+ * minimises sum_j w_j sum_t ((model - target) / RMS_j)^2, RMS_j the target
+ * column's RMS (columns of different units weigh alike), w_j the weights. */
+typedef enum gs_opt_method {
+  GS_OPT_NELDER_MEAD = 1, /* GSL nmsimplex2 over the logistic map of each range */
+  GS_OPT_BOUNDED = 2      /* NLopt BOBYQA inside the box (each range mapped to [0,1]) */
+} gs_opt_method;
+
+typedef struct gs_opt_options {
+  gs_opt_method method;
+  const double *weights; /* per target column; NULL: all 1 */
+  size_t max_runs;       /* model runs at most (0: 4000) */
+  double tol;            /* stop when the step (in [0,1] units of the ranges) is below (0: 1e-9) */
+} gs_opt_options;
+
+typedef struct gs_opt_result {
+  size_t ncontrols;
+  double *x;        /* the controls found */
+  double objective; /* at x */
+  double start_objective;
+  long runs;
+  long failed_runs;       /* trial runs that failed (treated as very bad points) */
+  gs_error first_failure; /* the first one's message */
+  int converged;          /* 0: stopped at max_runs */
+} gs_opt_result;
+
+/* GS_EINPUT for no controls, a list instead of a range, a negative weight,
+ * unknown keys or target columns (before any run). */
+int gs_optimise_run(const gs_cfg *base, const gs_study_axis *controls, size_t nc,
+                    const gs_fit_data *target, const gs_opt_options *opt, gs_opt_result *res,
+                    gs_error *err);
+void gs_opt_result_free(gs_opt_result *r);
+
+/* ---- global sensitivity ------------------------------------------------
+ * Variance-based (Sobol') indices by Saltelli sampling and Morris's
+ * elementary-effects screening, over ranges (axes from gs_study_parse_range)
+ * of any model given as a callback, so that the estimators are tested on
+ * analytic functions and a case runs through the sweep. */
+typedef enum gs_sens_method { GS_SENS_SOBOL = 1, GS_SENS_MORRIS = 2 } gs_sens_method;
+
+/* The model at npoints points x[npoints * nin] (values inside the ranges):
+ * y[npoints * nout].  Called once with every point of the analysis, so an
+ * implementation may run them in parallel. */
+typedef int (*gs_sens_model)(void *ctx, size_t npoints, size_t nin, const double *x, size_t nout,
+                             double *y, gs_error *err);
+
+typedef struct gs_sens_options {
+  gs_sens_method method;
+  size_t n;           /* Sobol: base sample N (N (k+2) runs); Morris: trajectories R (R (k+1) runs) */
+  int levels;         /* Morris: grid levels p, even (0: 4) */
+  size_t nboot;       /* Sobol: bootstrap resamples for the intervals (0: 500) */
+  double conf;        /* level of the intervals (0: 0.95) */
+  unsigned long seed; /* random shift of the Sobol' sequence, bootstrap, Morris trajectories */
+} gs_sens_options;
+
+typedef struct gs_sens_result {
+  gs_sens_method method;
+  size_t nin, nout, runs;
+  double conf;
+  /* Sobol: [out * nin + k]; first-order S1 and total ST with percentile
+   * bootstrap intervals [lo, hi] */
+  double *s1, *s1_lo, *s1_hi, *st, *st_lo, *st_hi;
+  /* Morris: [out * nin + k]; mean elementary effect, mean of |effects|,
+   * their standard deviation (effects per unit of the range) */
+  double *mu, *mu_star, *sigma;
+} gs_sens_result;
+
+/* Runs the analysis: GS_EINPUT for no keys, a list instead of a range, N
+ * too small (Sobol N >= 16, Morris R >= 2), too many keys (Sobol <= 20: the
+ * Sobol' sequence has 40 dimensions), an odd p; a model error or a
+ * non-finite output fails it. */
+int gs_sensitivity(const gs_study_axis *axes, size_t nin, size_t nout, gs_sens_model model,
+                   void *ctx, const gs_sens_options *opt, gs_sens_result *res, gs_error *err);
+/* The same with the case's outputs (sweep output columns, as gs_fit_data
+ * names them: d50_c1, M0, ...; with one compartment d50 for d50_c1) at the
+ * final time as the model: all points run as one sweep into sweep->out_dir
+ * (resumable; sweep->outputs is ignored).  Unknown keys and columns are
+ * refused before any run. */
+int gs_sensitivity_case(const gs_cfg *base, const gs_study_axis *axes, size_t nin,
+                        const char *const *outputs, size_t nout, const gs_sens_options *opt,
+                        const gs_sweep_options *sweep, gs_sens_result *res, gs_error *err);
+/* A CSV: Sobol "output,key,S1,S1_lo,S1_hi,ST,ST_lo,ST_hi", Morris
+ * "output,key,mu,mu_star,sigma"; a row per output and key. */
+int gs_sens_write_csv(const char *path, const gs_sens_result *r, const gs_study_axis *axes,
+                      const char *const *outputs, gs_error *err);
+void gs_sens_result_free(gs_sens_result *r);
 
 #ifdef __cplusplus
 }

@@ -1,4 +1,4 @@
-/* The gransim command: subcommands run, check, list, validate, sweep, fit, dem, dem-reduce. */
+/* The gransim command: subcommands run, check, list, validate, sweep, fit, sensitivity, optimise, dem, dem-reduce. */
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -42,6 +42,10 @@ static void usage(FILE *fp) {
           "                         variations; one row per run in DIR/sweep.csv\n"
           "  fit CASE --data FILE --params KEY=LO:HI ...\n"
           "                         fit case parameters to measured d50, M0, ... over time\n"
+          "  sensitivity CASE --range KEY=LO:HI ... --outputs COLS --method sobol:N|morris:R --out DIR\n"
+          "                         global sensitivity: Sobol' indices or Morris screening\n"
+          "  optimise CASE --target FILE --controls KEY=LO:HI ... [--method nelder-mead|bounded]\n"
+          "                         choose controls so that outputs come closest to a target\n"
           "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM)\n"
           "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n"
           "  couple CASE --out DIR  run a coupled PBM-DEM case (coupling: {mode: one_way}): the DEM\n"
@@ -292,6 +296,8 @@ int main(int argc, char **argv) {
     gs_parallel_finalize();
     return rc;
   }
+  if (!strcmp(argv[1], "sensitivity")) return gs_cmd_sensitivity(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "optimise")) return gs_cmd_optimise(argc - 2, argv + 2);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;

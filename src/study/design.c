@@ -181,23 +181,39 @@ int gs_design_lhs(const gs_study_axis *axes, size_t naxes, size_t n, unsigned lo
     const gs_study_axis *a = &axes[k];
     for (size_t i = 0; i < n; i++) perm[i] = i;
     gsl_ran_shuffle(rng, perm, n, sizeof *perm);
-    const double lo = a->log ? log(a->lo) : a->lo, hi = a->log ? log(a->hi) : a->hi;
     for (size_t r = 0; r < n && !rc; r++) {
       /* run r lies in stratum perm[r], uniformly within it */
       double u = ((double)perm[r] + gsl_rng_uniform(rng)) / (double)n;
-      double x = lo + (hi - lo) * u;
-      if (a->log) x = exp(x);
-      /* rounding may step past an end; the case must see a value inside */
-      if (x < a->lo) x = a->lo;
-      if (x > a->hi) x = a->hi;
       d->unit[r * naxes + k] = u;
       char buf[40];
-      snprintf(buf, sizeof buf, "%.17g", x);
+      snprintf(buf, sizeof buf, "%.17g", gs_study_axis_value(a, u));
       if (!(d->values[r * naxes + k] = dup_n(buf, strlen(buf), err))) rc = GS_ENOMEM;
     }
   }
   gsl_rng_free(rng);
   free(perm);
+  if (rc) gs_design_free(d);
+  return rc;
+}
+
+double gs_study_axis_value(const gs_study_axis *a, double u) {
+  const double lo = a->log ? log(a->lo) : a->lo, hi = a->log ? log(a->hi) : a->hi;
+  double x = lo + (hi - lo) * u;
+  if (a->log) x = exp(x);
+  /* rounding may step past an end; the case must see a value inside */
+  return x < a->lo ? a->lo : x > a->hi ? a->hi : x;
+}
+
+int gs_design_values(const gs_study_axis *axes, size_t naxes, const double *x, size_t n,
+                     gs_design *d, gs_error *err) {
+  if (n < 1 || n > GS_DESIGN_MAX_RUNS)
+    return gs_error_set(err, GS_EINPUT, "a design of %zu runs (1 to %u)", n, GS_DESIGN_MAX_RUNS);
+  int rc = design_start(axes, naxes, n, d, err);
+  for (size_t i = 0; i < n * naxes && !rc; i++) {
+    char buf[40];
+    snprintf(buf, sizeof buf, "%.17g", x[i]); /* 17 digits: the case sees the number itself */
+    if (!(d->values[i] = dup_n(buf, strlen(buf), err))) rc = GS_ENOMEM;
+  }
   if (rc) gs_design_free(d);
   return rc;
 }

@@ -14,6 +14,7 @@
 #include <gsl/gsl_multifit_nlinear.h>
 
 #include "gransim/run.h"
+#include "study/study_internal.h"
 
 /* ---- measured data ------------------------------------------------------- */
 
@@ -96,38 +97,10 @@ int gs_fit_data_read(const char *path, gs_fit_data *d, gs_error *err) {
 
 /* ---- the model as residuals of transformed parameters ---------------------- */
 
-typedef struct {
-  const gs_cfg *base;
-  const gs_study_axis *params;
-  size_t np;
-  const gs_fit_data *data;
-  const double *scale; /* per data column */
-  size_t *col;         /* data column -> output column */
-  gs_study_outputs out;
-  long runs;
-  gs_error err; /* the first failed model evaluation */
-} fit_ctx;
-
-/* The logistic map from an unbounded z to (LO, HI) (in log for log ranges):
- * every trial point is a valid case; and its derivative dx/dz. */
-static double to_x(const gs_study_axis *a, double z, double *dxdz) {
-  double s = 1 / (1 + exp(-z));
-  double lo = a->log ? log(a->lo) : a->lo, hi = a->log ? log(a->hi) : a->hi;
-  double u = lo + (hi - lo) * s, du = (hi - lo) * s * (1 - s);
-  double x = a->log ? exp(u) : u;
-  if (dxdz) *dxdz = a->log ? x * du : du;
-  return x;
-}
-
-static double to_z(const gs_study_axis *a, double x) {
-  double lo = a->log ? log(a->lo) : a->lo, hi = a->log ? log(a->hi) : a->hi;
-  double s = ((a->log ? log(x) : x) - lo) / (hi - lo);
-  return log(s / (1 - s));
-}
 
 /* Records the outputs at the data's times. */
 typedef struct {
-  const fit_ctx *fc;
+  const gs_fit_problem *fc;
   const gs_case *c;
   double *rows; /* ntimes x out.ncol */
   char *seen;
@@ -148,13 +121,12 @@ static int fit_obs_output(void *self, const gs_run_view *run, double t, const do
 
 static const gs_observer_type fit_obs_type = {.name = "fit", .output = fit_obs_output};
 
-/* Residuals (model - data) / column scale at parameters z. */
-static int model_residuals(fit_ctx *fc, const double *z, double *r, gs_error *err) {
+int gs_fit_problem_residuals(gs_fit_problem *fc, const double *x, double *r, gs_error *err) {
   gs_design d = {.nkeys = fc->np, .nruns = 1};
   char *keys[64], *values[64], text[64][40];
   for (size_t k = 0; k < fc->np; k++) {
     keys[k] = fc->params[k].key;
-    snprintf(text[k], sizeof text[k], "%.17g", to_x(&fc->params[k], z[k], NULL));
+    snprintf(text[k], sizeof text[k], "%.17g", x[k]);
     values[k] = text[k];
   }
   d.keys = keys;
@@ -198,27 +170,31 @@ static int model_residuals(fit_ctx *fc, const double *z, double *r, gs_error *er
 }
 
 static int fit_f(const gsl_vector *z, void *params, gsl_vector *f) {
-  fit_ctx *fc = params;
+  gs_fit_problem *fc = params;
   fc->runs++;
-  if (model_residuals(fc, z->data, f->data, &fc->err)) return GSL_EBADFUNC;
+  double x[64];
+  for (size_t k = 0; k < fc->np; k++) x[k] = gs_study_to_x(&fc->params[k], z->data[k], NULL);
+  if (gs_fit_problem_residuals(fc, x, f->data, &fc->err)) return GSL_EBADFUNC;
   return GSL_SUCCESS;
 }
 
 /* Forward differences, the p perturbed runs at once on the threads (each
  * run single-threaded): a Jacobian costs one run's time on p cores. */
 static int fit_df(const gsl_vector *z, void *params, gsl_matrix *J) {
-  fit_ctx *fc = params;
+  gs_fit_problem *fc = params;
   const size_t n = J->size1, p = fc->np;
   double *f0 = malloc(n * (p + 1) * sizeof *f0);
   if (!f0) return GSL_ENOMEM;
   int failed = 0;
 #pragma omp parallel for schedule(dynamic, 1)
   for (size_t j = 0; j <= p; j++) {
-    double zz[64];
-    for (size_t k = 0; k < p; k++) zz[k] = z->data[k];
-    if (j) zz[j - 1] += 1e-6 * (1 + fabs(zz[j - 1]));
+    double x[64];
+    for (size_t k = 0; k < p; k++) {
+      const double zk = z->data[k], h = j == k + 1 ? 1e-6 * (1 + fabs(zk)) : 0;
+      x[k] = gs_study_to_x(&fc->params[k], zk + h, NULL);
+    }
     gs_error e = {0};
-    if (model_residuals(fc, zz, f0 + j * n, &e)) {
+    if (gs_fit_problem_residuals(fc, x, f0 + j * n, &e)) {
 #pragma omp critical(gs_fit_error)
       if (!failed++) fc->err = e;
     }
@@ -230,6 +206,56 @@ static int fit_df(const gsl_vector *z, void *params, gsl_matrix *J) {
   }
   free(f0);
   return failed ? GSL_EBADFUNC : GSL_SUCCESS;
+}
+
+void gs_fit_problem_free(gs_fit_problem *fc) {
+  free(fc->col);
+  free(fc->scale);
+  gs_study_outputs_free(&fc->out);
+  memset(fc, 0, sizeof *fc);
+}
+
+int gs_fit_problem_init(gs_fit_problem *fc, const gs_cfg *base, const gs_study_axis *params,
+                        size_t np, const gs_fit_data *data, double *x0, gs_error *err) {
+  memset(fc, 0, sizeof *fc);
+  *fc = (gs_fit_problem){.base = base, .params = params, .np = np, .data = data};
+  /* the start: the case's own values where they lie inside the ranges */
+  gs_cfg *probe = gs_cfg_copy(base, err);
+  if (!probe) return err->code;
+  int rc = GS_OK;
+  for (size_t k = 0; k < np && !rc; k++) {
+    gs_cfg_node *node = gs_cfg_find(probe, params[k].key, err);
+    double x;
+    if (!node || gs_cfg_kind_of(node) != GS_CFG_SCALAR)
+      rc = node ? gs_error_set(err, GS_EINPUT, "key '%s' is not a single value", params[k].key)
+                : GS_EINPUT;
+    else if (gs_cfg_node_double(node, &x, err)) rc = gs_error_prefix(err, "key '%s': ", params[k].key);
+    else x0[k] = x > params[k].lo && x < params[k].hi ? x : gs_study_axis_value(&params[k], 0.5);
+  }
+  gs_cfg_free(probe);
+  if (rc) return rc;
+  /* output columns named by the data */
+  gs_design d0 = {.nkeys = 0, .nruns = 1};
+  gs_case c;
+  if ((rc = gs_study_case(base, &d0, 0, &c, err))) return rc;
+  gs_study_extras extra;
+  gs_study_extras_all(&c.model, &extra);
+  rc = gs_study_outputs_init(&fc->out, &c.model, extra.name, extra.n, err);
+  gs_case_free(&c);
+  if (rc) return rc;
+  fc->col = calloc(data->ncols, sizeof *fc->col);
+  double *scale = fc->scale = calloc(data->ncols, sizeof *scale);
+  if (!fc->col || !scale) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  for (size_t j = 0; j < data->ncols && !rc; j++) {
+    if ((rc = gs_study_outputs_find(&fc->out, data->names[j], "data column", &fc->col[j], err)))
+      break;
+    /* columns of different units weigh alike: each scaled by its RMS */
+    double s = 0;
+    for (size_t t = 0; t < data->ntimes; t++) s += pow(data->values[t * data->ncols + j], 2);
+    scale[j] = s > 0 ? sqrt(s / (double)data->ntimes) : 1;
+  }
+  if (rc) gs_fit_problem_free(fc);
+  return rc;
 }
 
 void gs_fit_result_free(gs_fit_result *r) {
@@ -251,65 +277,12 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
   if (n <= np)
     return gs_error_set(err, GS_EINPUT, "%zu measured values for %zu parameters: need more values",
                         n, np);
-  fit_ctx fc = {.base = base, .params = params, .np = np, .data = data};
-  /* the start: the case's own values where they lie inside the ranges */
-  gs_cfg *probe = gs_cfg_copy(base, err);
-  if (!probe) return err->code;
+  gs_fit_problem fc;
   double z0[64];
-  int rc = GS_OK;
-  for (size_t k = 0; k < np && !rc; k++) {
-    gs_cfg_node *node = gs_cfg_find(probe, params[k].key, err);
-    double x;
-    if (!node || gs_cfg_kind_of(node) != GS_CFG_SCALAR)
-      rc = node ? gs_error_set(err, GS_EINPUT, "key '%s' is not a single value", params[k].key)
-                : GS_EINPUT;
-    else if (gs_cfg_node_double(node, &x, err)) rc = gs_error_prefix(err, "key '%s': ", params[k].key);
-    else z0[k] = x > params[k].lo && x < params[k].hi ? to_z(&params[k], x) : 0;
-  }
-  gs_cfg_free(probe);
+  int rc = gs_fit_problem_init(&fc, base, params, np, data, z0, err);
   if (rc) return rc;
-  /* output columns named by the data */
-  gs_design d0 = {.nkeys = 0, .nruns = 1};
-  gs_case c;
-  if ((rc = gs_study_case(base, &d0, 0, &c, err))) return rc;
-  const char *extra[6 + 2 * 8] = {"M0", "M1", "M2", "d10", "d50", "d90"};
-  char names[16][80];
-  size_t nextra = 6;
-  for (int k = 0; k < c.model.nvol && k < 8; k++) {
-    snprintf(names[2 * k], sizeof names[0], "mean_%s", gs_model_vol_name(&c.model, k));
-    snprintf(names[2 * k + 1], sizeof names[0], "total_%s", gs_model_vol_name(&c.model, k));
-    extra[nextra++] = names[2 * k];
-    extra[nextra++] = names[2 * k + 1];
-  }
-  rc = gs_study_outputs_init(&fc.out, &c.model, extra, nextra, err);
-  gs_case_free(&c);
-  if (rc) return rc;
-  fc.col = calloc(data->ncols, sizeof *fc.col);
-  double *scale = calloc(data->ncols, sizeof *scale);
-  fc.scale = scale;
-  if (!fc.col || !scale) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-  for (size_t j = 0; j < data->ncols && !rc; j++) {
-    size_t i = 0;
-    char alias[300]; /* one compartment: d50 means d50_c1 */
-    snprintf(alias, sizeof alias, "%s_c1", data->names[j]);
-    while (i < fc.out.ncol && strcmp(fc.out.names[i], data->names[j]) &&
-           (fc.out.ncomp != 1 || strcmp(fc.out.names[i], alias)))
-      i++;
-    if (i == fc.out.ncol) {
-      char known[1024];
-      size_t at = 0;
-      for (size_t q = 0; q < fc.out.ncol && at < sizeof known; q++)
-        at += (size_t)snprintf(known + at, sizeof known - at, "%s%s", q ? ", " : "", fc.out.names[q]);
-      rc = gs_error_set(err, GS_EINPUT, "data column '%s' is no output of the case; known: %s",
-                        data->names[j], known);
-      break;
-    }
-    fc.col[j] = i;
-    /* columns of different units weigh alike: each scaled by its RMS */
-    double s = 0;
-    for (size_t t = 0; t < data->ntimes; t++) s += pow(data->values[t * data->ncols + j], 2);
-    scale[j] = s > 0 ? sqrt(s / (double)data->ntimes) : 1;
-  }
+  for (size_t k = 0; k < np; k++) z0[k] = gs_study_to_z(&params[k], z0[k]);
+  const double *scale = fc.scale;
 
   gsl_multifit_nlinear_workspace *w = NULL;
   gsl_vector *zv = gsl_vector_alloc(np);
@@ -346,7 +319,7 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
     res->corr = malloc(np * np * sizeof *res->corr);
     for (size_t k = 0; k < np; k++) {
       double dxdz;
-      res->x[k] = to_x(&params[k], gsl_vector_get(z, k), &dxdz);
+      res->x[k] = gs_study_to_x(&params[k], gsl_vector_get(z, k), &dxdz);
       /* the delta method: the covariance of z carried to x by dx/dz */
       res->stderr_x[k] = fabs(dxdz) * sqrt(s2 * gsl_matrix_get(covar, k, k));
       for (size_t q = 0; q < np; q++)
@@ -370,8 +343,6 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
   if (w) gsl_multifit_nlinear_free(w);
   gsl_vector_free(zv);
   gsl_matrix_free(covar);
-  free(fc.col);
-  free(scale);
-  gs_study_outputs_free(&fc.out);
+  gs_fit_problem_free(&fc);
   return rc;
 }

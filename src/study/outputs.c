@@ -1,6 +1,7 @@
 /* The outputs a study gathers from a run's final state, and the case of one
  * run (see gransim/study.h). */
 #include "gransim/study.h"
+#include "study/study_internal.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -152,4 +153,47 @@ void gs_study_outputs_free(gs_study_outputs *o) {
   free(o->index);
   free(o->comp);
   memset(o, 0, sizeof *o);
+}
+
+void gs_study_extras_all(const gs_model *m, gs_study_extras *x) {
+  x->n = 0;
+  for (size_t i = 0; i < sizeof fixed_names / sizeof *fixed_names; i++) x->name[x->n++] = fixed_names[i];
+  for (int k = 0; k < m->nvol && k < 8; k++) {
+    snprintf(x->buf[2 * k], sizeof x->buf[0], "mean_%s", gs_model_vol_name(m, k));
+    snprintf(x->buf[2 * k + 1], sizeof x->buf[0], "total_%s", gs_model_vol_name(m, k));
+    x->name[x->n++] = x->buf[2 * k];
+    x->name[x->n++] = x->buf[2 * k + 1];
+  }
+}
+
+int gs_study_outputs_find(const gs_study_outputs *o, const char *name, const char *what,
+                          size_t *col, gs_error *err) {
+  char alias[300]; /* one compartment: d50 means d50_c1 */
+  snprintf(alias, sizeof alias, "%s_c1", name);
+  for (size_t i = 0; i < o->ncol; i++)
+    if (!strcmp(o->names[i], name) || (o->ncomp == 1 && !strcmp(o->names[i], alias))) {
+      *col = i;
+      return GS_OK;
+    }
+  char known[1024];
+  size_t at = 0;
+  for (size_t q = 0; q < o->ncol && at < sizeof known; q++)
+    at += (size_t)snprintf(known + at, sizeof known - at, "%s%s", q ? ", " : "", o->names[q]);
+  return gs_error_set(err, GS_EINPUT, "%s '%s' is no output of the case; known: %s", what, name,
+                      known);
+}
+
+double gs_study_to_x(const gs_study_axis *a, double z, double *dxdz) {
+  double s = 1 / (1 + exp(-z));
+  double lo = a->log ? log(a->lo) : a->lo, hi = a->log ? log(a->hi) : a->hi;
+  double u = lo + (hi - lo) * s, du = (hi - lo) * s * (1 - s);
+  double x = a->log ? exp(u) : u;
+  if (dxdz) *dxdz = a->log ? x * du : du;
+  return x;
+}
+
+double gs_study_to_z(const gs_study_axis *a, double x) {
+  double lo = a->log ? log(a->lo) : a->lo, hi = a->log ? log(a->hi) : a->hi;
+  double s = ((a->log ? log(x) : x) - lo) / (hi - lo);
+  return log(s / (1 - s));
 }

@@ -1,0 +1,52 @@
+/* Helpers shared by the study layer's fit, optimisation and sensitivity
+ * (not part of the public API). */
+#ifndef GRANSIM_STUDY_INTERNAL_H
+#define GRANSIM_STUDY_INTERNAL_H
+
+#include "gransim/study.h"
+
+/* Every extra statistic a study may name (M0 M1 M2 d10 d50 d90, then
+ * mean_<coordinate> and total_<coordinate> per volume coordinate of m):
+ * names point into buf; returns how many (at most GS_STUDY_MAX_EXTRA). */
+#define GS_STUDY_MAX_EXTRA 22
+typedef struct {
+  const char *name[GS_STUDY_MAX_EXTRA];
+  char buf[16][80];
+  size_t n;
+} gs_study_extras;
+void gs_study_extras_all(const gs_model *m, gs_study_extras *x);
+
+/* The column of output o called name (a sweep column; with one compartment
+ * also without the _c1); GS_EINPUT naming the known columns otherwise.
+ * what says what the name is ("data column", "--outputs"). */
+int gs_study_outputs_find(const gs_study_outputs *o, const char *name, const char *what,
+                          size_t *col, gs_error *err);
+
+/* The logistic map from an unbounded z to (LO, HI) (in log for log ranges),
+ * so that every trial point of an unconstrained method is a valid case;
+ * *dxdz (if not NULL) its derivative.  gs_study_to_z is its inverse. */
+double gs_study_to_x(const gs_study_axis *a, double z, double *dxdz);
+double gs_study_to_z(const gs_study_axis *a, double x);
+
+/* Case outputs at measured times as residuals (model - data) / RMS of the
+ * data column: fit's least squares and optimise's objective. */
+typedef struct {
+  const gs_cfg *base;
+  const gs_study_axis *params;
+  size_t np;
+  const gs_fit_data *data;
+  double *scale; /* per data column */
+  size_t *col;   /* data column -> output column */
+  gs_study_outputs out;
+  long runs;
+  gs_error err; /* the first failed model evaluation */
+} gs_fit_problem;
+/* Checks the parameters' keys and the data's columns against the case;
+ * x0: the start, the case's own values where they lie inside the ranges,
+ * else the ranges' middles. */
+int gs_fit_problem_init(gs_fit_problem *fc, const gs_cfg *base, const gs_study_axis *params,
+                        size_t np, const gs_fit_data *data, double *x0, gs_error *err);
+/* r[ntimes * ncols] at parameter values x[np] (one run of the case). */
+int gs_fit_problem_residuals(gs_fit_problem *fc, const double *x, double *r, gs_error *err);
+void gs_fit_problem_free(gs_fit_problem *fc);
+#endif
