@@ -77,15 +77,23 @@ TL_FN int tl_case(const char *yaml, gs_case *c) {
   return rc;
 }
 
-/* Build a case and evaluate its rates at the initial state into *d (nstate)
- * and *dl (nledger), both malloc'ed; returns 0, or non-zero (counted as a
- * failed check, nothing to free) when the case does not build. */
-TL_FN int tl_rates_at_start(const char *yaml, gs_case *c, double **d, double **dl) {
-  if (tl_case(yaml, c)) return 1;
+/* Build a case from yaml (taken over and freed) and evaluate its rates at
+ * the initial state into *d (nstate) and *dl (nledger), both malloc'ed;
+ * returns 0 (free them with tl_rates_free), or non-zero (counted as a failed
+ * check, nothing to free) when the case does not build. */
+TL_FN int tl_rates_at_start(char *yaml, gs_case *c, double **d, double **dl) {
+  const int failed = tl_case(yaml, c);
+  free(yaml);
+  if (failed) return 1;
   *d = calloc(c->model.nstate, sizeof **d);
   *dl = calloc(c->model.nledger, sizeof **dl);
   gs_model_rhs(&c->model, &c->eval, 0, c->y0, *d, *dl);
   return 0;
+}
+TL_FN void tl_rates_free(gs_case *c, double *d, double *dl) {
+  free(d);
+  free(dl);
+  gs_case_free(c);
 }
 
 /* Run a built case; returns the final state (nstate + nledger, malloc'ed) or

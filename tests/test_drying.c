@@ -42,10 +42,7 @@ static void test_rates(void) {
                       "output: {end: 1}\n", dry_keys);
   gs_case c;
   double *d, *dl;
-  if (tl_rates_at_start(yaml, &c, &d, &dl)) {
-    free(yaml);
-    return;
-  }
+  if (tl_rates_at_start(yaml, &c, &d, &dl)) return;
   const gs_model *m = &c.model;
   const gs_grid *g = &m->grid;
   double want = 0, got = 0, dn = 0;
@@ -60,10 +57,7 @@ static void test_rates(void) {
   CHECK_REL(got, want, 1e-12);
   CHECK_REL(dl[1], want, 1e-12);
   CHECK(fabs(dn) < 1e-9);
-  free(d);
-  free(dl);
-  free(yaml);
-  gs_case_free(&c);
+  tl_rates_free(&c, d, dl);
 }
 
 static void test_water_balance(void) {

@@ -131,10 +131,7 @@ static void test_moisture_factor(void) {
                       "output: {end: 1}\n", gmax, alpha, xwc);
   gs_case c;
   double *d, *dl;
-  if (tl_rates_at_start(yaml, &c, &d, &dl)) {
-    free(yaml);
-    return;
-  }
+  if (tl_rates_at_start(yaml, &c, &d, &dl)) return;
   const gs_model *m = &c.model;
   const gs_grid *g = &m->grid;
   double got = 0, want = 0, dn = 0;
@@ -150,10 +147,7 @@ static void test_moisture_factor(void) {
   CHECK_REL(got, want, 1e-12);
   CHECK_REL(dl[0], want, 1e-12);
   CHECK(dn <= 0 && fabs(dn) < 1e-9 * tl_mom(&c, c.y0, 0, 0, 0, 0)); /* only what leaves at the top */
-  free(d);
-  free(dl);
-  free(yaml);
-  gs_case_free(&c);
+  tl_rates_free(&c, d, dl);
 }
 
 #define LGRID "grid: {axes: [{name: solid, type: linear, min: 0, max: 40, cells: 20}]}\noutput: {end: 1}\n"

@@ -66,10 +66,7 @@ static void test_lever(void) {
                       "output: {end: 1}\n", 3.3 * sn, 2.5 * vd, Q, D, R);
   gs_case c;
   double *d, *dl;
-  if (tl_rates_at_start(yaml, &c, &d, &dl)) {
-    free(yaml);
-    return;
-  }
+  if (tl_rates_at_start(yaml, &c, &d, &dl)) return;
   const gs_model *m = &c.model;
   const gs_grid *g = &m->grid;
   double n = 0, s = 0, l = 0;
@@ -87,10 +84,7 @@ static void test_lever(void) {
   CHECK_REL(n, rate, 1e-13);
   CHECK_REL(s, rate * sn, 1e-13);
   CHECK_REL(l, rate * vd, 1e-13);
-  free(d);
-  free(dl);
-  free(yaml);
-  gs_case_free(&c);
+  tl_rates_free(&c, d, dl);
 }
 
 static void test_fines(void) {

@@ -87,26 +87,30 @@ static int add_observers(gs_run *run, gs_error *err) {
   const gs_run_options *opt = run->opt;
   const int root = run->dist.rank == 0;
   const int show = root && (opt->progress >= 0 ? opt->progress : isatty(STDERR_FILENO));
-  struct {
+  const struct {
     int on;
-    const gs_observer_type *type;
-    int (*create)(gs_run *, void **, gs_error *);
+    const gs_builtin_observer *b;
   } builtin[] = {
-      {root, &gs_observe_checks, gs_observe_checks_create},
-      {root && opt->out_dir, &gs_observe_output, gs_observe_output_create},
-      {show, &gs_observe_progress, gs_observe_progress_create},
-      {opt->timings, &gs_observe_timings, gs_observe_timings_create},
+      {root, &gs_observe_checks},
+      {root && opt->out_dir, &gs_observe_output},
+      {show, &gs_observe_progress},
+      {opt->timings, &gs_observe_timings},
   };
   const size_t nb = sizeof builtin / sizeof builtin[0];
   run->obs = gs_calloc(nb + opt->nobservers, sizeof *run->obs, err);
   if (!run->obs) return GS_ENOMEM;
   for (size_t i = 0; i < nb; i++) {
     if (!builtin[i].on) continue;
-    gs_observer *o = &run->obs[run->nobs];
-    o->type = builtin[i].type;
-    int rc = builtin[i].create(run, &o->self, err);
-    if (rc) return rc;
-    run->nobs++;
+    const gs_builtin_observer *b = builtin[i].b;
+    gs_run **self = gs_calloc(1, b->size, err); /* its first member is the run */
+    if (!self) return GS_ENOMEM;
+    *self = run;
+    int rc = b->init ? b->init(self, err) : GS_OK;
+    if (rc) {
+      b->type->free(self);
+      return rc;
+    }
+    run->obs[run->nobs++] = (gs_observer){.type = b->type, .self = self};
   }
   run->nown = run->nobs;
   for (size_t i = 0; root && i < opt->nobservers; i++) run->obs[run->nobs++] = opt->observers[i];

@@ -138,25 +138,25 @@ static void checks_free(void *self) {
   free(k);
 }
 
-int gs_observe_checks_create(gs_run *run, void **self, gs_error *err) {
-  const gs_model *m = &run->c->model;
-  checks_t *k = gs_calloc(1, sizeof *k, err);
-  if (!k) return GS_ENOMEM;
-  k->run = run;
-  if (!(k->M1_0 = gs_calloc(m->grid.ncomp * (size_t)m->nvol, sizeof(double), err))) {
-    free(k);
-    return GS_ENOMEM;
-  }
+static int checks_init(void *self, gs_error *err) {
+  checks_t *k = self;
+  const gs_model *m = &k->run->c->model;
+  if (!(k->M1_0 = gs_calloc(m->grid.ncomp * (size_t)m->nvol, sizeof(double), err))) return GS_ENOMEM;
   /* the case's initial state, also when resuming: the ledger counts from it */
   for (size_t comp = 0; comp < m->grid.ncomp; comp++)
     for (int v = 0; v < m->nvol; v++)
-      k->M1_0[comp * (size_t)m->nvol + (size_t)v] = gs_model_held(m, run->c->y0, comp, v);
-  *self = k;
+      k->M1_0[comp * (size_t)m->nvol + (size_t)v] = gs_model_held(m, k->run->c->y0, comp, v);
   return GS_OK;
 }
 
-const gs_observer_type gs_observe_checks = {
+static const gs_observer_type checks_type = {
     .name = "checks",
     .output = checks_output,
     .free = checks_free,
+};
+
+const gs_builtin_observer gs_observe_checks = {
+    .type = &checks_type,
+    .size = sizeof(checks_t),
+    .init = checks_init,
 };

@@ -103,20 +103,23 @@ static void output_free(void *self) {
   free(o);
 }
 
-int gs_observe_output_create(gs_run *run, void **self, gs_error *err) {
-  output_t *o = gs_calloc(1, sizeof *o, err);
-  if (!o) return GS_ENOMEM;
-  o->run = run;
-  o->resumed_t = NAN;
-  *self = o;
+static int output_init(void *self, gs_error *err) {
+  (void)err;
+  ((output_t *)self)->resumed_t = NAN;
   return GS_OK;
 }
 
-const gs_observer_type gs_observe_output = {
+static const gs_observer_type output_type = {
     .name = "output",
     .start = output_start,
     .output = output_output,
     .idle = output_idle,
     .finish = output_finish,
     .free = output_free,
+};
+
+const gs_builtin_observer gs_observe_output = {
+    .type = &output_type,
+    .size = sizeof(output_t),
+    .init = output_init,
 };

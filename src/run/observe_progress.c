@@ -7,7 +7,7 @@
 
 typedef struct {
   gs_run *run;
-  int first; /* the start time: nothing done yet */
+  int started; /* the start time is behind: something done */
 } progress_t;
 
 static int progress_output(void *self, const gs_run_view *view, double t, const double *Y,
@@ -16,8 +16,8 @@ static int progress_output(void *self, const gs_run_view *view, double t, const 
   (void)stop;
   (void)err;
   progress_t *p = self;
-  if (p->first) {
-    p->first = 0;
+  if (!p->started) {
+    p->started = 1;
     return GS_OK;
   }
   gs_integrator_stats st;
@@ -40,18 +40,11 @@ static int progress_finish(void *self, const gs_run_view *view, int ok, gs_error
   return GS_OK;
 }
 
-int gs_observe_progress_create(gs_run *run, void **self, gs_error *err) {
-  progress_t *p = gs_calloc(1, sizeof *p, err);
-  if (!p) return GS_ENOMEM;
-  p->run = run;
-  p->first = 1;
-  *self = p;
-  return GS_OK;
-}
-
-const gs_observer_type gs_observe_progress = {
+static const gs_observer_type progress_type = {
     .name = "progress",
     .output = progress_output,
     .finish = progress_finish,
     .free = free,
 };
+
+const gs_builtin_observer gs_observe_progress = {.type = &progress_type, .size = sizeof(progress_t)};

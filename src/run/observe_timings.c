@@ -41,7 +41,6 @@ static void print_phases(const gs_dist *d, const double *mine) {
 typedef struct {
   gs_run *run;
   long faults_start;
-  double finish_start; /* set by the driver when the run's observers start finishing */
 } timings_t;
 
 static int timings_start(void *self, const gs_run_view *view, double *t, double *Y,
@@ -69,17 +68,11 @@ static int timings_finish(void *self, const gs_run_view *view, int ok, gs_error 
   return GS_OK;
 }
 
-int gs_observe_timings_create(gs_run *run, void **self, gs_error *err) {
-  timings_t *k = gs_calloc(1, sizeof *k, err);
-  if (!k) return GS_ENOMEM;
-  k->run = run;
-  *self = k;
-  return GS_OK;
-}
-
-const gs_observer_type gs_observe_timings = {
+static const gs_observer_type timings_type = {
     .name = "timings",
     .start = timings_start,
     .finish = timings_finish,
     .free = free,
 };
+
+const gs_builtin_observer gs_observe_timings = {.type = &timings_type, .size = sizeof(timings_t)};

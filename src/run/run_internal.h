@@ -72,11 +72,15 @@ double gs_run_now(void);
 int gs_run_agree(gs_dist *d, int rc, gs_error *err);
 
 /* The built-in observers. */
-extern const gs_observer_type gs_observe_checks, gs_observe_output, gs_observe_progress,
+/* The built-in observers: the driver allocates each one's state (zeroed,
+ * `size` bytes, whose first member is `gs_run *run`, set before `init`). */
+typedef struct gs_builtin_observer {
+  const gs_observer_type *type;
+  size_t size;
+  /* Optional: the rest of the state; on failure the type's free is called. */
+  int (*init)(void *self, gs_error *err);
+} gs_builtin_observer;
+extern const gs_builtin_observer gs_observe_checks, gs_observe_output, gs_observe_progress,
     gs_observe_timings;
-int gs_observe_checks_create(gs_run *run, void **self, gs_error *err);
-int gs_observe_output_create(gs_run *run, void **self, gs_error *err);
-int gs_observe_progress_create(gs_run *run, void **self, gs_error *err);
-int gs_observe_timings_create(gs_run *run, void **self, gs_error *err);
 
 #endif
