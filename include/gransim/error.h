@@ -33,6 +33,18 @@ int gs_error_set(gs_error *err, int code, const char *fmt, ...)
 /* Prefix an existing message with context ("while reading X: ..."); returns err->code. */
 int gs_error_prefix(gs_error *err, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
+/* GSL reports errors through one process-wide handler whose default aborts.
+ * libgransim replaces it when loaded (a constructor in src/core/error.c) by
+ * one that records the error of the calling thread and returns, so every GSL
+ * call's status is the caller's to turn into a gransim error with the key or
+ * file it concerns.  gs_gsl_reason gives the last recorded reason ("" if
+ * none since gs_gsl_clear); gs_gsl_error sets *err to "what: GSL: reason". */
+void gs_gsl_clear(void);
+const char *gs_gsl_reason(void);
+int gs_gsl_error(gs_error *err, int code, const char *what);
+/* Install the handler again (after a caller replaced it). */
+void gs_gsl_install(void);
+
 /* malloc/calloc that set GS_ENOMEM in *err on failure (return NULL). */
 void *gs_malloc(size_t nbytes, gs_error *err);
 void *gs_calloc(size_t count, size_t size, gs_error *err);

@@ -1,6 +1,7 @@
 /* Error reporting helpers: see include/gransim/error.h. */
 #include "gransim/error.h"
 
+#include <gsl/gsl_errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -54,3 +55,24 @@ void *gs_calloc(size_t count, size_t size, gs_error *err) {
   if (!p) gs_error_set(err, GS_ENOMEM, "out of memory allocating %zu x %zu bytes", count, size);
   return p;
 }
+
+/* The last GSL error of this thread (threads evaluate rates at once). */
+static _Thread_local char gsl_reason[256];
+
+static void gsl_record(const char *reason, const char *file, int line, int gsl_errno) {
+  snprintf(gsl_reason, sizeof gsl_reason, "%s (%s, in GSL's %s:%d)", reason ? reason : "error",
+           gsl_strerror(gsl_errno), file ? file : "?", line);
+}
+
+void gs_gsl_clear(void) { gsl_reason[0] = '\0'; }
+const char *gs_gsl_reason(void) { return gsl_reason; }
+
+int gs_gsl_error(gs_error *err, int code, const char *what) {
+  return gs_error_set(err, code, "%s: GSL: %s", what, gsl_reason[0] ? gsl_reason : "unknown error");
+}
+
+void gs_gsl_install(void) { gsl_set_error_handler(gsl_record); }
+
+/* Once, when the library is loaded: in a file every part of it links, so
+ * no program using libgransim can reach GSL's aborting default. */
+__attribute__((constructor)) static void gs_gsl_at_load(void) { gs_gsl_install(); }

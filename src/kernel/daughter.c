@@ -5,6 +5,7 @@
  *   power:   b = nu (q+1) z^q, nu = (q+2)/(q+1)   (q = exponent > -1; q = 0 is uniform)
  *   beta:    b = nu Beta(z; a, (nu-1) a)           nu fragments (>= 2 on average), shape a
  * count_below / mass_below are the closed-form partial integrals. */
+#include <gsl/gsl_errno.h>
 #include <gsl/gsl_sf_gamma.h>
 #include <math.h>
 #include <stdlib.h>
@@ -73,17 +74,26 @@ static int beta_create(gs_cfg_node *node, void **self, gs_error *err) {
   if (!rc) rc = gs_cfg_double_range(node, "shape", 0, 1, 0, 1, HUGE_VAL, 0, &d->q, err);
   return dau_make(node, d, rc, self, err);
 }
+/* The regularised incomplete beta I_z(a, b).  With a large shape it lies
+ * below the smallest double far into the tails, where GSL reports an
+ * underflow with the value 0: that 0 is exact to round-off (the fractions
+ * it is compared with sum to 1).  Any other failure gives NaN, which the
+ * breakage tables refuse naming the daughters key and GSL's reason. */
+static double beta_inc(double a, double b, double z) {
+  gsl_sf_result r;
+  int st = gsl_sf_beta_inc_e(a, b, z, &r);
+  if (st == GSL_EUNDRFLW) return 0.0;
+  return st == GSL_SUCCESS ? r.val : NAN;
+}
 /* Symmetric Beta(a, (nu-1)a) has mean 1/nu, so nu * E[z] = 1 conserves mass;
  * int_0^z z' b = I_z(a+1, (nu-1)a). */
 static double beta_count(const void *s, double z) {
   const dau_t *d = s;
-  z = clamp01(z);
-  return d->nu * gsl_sf_beta_inc(d->q, (d->nu - 1) * d->q, z);
+  return d->nu * beta_inc(d->q, (d->nu - 1) * d->q, clamp01(z));
 }
 static double beta_mass(const void *s, double z) {
   const dau_t *d = s;
-  z = clamp01(z);
-  return gsl_sf_beta_inc(d->q + 1, (d->nu - 1) * d->q, z);
+  return beta_inc(d->q + 1, (d->nu - 1) * d->q, clamp01(z));
 }
 
 static const gs_daughter_type uniform_t = {

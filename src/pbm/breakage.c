@@ -124,8 +124,8 @@ static int add_packet(brk_t *B, size_t *cap, size_t *n, packet_t p, gs_error *er
 }
 
 /* Packets of parent k: CA stores (cell, count, volume); FP stores node coefficients. */
-static int parent_packets(brk_t *B, const gs_grid *g, size_t k, double *z, double *fp_row,
-                          size_t *cap, size_t *n, gs_error *err) {
+static int parent_packets(brk_t *B, const gs_grid *g, size_t k, const gs_cfg_node *dn, double *z,
+                          double *fp_row, size_t *cap, size_t *n, gs_error *err) {
   const int dim = g->dim;
   const double *X = g->x + k * (size_t)dim;
   size_t nz = breakpoints(B, g, k, z);
@@ -134,6 +134,11 @@ static int parent_packets(brk_t *B, const gs_grid *g, size_t k, double *z, doubl
   for (size_t i = 0; i + 1 < nz; i++) {
     double cnt = dt->count_below(B->dau.self, z[i + 1]) - dt->count_below(B->dau.self, z[i]);
     double mass = dt->mass_below(B->dau.self, z[i + 1]) - dt->mass_below(B->dau.self, z[i]);
+    if (!isfinite(cnt) || !isfinite(mass))
+      return gs_cfg_fail(dn, err,
+                         "daughter distribution '%s' cannot be evaluated between fractions %.9g and "
+                         "%.9g of cell %zu's volume: GSL: %s",
+                         dt->name, z[i], z[i + 1], k, *gs_gsl_reason() ? gs_gsl_reason() : "not finite");
     if (!(cnt > 0)) continue;
     double zbar = mass / cnt, v[GS_MAX_DIM];
     for (int d = 0; d < dim; d++) v[d] = zbar * X[d];
@@ -151,7 +156,8 @@ static int parent_packets(brk_t *B, const gs_grid *g, size_t k, double *z, doubl
   return GS_OK;
 }
 
-static int build_packets(brk_t *B, const gs_grid *g, gs_error *err) {
+/* dn: the daughters key, named if the distribution cannot be evaluated. */
+static int build_packets(brk_t *B, const gs_grid *g, const gs_cfg_node *dn, gs_error *err) {
   size_t zcap = 8;
   for (int d = 0; d < g->dim; d++) zcap += 2 * (g->axis[d].n + 1);
   double *z = gs_malloc(zcap * sizeof(double), err);
@@ -160,9 +166,10 @@ static int build_packets(brk_t *B, const gs_grid *g, gs_error *err) {
   B->excess = gs_calloc(g->ncells * (size_t)g->dim, sizeof(double), err);
   int rc = (!z || !fp_row || !B->first || !B->excess) ? GS_ENOMEM : GS_OK;
   size_t cap = 0, n = 0;
+  gs_gsl_clear();
   for (size_t k = 0; !rc && k < g->ncells; k++) {
     B->first[k] = n;
-    if (B->rate[k] > 0) rc = parent_packets(B, g, k, z, fp_row, &cap, &n, err);
+    if (B->rate[k] > 0) rc = parent_packets(B, g, k, dn, z, fp_row, &cap, &n, err);
   }
   if (!rc) B->first[g->ncells] = n;
   free(z);
@@ -206,7 +213,7 @@ static int brk_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
       rc = gs_cfg_fail(sn, err, "selection function gives %g at cell %zu (expected a finite rate >= 0)",
                        B->rate[k], k);
   }
-  if (!rc) rc = build_packets(B, g, err);
+  if (!rc) rc = build_packets(B, g, dn, err);
   if (rc) {
     brk_free(B);
     return rc;
