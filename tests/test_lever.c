@@ -9,6 +9,8 @@
  * Every other trial starts from destinations of -0.0 (with guard cells after
  * them): an extra write, even of +0.0 to a node that does not exist or has
  * no share, turns -0.0 into +0.0 and shows in the byte comparison. */
+#include <float.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -111,8 +113,37 @@ static void check_grid(const char *name, gs_grid *g, tl_rng *r) {
   free(z);
 }
 
+/* Where a computed value on a cell edge goes (gs_axis_locate_snapped): to
+ * the cell above whether round-off left it a few ulps below or above the
+ * edge; the last edge (and a few ulps past it) to the last cell; further
+ * out nowhere; values clearly inside a cell to that cell. */
+static void check_snapped(void) {
+  gs_axis ax;
+  gs_error err;
+  CHECK(!gs_axis_linear(&ax, "v", 0, 1, 320, &err));
+  for (size_t k = 1; k < ax.n; k++) {
+    double e = ax.edges[k];
+    CHECK(gs_axis_locate_snapped(&ax, e) == k);
+    CHECK(gs_axis_locate_snapped(&ax, nextafter(nextafter(e, 0), 0)) == k);
+    CHECK(gs_axis_locate_snapped(&ax, e * (1 + 8 * DBL_EPSILON)) == k);
+    CHECK(gs_axis_locate_snapped(&ax, e * (1 - 8 * DBL_EPSILON)) == k);
+    CHECK(gs_axis_locate_snapped(&ax, e * (1 - 1e-9)) == k - 1); /* inside the cell below */
+    CHECK(gs_axis_locate_snapped(&ax, ax.pivots[k]) == k);
+    /* every sum of midpoint pivots lies on an edge: the cell above it */
+    CHECK(gs_axis_locate_snapped(&ax, ax.pivots[k - 1] + ax.pivots[0]) == k);
+  }
+  CHECK(gs_axis_locate_snapped(&ax, 1) == ax.n - 1);
+  CHECK(gs_axis_locate_snapped(&ax, nextafter(1, 2)) == ax.n - 1);
+  CHECK(gs_axis_locate_snapped(&ax, 1 + 1e-9) == GS_NOWHERE);
+  CHECK(gs_axis_locate_snapped(&ax, 0) == 0);
+  CHECK(gs_axis_locate_snapped(&ax, -1e-9) == GS_NOWHERE);
+  CHECK(gs_axis_locate_snapped(&ax, NAN) == GS_NOWHERE);
+  gs_axis_free(&ax);
+}
+
 int main(void) {
   tl_rng r = {20261124};
+  check_snapped();
   gs_error err;
   /* the CoriMix grid: 16 x 16 geometric bins of ratio 3 */
   gs_axis ax[2];

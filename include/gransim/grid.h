@@ -48,6 +48,15 @@ void gs_axis_free(gs_axis *ax);
  * upper edge), or GS_NOWHERE if v is outside [edge[0], edge[n]]. */
 size_t gs_axis_locate(const gs_axis *ax, double v);
 
+/* The cell of a computed value v that stands for an exact one (a sum of
+ * pivots, a fragment's mean): a v within a few ulps of an edge (16 machine
+ * epsilons relative, at most a quarter of the adjacent cells) counts as on
+ * that edge, and an edge belongs to the cell above it, the last edge to the
+ * last cell.  So the order of floating-point operations that gave v never
+ * decides its cell (docs/models.md, "Sums on cell edges").  GS_NOWHERE if v
+ * lies further outside [edge[0], edge[n]]. */
+size_t gs_axis_locate_snapped(const gs_axis *ax, double v);
+
 /* Lever rule around the pivots: for v in [pivot[0], pivot[n-1]] finds lo with
  * pivot[lo] <= v <= pivot[lo+1] and the fraction w of the pair that goes to
  * lo+1 (so lo*(1-w) + (lo+1)*w reproduces v).  If v sits exactly on the last

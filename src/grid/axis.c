@@ -1,4 +1,5 @@
 /* One internal-coordinate axis: edges, pivots, location and lever rule. */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -109,6 +110,27 @@ size_t gs_axis_locate(const gs_axis *ax, double v) {
   if (!(v >= ax->edges[0]) || v > ax->edges[ax->n]) return GS_NOWHERE;
   size_t i = bisect(ax->edges, ax->n + 1, v);
   return i >= ax->n ? ax->n - 1 : i;
+}
+
+/* Round-off of an edge (a few operations on the case's numbers) and of a sum
+ * of two pivots (each a few more) stays well inside 16 epsilons. */
+#define SNAP_EPS (16 * DBL_EPSILON)
+
+size_t gs_axis_locate_snapped(const gs_axis *ax, double v) {
+  const double *e = ax->edges;
+  const size_t n = ax->n;
+  size_t k; /* the edge nearest to v */
+  if (!(v >= e[0])) k = 0;
+  else if (v > e[n]) k = n;
+  else {
+    size_t i = bisect(e, n + 1, v);
+    k = i < n && e[i + 1] - v < v - e[i] ? i + 1 : i;
+  }
+  double tol = SNAP_EPS * fmax(fabs(v), fabs(e[k]));
+  if (k > 0) tol = fmin(tol, 0.25 * (e[k] - e[k - 1]));
+  if (k < n) tol = fmin(tol, 0.25 * (e[k + 1] - e[k]));
+  if (fabs(v - e[k]) <= tol) return k < n ? k : n - 1;
+  return gs_axis_locate(ax, v);
 }
 
 int gs_axis_lever(const gs_axis *ax, double v, size_t *lo, double *w) {

@@ -141,7 +141,7 @@ static int build_axis_maps(agg_t *A, const gs_grid *g, gs_error *err) {
     for (size_t i = 0; i < n; i++)
       for (size_t j = 0; j < n; j++) {
         double s = ax->pivots[i] + ax->pivots[j];
-        size_t t = gs_axis_locate(ax, s);
+        size_t t = gs_axis_locate_snapped(ax, s);
         A->target[q][i * n + j] = t == GS_NOWHERE ? A->big : t * A->stride[q];
         size_t lo;
         double w;

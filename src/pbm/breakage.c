@@ -106,7 +106,7 @@ static size_t breakpoints(const brk_t *B, const gs_grid *g, size_t k, double *z)
 static size_t containing_cell(const gs_grid *g, const double *v) {
   size_t idx[GS_MAX_DIM];
   for (int d = 0; d < g->dim; d++) {
-    size_t i = gs_axis_locate(&g->axis[d], v[d]);
+    size_t i = gs_axis_locate_snapped(&g->axis[d], v[d]);
     idx[d] = i != GS_NOWHERE ? i : (v[d] < g->axis[d].edges[0] ? 0 : g->axis[d].n - 1);
   }
   return gs_grid_index(g, idx);
