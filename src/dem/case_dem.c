@@ -437,6 +437,7 @@ static int load(gs_dem_case *c, gs_error *err) {
         !(rc = gs_cfg_double_range(out, "vtk_every", 0, 0, 0, 0, HUGE_VAL, 0, &c->vtk_every, err)))
       rc = gs_cfg_check_unused(out, err);
   }
+  if (!rc) rc = gs_dem_wet_read(c, root, rmin_all, err);
   if (!rc) rc = gs_cfg_check_unused(root, err);
   /* the time step against the Rayleigh time of the smallest particle */
   if (!rc) {
@@ -487,7 +488,17 @@ void gs_dem_case_free(gs_dem_case *c) {
   free(c->feed);
   free(c->outlets);
   free(c->cmp_edges);
+  gs_dem_wet_free(c);
   gs_dem_free(c->dem);
   gs_cfg_free(c->cfg);
   free(c);
+}
+
+int gs_dem_case_vec3(gs_cfg_node *map, const char *key, int required, const double *def, double out[3],
+                     gs_error *err) {
+  return vec3(map, key, required, def, out, err);
+}
+
+int gs_dem_case_unit_vec(gs_cfg_node *map, const char *key, double out[3], gs_error *err) {
+  return unit_vec(map, key, out, err);
 }

@@ -76,7 +76,22 @@ struct gs_dem_case_s {
   double steady_tol;
   /* output */
   double out_every, vtk_every;
+  /* spray and granulation (src/dem/dem_wet.h); NULL when the case has neither */
+  struct gs_dem_wet *wet;
 };
+
+/* case_wet.c, wet_run.c: the `spray:` and `granulation:` sections, and the
+ * run driver's calls (a case without them just runs the DEM). */
+int gs_dem_wet_read(gs_dem_case *c, gs_cfg_node *root, double rmin, gs_error *err);
+int gs_dem_wet_start(gs_dem_case *c, const char *dir, gs_error *err);
+int gs_dem_wet_advance(gs_dem_case *c, long nsteps, gs_error *err);
+int gs_dem_wet_output(gs_dem_case *c, gs_error *err);
+int gs_dem_wet_finish(gs_dem_case *c, gs_error *err);
+void gs_dem_wet_free(gs_dem_case *c);
+/* case_dem.c's readers of a 3-vector and of a direction (normalised). */
+int gs_dem_case_vec3(gs_cfg_node *map, const char *key, int required, const double *def, double out[3],
+                     gs_error *err);
+int gs_dem_case_unit_vec(gs_cfg_node *map, const char *key, double out[3], gs_error *err);
 
 /* Insert into the case's simulation with inserter in's region, velocity and
  * class fractions (run_dem.c; the LIGGGHTS engine builds its initial bed with

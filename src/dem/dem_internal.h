@@ -16,10 +16,13 @@
 #define GS_DEM_MAX_WALLS 32
 #define GS_DEM_IMPACT_BINS 40
 
-/* Per-particle arrays; the list drives allocation, permutation and removal. */
+/* Per-particle arrays; the list drives allocation, permutation and removal.
+ * vs and vl are the solid and liquid volumes [m^3] (vl grows as a particle
+ * absorbs spray droplets, src/dem/spray.c; both add up when particles
+ * aggregate, src/dem/granulation.c). */
 #define GS_DEM_DOUBLE_FIELDS(X) \
   X(x) X(y) X(z) X(vx) X(vy) X(vz) X(wx) X(wy) X(wz) X(fx) X(fy) X(fz) X(tx) X(ty) X(tz) \
-  X(r) X(m) X(invm) X(invI) X(x0) X(y0) X(z0) X(t_in)
+  X(r) X(m) X(invm) X(invI) X(x0) X(y0) X(z0) X(t_in) X(vs) X(vl)
 
 typedef struct {
   size_t n, cap;
@@ -140,6 +143,11 @@ struct gs_dem {
   int *rm_cls;
   double *rm_rt, *rm_m;
   size_t nrm, rm_cap, rm_taken;
+  /* collision onsets recorded one by one for the granulation (pair_log.c);
+   * NULL unless gs_dem_pair_log_enable was called */
+  struct gs_dem_pair_log *plog;
+  /* solid and liquid volume of the particles removed (outlets, box) */
+  double vs_removed, vl_removed;
   /* removal predicate */
   int (*remove_pred)(const double x[3], void *ctx);
   void *remove_ctx;
@@ -163,6 +171,24 @@ int gs_dem_prepare(gs_dem *d, gs_error *err);
 /* neighbour.c */
 int gs_dem_rebuild(gs_dem *d, gs_error *err);
 int gs_dem_needs_rebuild(const gs_dem *d);
+
+/* pair_log.c: a collision onset (particle ids ida < idb, normal approach
+ * speed vn >= 0 [m/s]); records of one force evaluation are put in id order
+ * so the log does not depend on the number of threads */
+typedef struct {
+  long ida, idb;
+  double vn;
+} gs_dem_pair_rec;
+typedef struct gs_dem_pair_log {
+  gs_dem_pair_rec *r;
+  size_t n, cap;
+  int oom;
+} gs_dem_pair_log;
+int gs_dem_pair_log_enable(gs_dem *d, gs_error *err);
+void gs_dem_pair_log_push(gs_dem_pair_log *b, long ida, long idb, double vn);
+/* Append the per-thread buffers of one force evaluation to d->plog. */
+void gs_dem_pair_log_merge(gs_dem *d, gs_dem_pair_log *bufs, int nt);
+void gs_dem_pair_log_free(gs_dem *d);
 
 /* pair_forces.c, wall_forces.c */
 void gs_dem_pair_forces(gs_dem *d);

@@ -102,6 +102,11 @@ int gs_dem_rebuild(gs_dem *d, gs_error *err) {
       dead = 1;
       if (s < nold && record_removed(d, src, k)) return gs_error_set(err, GS_ENOMEM, "out of memory");
     }
+    if (dead && !src->dead[k]) {
+      /* leaving the simulation (aggregated-away particles hold nothing) */
+      d->vs_removed += src->vs[k];
+      d->vl_removed += src->vl[k];
+    }
     ndead += dead;
     d->cellof[s] = dead ? -1
                         : (cell_coord(d, xs[2], 2) * d->cdim[1] + cell_coord(d, xs[1], 1)) * d->cdim[0] +

@@ -6,6 +6,7 @@
  * directly, so one thread costs nothing extra).  Collision events are counted
  * where a contact begins (its touch flag goes 0 -> 1) into per-thread class
  * matrices, so a contact is counted once however many steps it lasts. */
+#include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,6 +37,9 @@ void gs_dem_pair_forces(gs_dem *d) {
   const size_t ntypes = d->ntypes;
   const double dt = d->prm.dt;
   uint64_t *ev_all = calloc((size_t)nt * ncl * ncl, sizeof(uint64_t));
+  /* per-thread logs of collision onsets, when the granulation asks for them */
+  gs_dem_pair_log *plog = d->plog ? calloc((size_t)nt, sizeof *plog) : NULL;
+  if (d->plog && !plog) d->oom = 1;
 
 #pragma omp parallel num_threads(nt)
   {
@@ -75,7 +79,8 @@ void gs_dem_pair_forces(gs_dem *d) {
           continue;
         }
         const int tj = type[j];
-        if (!touch[k]) {
+        const int onset = !touch[k];
+        if (onset) {
           touch[k] = 1;
           if (ev) {
             int ci = d->types[ti].cls, cj = d->types[tj].cls;
@@ -93,6 +98,7 @@ void gs_dem_pair_forces(gs_dem *d) {
         const double ci = ri - 0.5 * delta, cj = rj - 0.5 * delta;
         const double vrx = vx[i] - vx[j], vry = vy[i] - vy[j], vrz = vz[i] - vz[j];
         const double vn = vrx * nrm[0] + vry * nrm[1] + vrz * nrm[2];
+        if (onset && plog) gs_dem_pair_log_push(&plog[tid], p->id[i], p->id[j], fabs(vn));
         /* (ci wi + cj wj) x n: rotation's share of the contact-point velocity */
         const double ax = ci * wx[i] + cj * wx[j], ay = ci * wy[i] + cj * wy[j],
                      az = ci * wz[i] + cj * wz[j];
@@ -148,6 +154,10 @@ void gs_dem_pair_forces(gs_dem *d) {
         }
       }
     }
+  }
+  if (plog) {
+    gs_dem_pair_log_merge(d, plog, nt);
+    free(plog);
   }
   if (ev_all) {
     for (int t = 0; t < nt; t++)

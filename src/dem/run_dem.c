@@ -113,6 +113,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   double psteps = 0;
   long prev_out_step = 0;
   if (!rc) rc = gs_dem_run(d, 0, err); /* place the fill so that t = 0 is reported */
+  if (!rc) rc = gs_dem_wet_start(c, dir, err);
   if (!rc) gs_dem_stats_reset(&st, c, 0);
   while (!rc && step <= nsteps) {
     /* events at this step */
@@ -191,6 +192,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       for (size_t w = 0; w < k.nwalls; w++) fprintf(ts, ",%.9g", gs_dem_wall_axial_torque(d, w));
       fprintf(ts, ",%llu,%d,%.6f\n", (unsigned long long)k.lost, steady, wall_seconds() - t0wall);
       prev_out_step = step;
+      if (!rc) rc = gs_dem_wet_output(c, err);
       if (progress) {
         double el = wall_seconds() - t0wall;
         fprintf(stderr, "gransim dem: t = %.5f / %.5f s, %zu particles, %zu contacts, %.3g particle-steps/s\n",
@@ -206,7 +208,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       }
       frame++;
     }
-    if (step == nsteps) break;
+    if (rc || step == nsteps) break; /* a failed event above stops the run here */
     /* advance to the next event */
     long next = nsteps;
     long cand[4] = {(step / out_k + 1) * out_k, (step / smp_k + 1) * smp_k,
@@ -222,7 +224,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       gs_dem_get_view(d, &v);
       psteps += (double)v.n * (double)(next - step);
     }
-    rc = gs_dem_run(d, next - step, err);
+    rc = gs_dem_wet_advance(c, next - step, err);
     step = next;
   }
   if (!rc && progress) {
@@ -234,6 +236,11 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
             t_steady >= 0 ? "" : "; steady state not reached");
   }
   if (ts) fclose(ts);
+  {
+    gs_error werr = {0};
+    int wrc = gs_dem_wet_finish(c, rc ? &werr : err);
+    if (!rc) rc = wrc;
+  }
   if (!rc && !gs_dem_stats_have_window(&st, c, gs_dem_time(d), t_steady)) {
     if (c->start_steady)
       fprintf(stderr, "gransim: warning: %s: statistics.start is 'steady' but the steady state was not reached "

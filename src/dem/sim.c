@@ -79,6 +79,7 @@ void gs_dem_free(gs_dem *d) {
   free(d->rm_cls);
   free(d->rm_rt);
   free(d->rm_m);
+  gs_dem_pair_log_free(d);
   free(d);
 }
 
@@ -205,6 +206,8 @@ long gs_dem_add_particle(gs_dem *d, int type, double radius, const double x[3], 
   p->invI[i] = 1.0 / (0.4 * mass * radius * radius);
   p->x0[i] = x[0], p->y0[i] = x[1], p->z0[i] = x[2];
   p->t_in[i] = d->t;
+  p->vs[i] = 4.0 / 3.0 * M_PI * radius * radius * radius;
+  p->vl[i] = 0;
   p->type[i] = type;
   p->id[i] = d->next_id;
   p->dead[i] = 0;
