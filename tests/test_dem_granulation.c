@@ -162,7 +162,8 @@ static void update_statistics(void) {
   CHECK(a1 == a2 && wet1 == a1 && wet2 == a2);
   /* C_ab of the (1,0)-(1,0) dry pairs and (1,1)-(1,1) wet pairs: N / (F^2 dt) */
   char *t = dt_slurp("update", "granulation_collisions.csv");
-  const double F = N, C = (N / 2) / (F * F * 1e-4);
+  /* same-class pairs: C_aa = 2 N_aa / (F_a^2 dt), the PBM pair loop's convention */
+  const double F = N, C = 2.0 * (N / 2) / (F * F * 1e-4);
   char want[2][200];
   snprintf(want[0], sizeof want[0], ",1,0,1,0,%d,%d,0.0001,%d,0,", N, N, N / 2);
   snprintf(want[1], sizeof want[1], ",1,1,1,1,%d,%d,0.0001,%d,%ld,", N, N, N / 2, a1);
@@ -171,6 +172,17 @@ static void update_statistics(void) {
     if (!r) fprintf(stderr, "granulation_collisions.csv lacks '%s':\n%s", want[q], t);
     CHECK(r != NULL);
     if (r) CHECK_REL(strtod(r + strlen(want[q]), NULL), C, 1e-8);
+  }
+  free(t);
+  /* the run's kernel table between solid classes: all 2N particles in class 1 */
+  t = dt_slurp("update", "granulation_kernel.csv");
+  const char *row = strstr(t, "\nedges, ");
+  CHECK(row != NULL);
+  if (row) {
+    row = strchr(row + 1, '\n') + 1;
+    char *end;
+    CHECK_REL(strtod(row, &end), 2.0 * N / (4.0 * F * F * 1e-4), 1e-8);
+    for (int q = 0; q < 3; q++) CHECK(strtod(end + 1, &end) == 0);
   }
   free(t);
 }

@@ -104,6 +104,9 @@ typedef struct {
   uint8_t *used;            /* aggregated in this update */
   size_t idx_cap, cls_cap;
   double *ncoll, *nagg;     /* per class pair */
+  double *kn, *kexp;        /* per pair of solid classes, over the run: collisions
+                               and the exposure, the sum of F_a F_b dt over the updates */
+  char path_kernel[4200];
 } gs_dem_granulation;
 
 /* Class (0 .. ns*nl-1) of a particle of solid volume vs and liquid vl:

@@ -71,8 +71,11 @@ int gs_dem_granulation_start(gs_dem_granulation *g, gs_dem *d, const char *dir, 
   const size_t nc = (size_t)g->ns * g->nl;
   g->ncoll = calloc(nc * nc, sizeof(double));
   g->nagg = calloc(nc * nc, sizeof(double));
+  g->kn = calloc((size_t)g->ns * g->ns, sizeof(double));
+  g->kexp = calloc((size_t)g->ns * g->ns, sizeof(double));
   g->rng = gsl_rng_alloc(gsl_rng_mt19937);
-  if (!g->ncoll || !g->nagg || !g->rng) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  if (!g->ncoll || !g->nagg || !g->kn || !g->kexp || !g->rng) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  snprintf(g->path_kernel, sizeof g->path_kernel, "%s/granulation_kernel.csv", dir);
   gsl_rng_set(g->rng, (unsigned long)(seed ^ 0x9e3779b9ULL));
   int rc = gs_dem_pair_log_enable(d, err);
   if (rc) return rc;
@@ -134,6 +137,36 @@ static int write_state(gs_dem_granulation *g, const gs_dem *d, uint64_t nwet, ui
   return GS_OK;
 }
 
+/* The run's collision frequencies between solid classes as a `table`
+ * kernel file (the writer of gransim dem-reduce), rewritten at every update:
+ * C_ab = N_ab / sum(F_a F_b dt) and C_aa = 2 N_aa / sum(F_a^2 dt), the
+ * convention of the PBM's pair loop (docs/models.md, "Collision
+ * frequencies"). */
+static int write_kernel(const gs_dem_granulation *g, gs_error *err) {
+  const size_t n = (size_t)g->ns;
+  double *C = malloc(n * n * sizeof(double)), *e = malloc((n + 1) * sizeof(double));
+  if (!C || !e) {
+    free(C);
+    free(e);
+    return gs_error_set(err, GS_ENOMEM, "out of memory");
+  }
+  for (size_t a = 0; a < n; a++)
+    for (size_t b = 0; b < n; b++) {
+      const double x = g->kexp[a * n + b];
+      C[a * n + b] = x > 0 ? (a == b ? 2 : 1) * g->kn[a * n + b] / x : 0;
+    }
+  for (size_t k = 0; k <= n; k++) e[k] = (k + 0.5) * g->ds;
+  char comment[400];
+  snprintf(comment, sizeof comment,
+           "# gransim dem granulation: collision frequency C_ab [1/s per pair of particles] between classes of "
+           "solid volume, %ld update(s) to t = %.9g s;\n# C_ab = N_ab / sum(F_a F_b dt), C_aa = 2 N_aa / "
+           "sum(F_a^2 dt); 0 for classes never populated\n", g->updates, g->t_last);
+  int rc = gs_dem_kernel_table_write(g->path_kernel, comment, n, e, 1, C, err);
+  free(C);
+  free(e);
+  return rc;
+}
+
 static gs_dem_partner partner(const gs_dem_particles *p, size_t i) {
   return (gs_dem_partner){p->m[i], p->r[i], p->vs[i], p->vl[i]};
 }
@@ -192,12 +225,26 @@ int gs_dem_granulation_update(gs_dem_granulation *g, gs_dem *d, gs_error *err) {
   for (size_t a = 0; a < nc; a++)
     for (size_t b = a; b < nc; b++) {
       const double N = g->ncoll[a * nc + b];
+      const size_t sa = a / g->nl, sb = b / g->nl;
+      g->kn[sa * g->ns + sb] += N;
+      if (sa != sb) g->kn[sb * g->ns + sa] += N;
       if (N == 0) continue;
-      const double C = pop[a] > 0 && pop[b] > 0 && span > 0 ? N / (pop[a] * pop[b] * span) : 0;
+      const double C = pop[a] > 0 && pop[b] > 0 && span > 0 ? (a == b ? 2 : 1) * N / (pop[a] * pop[b] * span) : 0;
       fprintf(g->f_col, "%.9g,%zu,%zu,%zu,%zu,%.0f,%.0f,%.9g,%.0f,%.0f,%.9g\n", t, a / g->nl + 1, a % g->nl,
               b / g->nl + 1, b % g->nl, pop[a], pop[b], span, N, g->nagg[a * nc + b], C);
     }
+  /* the exposure of the solid classes over this interval */
+  double *fs = calloc((size_t)g->ns, sizeof(double));
+  if (!fs) {
+    free(pop);
+    return gs_error_set(err, GS_ENOMEM, "out of memory");
+  }
+  for (size_t a = 0; a < nc; a++) fs[a / g->nl] += pop[a];
+  for (int a = 0; a < g->ns; a++)
+    for (int b = 0; b < g->ns; b++) g->kexp[a * g->ns + b] += fs[a] * fs[b] * span;
+  free(fs);
   free(pop);
+  if ((rc = write_kernel(g, err))) return rc;
   /* drop the merged-away particles now, so that every view and output of
    * this time sees the particles the classes describe */
   if (nagg && ((rc = gs_dem_prepare(d, err)) || (rc = gs_dem_rebuild(d, err)))) return rc;
@@ -226,6 +273,9 @@ void gs_dem_granulation_free(gs_dem_granulation *g) {
   free(g->used);
   free(g->ncoll);
   free(g->nagg);
+  free(g->kn);
+  free(g->kexp);
+  g->kn = g->kexp = NULL;
   g->rng = NULL;
   g->cls = g->idx = NULL;
   g->used = NULL;
