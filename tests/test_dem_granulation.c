@@ -12,11 +12,15 @@
  *    psi0 = 0.1 aggregates a Binomial(4000, 0.1) number (within 4 standard
  *    deviations; the same number again with the same seed), dry pairs never,
  *    and writes C_ab = N_ab / (F_a F_b dt) per class pair;
+ *  - the collision log is the same with 1 and 2 threads (threads forced
+ *    on for 1,728 colliding particles): the same pairs in the same order,
+ *    approach speeds to round-off;
  *  - a sprayed drum run with aggregation: at every update the class
  *    populations add up to the particles present, particles fall by exactly
  *    the aggregations, the solid volume stays to round-off and the liquid on
  *    the particles is the spray ledger's. */
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -276,10 +280,62 @@ static void drum_classes(void) {
   gs_dem_case_free(c);
 }
 
+/* The collision log of a gas of 12^3 particles in a box of planes. */
+static gs_dem_pair_log log_run(int threads) {
+  omp_set_num_threads(threads);
+  gs_dem_params prm = {.dt = 2e-6, .gravity = {0, 0, -9.81}, .skin = 5e-4, .lo = {0, 0, 0},
+                       .hi = {0.04, 0.04, 0.04}, .nclass = 1};
+  gs_error err = {0};
+  gs_dem *d = gs_dem_alloc(&prm, &err);
+  gs_dem_set_parallel_min(d, 0);
+  gs_dem_material m = {.E = 8e6, .nu = 0.2, .e = 0.4, .mu_s = 0.5, .mu_r = 0.2, .density = 500};
+  CHECK(gs_dem_add_type(d, &m, 0, &err) == 0);
+  const double o[3] = {0, 0, 0}, n[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const double h[3] = {0.04, 0.04, 0.04}, nm[3][3] = {{-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
+  for (int a = 0; a < 3; a++) {
+    CHECK(gs_dem_add_plane(d, "lo", o, n[a], &m, &err) >= 0);
+    CHECK(gs_dem_add_plane(d, "hi", h, nm[a], &m, &err) >= 0);
+  }
+  uint64_t q = 12345;
+  for (int k = 0; k < 1728; k++) {
+    double x[3] = {0.0025 + 0.003 * (k % 12), 0.0025 + 0.003 * ((k / 12) % 12), 0.0025 + 0.003 * (k / 144)}, v[3];
+    for (int a = 0; a < 3; a++) {
+      q = q * 6364136223846793005ULL + 1442695040888963407ULL;
+      v[a] = ((double)(q >> 11) / 9007199254740992.0 - 0.5) * 2.0;
+    }
+    CHECK(gs_dem_add_particle(d, 0, 1.2e-3, x, v, NULL, &err) == k);
+  }
+  CHECK(gs_dem_pair_log_enable(d, &err) == 0);
+  CHECK(gs_dem_run(d, 700, &err) == 0);
+  gs_dem_pair_log L = *d->plog;
+  d->plog->r = NULL;
+  gs_dem_free(d);
+  omp_set_num_threads(1);
+  return L;
+}
+
+static void log_threads(void) {
+  gs_dem_pair_log a = log_run(1), b = log_run(2);
+  int same = a.n == b.n;
+  double dv = 0;
+  for (size_t k = 0; same && k < a.n; k++) {
+    same &= a.r[k].ida == b.r[k].ida && a.r[k].idb == b.r[k].idb && a.r[k].ida < a.r[k].idb;
+    dv = fmax(dv, fabs(a.r[k].vn - b.r[k].vn) / fmax(1e-3, a.r[k].vn));
+  }
+  fprintf(stderr, "log: %zu vs %zu collisions with 1 and 2 threads, %s pairs, largest vn difference %.3g\n", a.n,
+          b.n, same ? "same" : "DIFFERENT", dv);
+  CHECK(a.n > 500);
+  CHECK(same);
+  CHECK(dv < 1e-9);
+  free(a.r);
+  free(b.r);
+}
+
 int main(void) {
   if (dt_scratch_begin("granulation")) return 1;
   merge_conserves();
   rules();
+  log_threads();
   update_statistics();
   drum_classes();
   dt_scratch_end();
