@@ -4,6 +4,10 @@
  *    momentum to round-off, puts the aggregate at their centre of mass with
  *    the radius of the summed solid, and the next rebuild drops the partner
  *    without booking it as removed;
+ *  - growth: a merged pair's contact radius starts at the larger partner's,
+ *    is halfway after half the growth time and the aggregate's own after
+ *    it, and a neighbour first reached while growing is pushed away (the
+ *    neighbour list followed the growth);
  *  - the success rules: `constant` aggregates exactly when both (or, with
  *    `require: either`, one) liquid contents reach lc_min and u < psi0;
  *    `stokes` exactly when St_v < St* (computed here from Liu et al. 2000),
@@ -76,6 +80,47 @@ static void merge_conserves(void) {
   CHECK(d->p.n == 1);
   CHECK(d->vs_removed == 0 && d->vl_removed == 0);
   CHECK_REL(d->p.vs[0], vs, 1e-15);
+  gs_dem_free(d);
+}
+
+static void growth(void) {
+  gs_dem *d = empty_dem();
+  gs_error err = {0};
+  const double xa[3] = {-1e-3, 0, 0}, xb[3] = {1e-3, 0, 0}, xc[3] = {0, 2.25e-3, 0};
+  CHECK(gs_dem_add_particle(d, 0, 1e-3, xa, NULL, NULL, &err) == 0);
+  CHECK(gs_dem_add_particle(d, 0, 1e-3, xb, NULL, NULL, &err) == 1);
+  CHECK(gs_dem_add_particle(d, 0, 1e-3, xc, NULL, NULL, &err) == 2);
+  CHECK(gs_dem_run(d, 0, &err) == 0);
+  gs_dem_granulation g = {.growth_k = 20};
+  size_t ia = 0, ib = 0, ic = 0;
+  for (size_t i = 0; i < 3; i++) {
+    if (d->p.id[i] == 0) ia = i;
+    if (d->p.id[i] == 1) ib = i;
+    if (d->p.id[i] == 2) ic = i;
+  }
+  gs_dem_merge(d, ia, ib);
+  const double r1 = d->p.r[ia];
+  CHECK_REL(r1, 1e-3 * cbrt(2.0), 1e-15);
+  CHECK(gs_dem_growth_add(&g, d, ia, 1e-3, &err) == 0);
+  CHECK(d->p.r[ia] == 1e-3 && g.ngrow == 1);
+  CHECK(gs_dem_prepare(d, &err) == 0 && gs_dem_rebuild(d, &err) == 0);
+  for (int s = 0; s < 20; s++) {
+    CHECK(gs_dem_run(d, 1, &err) == 0);
+    gs_dem_growth_step(&g, d);
+    if (s == 9) {
+      for (size_t i = 0; i < d->p.n; i++)
+        if (d->p.id[i] == 0) CHECK_REL(d->p.r[i], 1e-3 + 0.5 * (r1 - 1e-3), 1e-12);
+    }
+  }
+  CHECK(g.ngrow == 0);
+  CHECK(gs_dem_run(d, 5, &err) == 0);
+  CHECK(d->p.n == 2);
+  for (size_t i = 0; i < d->p.n; i++) {
+    if (d->p.id[i] == 0) CHECK(d->p.r[i] == r1);
+    if (d->p.id[i] == 2) CHECK(d->p.vy[i] > 1e-6);
+  }
+  (void)ic;
+  free(g.grow);
   gs_dem_free(d);
 }
 
@@ -334,6 +379,7 @@ static void log_threads(void) {
 int main(void) {
   if (dt_scratch_begin("granulation")) return 1;
   merge_conserves();
+  growth();
   rules();
   log_threads();
   update_statistics();

@@ -210,7 +210,13 @@ int gs_dem_granulation_update(gs_dem_granulation *g, gs_dem *d, gs_error *err) {
     if (!g->rule.type->success(&g->rule, &a, &b, q->vn, u)) continue;
     /* the larger solid survives (the earlier particle on a tie) */
     const int keep_a = p->vs[ia] >= p->vs[ib];
-    gs_dem_merge(d, keep_a ? (size_t)ia : (size_t)ib, keep_a ? (size_t)ib : (size_t)ia);
+    const size_t keep = keep_a ? (size_t)ia : (size_t)ib;
+    const double r0 = fmax(p->r[ia], p->r[ib]);
+    gs_dem_merge(d, keep, keep_a ? (size_t)ib : (size_t)ia);
+    if (g->growth_k > 0 && (rc = gs_dem_growth_add(g, d, keep, r0, err))) {
+      free(pop);
+      return rc;
+    }
     g->used[q->ida] = g->used[q->idb] = 1;
     g->nagg[(size_t)ca * nc + cb] += 1;
     nagg++;
@@ -275,7 +281,10 @@ void gs_dem_granulation_free(gs_dem_granulation *g) {
   free(g->nagg);
   free(g->kn);
   free(g->kexp);
+  free(g->grow);
   g->kn = g->kexp = NULL;
+  g->grow = NULL;
+  g->ngrow = g->grow_cap = 0;
   g->rng = NULL;
   g->cls = g->idx = NULL;
   g->used = NULL;
