@@ -12,10 +12,15 @@ stdout_has "valid"
 
 sed 's/^  duration: 1.0$/  duration: 0.3/' "$SRC/examples/spray-drum.yaml" > "$WORK/drum.yaml"
 grep -q '^  duration: 0.3$' "$WORK/drum.yaml" || fail "could not shorten the spray-drum example"
+sed -i 's/^output: {every: 0.05}$/output: {every: 0.05, vtk_every: 0.3}/' "$WORK/drum.yaml"
 run_rc 0 "$BIN" dem "$WORK/drum.yaml" --out "$WORK/out" --quiet
 for f in spray.csv granulation.csv granulation_classes.csv granulation_collisions.csv granulation_kernel.csv; do
   [ -s "$WORK/out/$f" ] || fail "missing $f"
 done
+# the VTK frames carry each particle's liquid content, some of it wet at the end
+grep -q '^SCALARS liquid_content double 1$' "$WORK/out/vtk/particles_000001.vtk" || fail "no liquid_content in the VTK file"
+awk '/^SCALARS liquid_content/ { on = 1; getline; next } /^(SCALARS|VECTORS)/ { on = 0 } on && $1 > 0 { wet++ }
+     END { exit !(wet > 0) }' "$WORK/out/vtk/particles_000001.vtk" || fail "no wet particle in the last VTK frame"
 # ledger: injected = on particles + airborne + on walls + left, to round-off; droplets absorbed
 awk -F, 'NR > 1 { s = $6 + $7 + $8 + $9; d = $5 - s; if (d < 0) d = -d; if (d > 1e-12 * $5) bad = 1; n++ }
          END { exit bad || n != 7 }' "$WORK/out/spray.csv" || fail "ledger: $(cat "$WORK/out/spray.csv")"
@@ -57,4 +62,8 @@ bad 's/  every: 0.05/  every: 0.05001/' "granulation.every" "whole number of tim
 bad 's/type: constant, efficiency: 0.05/type: sticky, efficiency: 0.05/' "sticky" "constant, stokes"
 bad 's/efficiency: 0.05/efficiency: 1.5/' "granulation.rule.efficiency = '1.5'"
 bad 's/min_liquid_content: 0.2/min_liquid_contnet: 0.2/' "unknown key 'min_liquid_contnet'"
+bad 's/solid_classes: {count: 8}/solid_classes: {count: 200}/' "at most 1024 classes"
+sed '/^spray:/,/^  start: 0.1$/d' "$SRC/examples/spray-drum.yaml" > "$WORK/bad.yaml"
+run_rc 1 "$BIN" dem --check "$WORK/bad.yaml"
+stderr_has "missing key 'width' in granulation.liquid_classes"
 echo "cli_spray: ok"

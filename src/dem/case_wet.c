@@ -68,6 +68,9 @@ static int read_granulation(gs_dem_case *c, gs_cfg_node *g, double rmin, gs_erro
   if ((rc = read_classes(g, "solid_classes", 4.0 / 3.0 * M_PI * rmin * rmin * rmin, &q->ds, &q->ns, err)) ||
       (rc = read_classes(g, "liquid_classes", vd, &q->dl, &q->nl, err)))
     return rc;
+  /* the per-update counts are a dense matrix over pairs of classes */
+  if (q->ns * q->nl > 1024)
+    return gs_cfg_fail(g, err, "solid_classes.count x liquid_classes.count = %d: at most 1024 classes", q->ns * q->nl);
   return gs_cfg_check_unused(g, err);
 }
 
