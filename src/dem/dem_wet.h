@@ -35,8 +35,14 @@ typedef struct {
   double injected, on_particles, airborne, on_walls, left;
 } gs_dem_liquid_ledger;
 
+/* An acceleration on a droplet besides gravity (the gas phase's drag, for
+ * one): a[3] at position x and velocity v [m/s^2]. */
+typedef void (*gs_dem_drop_accel)(void *ctx, const double x[3], const double v[3], double a[3]);
+
 typedef struct {
   gs_dem_nozzle noz;
+  gs_dem_drop_accel accel;  /* NULL: gravity only */
+  void *accel_ctx;
   double vd, md, rd;        /* droplet volume, mass, radius */
   double e1[3], e2[3];      /* unit vectors normal to the axis */
   gsl_rng *rng;

@@ -131,12 +131,15 @@ int gs_dem_spray_step(gs_dem_spray *s, gs_dem *d, gs_error *err) {
       }
     }
   }
-  /* move (semi-implicit Euler under gravity), then settle each droplet */
+  /* move (semi-implicit Euler under gravity and the optional acceleration),
+   * then settle each droplet */
   size_t keep = 0;
   for (size_t k = 0; k < s->n; k++) {
     gs_dem_drop q = s->drop[k];
+    double acc[3] = {0, 0, 0};
+    if (s->accel) s->accel(s->accel_ctx, q.x, q.v, acc);
     for (int a = 0; a < 3; a++) {
-      q.v[a] += dt * d->prm.gravity[a];
+      q.v[a] += dt * (d->prm.gravity[a] + acc[a]);
       q.x[a] += dt * q.v[a];
     }
     long i = touched_particle(d, q.x, s->rd);
