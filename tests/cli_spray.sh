@@ -1,6 +1,7 @@
 # `gransim dem` with spray and granulation: the example examples/spray-drum.yaml
 # is valid and, shortened, runs and writes its tables; the liquid ledger
 # balances in every row; the class populations add up to the particles; the
+# liquid on the particles of a closed drum never falls and the mean diameter grows; the
 # run's kernel table is one the PBM's `table` kernel reads; bad spray and
 # granulation keys are refused naming file, line, key and value.
 source "$(dirname "$0")/cli-lib.sh" "$@"
@@ -30,6 +31,10 @@ awk -F, 'FNR == 1 { next } FILENAME ~ /classes/ { pop[$1] += $6; next } { np[$1]
          END { for (t in np) { if (pop[t] != np[t]) exit 1; n++ } exit n < 7 }' \
   "$WORK/out/granulation_classes.csv" "$WORK/out/granulation.csv" ||
   fail "class populations do not add up to the particles"
+# in a closed drum the liquid on the particles never falls, and the granules have grown
+awk -F, 'NR > 2 && $9 < l { bad = 1 } NR == 2 { d0 = $3 } NR > 1 { d = $3; l = $9 }
+         END { exit bad || !(d > d0) || !(l > 0) }' "$WORK/out/granulation.csv" ||
+  fail "liquid on particles fell or no growth: $(cat "$WORK/out/granulation.csv")"
 # the PBM reads the kernel table
 cp "$WORK/out/granulation_kernel.csv" "$WORK/K.csv"
 cat > "$WORK/pbm.yaml" <<YAML
