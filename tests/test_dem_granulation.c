@@ -32,6 +32,7 @@
 
 #include "dem/dem_wet.h"
 #include "dem_testlib.h"
+#include "wet_testlib.h"
 
 static gs_dem *empty_dem(void) {
   gs_dem_params prm = {.dt = 1e-5, .gravity = {0, 0, 0}, .skin = 2e-4, .lo = {-1, -1, -1},
@@ -243,20 +244,7 @@ static const char *DRUM =
     "  box: {lo: [-0.04, -0.04, -0.001], hi: [0.04, 0.04, 0.021]}\n"
     "  gravity: [0, -9.81, 0]\n"
     "  seed: 9\n"
-    "materials:\n"
-    "  - {name: powder, E: 2.5e6, nu: 0.25, e: 0.1, mu_s: 0.5, density: 1030}\n"
-    "classes:\n"
-    "  - {name: primary, radius: 1.0e-3, material: powder}\n"
-    "walls:\n"
-    "  - name: drum\n"
-    "    cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.03}\n"
-    "    material: powder\n"
-    "    rotation: {origin: [0, 0, 0], axis: [0, 0, 1], rpm: 30}\n"
-    "  - {name: front, plane: {point: [0, 0, 0], normal: [0, 0, 1]}, material: powder}\n"
-    "  - {name: back, plane: {point: [0, 0, 0.02], normal: [0, 0, -1]}, material: powder}\n"
-    "fill:\n"
-    "  - region: {box: {lo: [-0.02, -0.028, 0.002], hi: [0.02, -0.005, 0.018]}}\n"
-    "    count: 250\n"
+    WET_DRUM_BED
     "spray:\n"
     "  point: [0, 0.005, 0.01]\n"
     "  axis: [0, -1, 0]\n"
