@@ -111,6 +111,13 @@ static void accel_hook(void) {
     CHECK_ABS(s.drop[0].v[1], -2.0, 1e-12);
     CHECK_ABS(s.drop[0].x[1], 0.01 - 100 * d->prm.dt * 2.0, 1e-12);
   }
+  /* a non-finite acceleration stops the run naming the step */
+  double nan_g[3] = {NAN, 0, 0};
+  s.accel_ctx = nan_g;
+  CHECK(gs_dem_run(d, 1, &err) == 0);
+  CHECK(gs_dem_spray_step(&s, d, &err) == GS_ENUMERIC);
+  CHECK(strstr(err.msg, "non-finite") && strstr(err.msg, "step 101"));
+  fprintf(stderr, "stopped as expected: %s\n", err.msg);
   gs_dem_spray_free(&s);
   gs_dem_free(d);
 }

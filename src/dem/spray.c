@@ -142,6 +142,11 @@ int gs_dem_spray_step(gs_dem_spray *s, gs_dem *d, gs_error *err) {
       q.v[a] += dt * (d->prm.gravity[a] + acc[a]);
       q.x[a] += dt * q.v[a];
     }
+    if (!isfinite(q.x[0] + q.x[1] + q.x[2] + q.v[0] + q.v[1] + q.v[2]))
+      return gs_error_set(err, GS_ENUMERIC,
+                          "spray: droplet %zu of %zu airborne has a non-finite position or velocity at t = %g s "
+                          "(step %ld); its acceleration besides gravity is not finite",
+                          k, s->n, t, d->step);
     long i = touched_particle(d, q.x, s->rd);
     if (i >= 0) {
       gs_dem_absorb(d, (size_t)i, s->vd, s->md, q.v);
