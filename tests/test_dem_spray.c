@@ -57,7 +57,8 @@ static void single_droplet(void) {
   z.end = 1e-3;
   z.mass_rate = 1.5 * md / z.end;
   CHECK(gs_dem_spray_init(&s, &z, 7, &err) == 0);
-  const double m0 = d->p.m[0];
+  const double m0 = d->p.m[0], I0 = 1.0 / d->p.invI[0];
+  d->p.wz[0] = 3.0; /* a spinning particle keeps its angular momentum */
   int steps = 0;
   while (s.absorbed == 0 && steps < 2000) {
     CHECK(gs_dem_run(d, 1, &err) == 0);
@@ -73,6 +74,8 @@ static void single_droplet(void) {
   CHECK(s.n == 0);
   CHECK(d->p.vl[0] == s.vd); /* exactly its volume */
   CHECK_REL(d->p.m[0], m0 + s.md, 1e-15);
+  CHECK_REL(1.0 / d->p.invI[0], I0 * d->p.m[0] / m0, 1e-14);
+  CHECK_REL(d->p.wz[0] / d->p.invI[0], 3.0 * I0, 1e-14);
   /* momentum: the droplet's at impact (it moved at 2 m/s straight down) */
   CHECK_REL(d->p.m[0] * d->p.vy[0], -2.0 * s.md, 1e-12);
   CHECK(fabs(d->p.vx[0]) < 1e-6 * fabs(d->p.vy[0]));

@@ -60,8 +60,10 @@ void gs_dem_absorb(gs_dem *d, size_t i, double vol, double mass, const double v[
   p->vx[i] = (p->m[i] * p->vx[i] + mass * v[0]) / m;
   p->vy[i] = (p->m[i] * p->vy[i] + mass * v[1]) / m;
   p->vz[i] = (p->m[i] * p->vz[i] + mass * v[2]) / m;
-  /* spin: the droplet brings no angular momentum about the centre it joins */
-  const double I0 = 1.0 / p->invI[i], I1 = 0.4 * m * p->r[i] * p->r[i];
+  /* spin: the droplet brings no angular momentum about the centre it joins;
+   * the moment of inertia grows with the mass at the same size (not from the
+   * contact radius, which lags behind the size of a growing aggregate) */
+  const double I0 = 1.0 / p->invI[i], I1 = I0 * m / p->m[i];
   p->wx[i] *= I0 / I1;
   p->wy[i] *= I0 / I1;
   p->wz[i] *= I0 / I1;
