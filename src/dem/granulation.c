@@ -25,6 +25,7 @@
 
 static int write_state(gs_dem_granulation *g, const gs_dem *d, uint64_t nwet, uint64_t ncol,
                        uint64_t nagg, gs_error *err);
+static int write_kernel(const gs_dem_granulation *g, gs_error *err);
 
 int gs_dem_granulation_class(const gs_dem_granulation *g, double vs, double vl) {
   double a = floor(vs / g->ds + 0.5), b = floor(vl / g->dl + 0.5);
@@ -89,7 +90,7 @@ int gs_dem_granulation_start(gs_dem_granulation *g, gs_dem *d, const char *dir, 
   fprintf(g->f_cls, "time,solid_class,liquid_class,solid_volume,liquid_volume,particles\n");
   fprintf(g->f_col, "time,solid_class_a,liquid_class_a,solid_class_b,liquid_class_b,particles_a,particles_b,"
                     "interval,collisions,aggregations,C_ab\n");
-  return write_state(g, d, 0, 0, 0, err);
+  return (rc = write_kernel(g, err)) ? rc : write_state(g, d, 0, 0, 0, err);
 }
 
 static int grow(void **ptr, size_t *cap, size_t need, size_t elem, gs_error *err) {
