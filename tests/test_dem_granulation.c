@@ -4,6 +4,10 @@
  *    momentum to round-off, puts the aggregate at their centre of mass with
  *    the radius of the summed solid, and the next rebuild drops the partner
  *    without booking it as removed;
+ *  - growth: a merged pair's contact radius starts at the larger partner's,
+ *    is halfway after half the growth time and the aggregate's own after
+ *    it, and a neighbour first reached while growing is pushed away (the
+ *    neighbour list followed the growth);
  *  - the success rules: `constant` aggregates exactly when both (or, with
  *    `require: either`, one) liquid contents reach lc_min and u < psi0;
  *    `stokes` exactly when St_v < St* (computed here from Liu et al. 2000),
@@ -12,11 +16,15 @@
  *    psi0 = 0.1 aggregates a Binomial(4000, 0.1) number (within 4 standard
  *    deviations; the same number again with the same seed), dry pairs never,
  *    and writes C_ab = N_ab / (F_a F_b dt) per class pair;
+ *  - the collision log is the same with 1 and 2 threads (threads forced
+ *    on for 1,728 colliding particles): the same pairs in the same order,
+ *    approach speeds to round-off;
  *  - a sprayed drum run with aggregation: at every update the class
  *    populations add up to the particles present, particles fall by exactly
  *    the aggregations, the solid volume stays to round-off and the liquid on
  *    the particles is the spray ledger's. */
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -24,6 +32,7 @@
 
 #include "dem/dem_wet.h"
 #include "dem_testlib.h"
+#include "wet_testlib.h"
 
 static gs_dem *empty_dem(void) {
   gs_dem_params prm = {.dt = 1e-5, .gravity = {0, 0, 0}, .skin = 2e-4, .lo = {-1, -1, -1},
@@ -72,6 +81,47 @@ static void merge_conserves(void) {
   CHECK(d->p.n == 1);
   CHECK(d->vs_removed == 0 && d->vl_removed == 0);
   CHECK_REL(d->p.vs[0], vs, 1e-15);
+  gs_dem_free(d);
+}
+
+static void growth(void) {
+  gs_dem *d = empty_dem();
+  gs_error err = {0};
+  const double xa[3] = {-1e-3, 0, 0}, xb[3] = {1e-3, 0, 0}, xc[3] = {0, 2.25e-3, 0};
+  CHECK(gs_dem_add_particle(d, 0, 1e-3, xa, NULL, NULL, &err) == 0);
+  CHECK(gs_dem_add_particle(d, 0, 1e-3, xb, NULL, NULL, &err) == 1);
+  CHECK(gs_dem_add_particle(d, 0, 1e-3, xc, NULL, NULL, &err) == 2);
+  CHECK(gs_dem_run(d, 0, &err) == 0);
+  gs_dem_granulation g = {.growth_k = 20};
+  size_t ia = 0, ib = 0, ic = 0;
+  for (size_t i = 0; i < 3; i++) {
+    if (d->p.id[i] == 0) ia = i;
+    if (d->p.id[i] == 1) ib = i;
+    if (d->p.id[i] == 2) ic = i;
+  }
+  gs_dem_merge(d, ia, ib);
+  const double r1 = d->p.r[ia];
+  CHECK_REL(r1, 1e-3 * cbrt(2.0), 1e-15);
+  CHECK(gs_dem_growth_add(&g, d, ia, 1e-3, &err) == 0);
+  CHECK(d->p.r[ia] == 1e-3 && g.ngrow == 1);
+  CHECK(gs_dem_prepare(d, &err) == 0 && gs_dem_rebuild(d, &err) == 0);
+  for (int s = 0; s < 20; s++) {
+    CHECK(gs_dem_run(d, 1, &err) == 0);
+    gs_dem_growth_step(&g, d);
+    if (s == 9) {
+      for (size_t i = 0; i < d->p.n; i++)
+        if (d->p.id[i] == 0) CHECK_REL(d->p.r[i], 1e-3 + 0.5 * (r1 - 1e-3), 1e-12);
+    }
+  }
+  CHECK(g.ngrow == 0);
+  CHECK(gs_dem_run(d, 5, &err) == 0);
+  CHECK(d->p.n == 2);
+  for (size_t i = 0; i < d->p.n; i++) {
+    if (d->p.id[i] == 0) CHECK(d->p.r[i] == r1);
+    if (d->p.id[i] == 2) CHECK(d->p.vy[i] > 1e-6);
+  }
+  (void)ic;
+  free(g.grow);
   gs_dem_free(d);
 }
 
@@ -162,7 +212,8 @@ static void update_statistics(void) {
   CHECK(a1 == a2 && wet1 == a1 && wet2 == a2);
   /* C_ab of the (1,0)-(1,0) dry pairs and (1,1)-(1,1) wet pairs: N / (F^2 dt) */
   char *t = dt_slurp("update", "granulation_collisions.csv");
-  const double F = N, C = (N / 2) / (F * F * 1e-4);
+  /* same-class pairs: C_aa = 2 N_aa / (F_a^2 dt), the PBM pair loop's convention */
+  const double F = N, C = 2.0 * (N / 2) / (F * F * 1e-4);
   char want[2][200];
   snprintf(want[0], sizeof want[0], ",1,0,1,0,%d,%d,0.0001,%d,0,", N, N, N / 2);
   snprintf(want[1], sizeof want[1], ",1,1,1,1,%d,%d,0.0001,%d,%ld,", N, N, N / 2, a1);
@@ -171,6 +222,17 @@ static void update_statistics(void) {
     if (!r) fprintf(stderr, "granulation_collisions.csv lacks '%s':\n%s", want[q], t);
     CHECK(r != NULL);
     if (r) CHECK_REL(strtod(r + strlen(want[q]), NULL), C, 1e-8);
+  }
+  free(t);
+  /* the run's kernel table between solid classes: all 2N particles in class 1 */
+  t = dt_slurp("update", "granulation_kernel.csv");
+  const char *row = strstr(t, "\nedges, ");
+  CHECK(row != NULL);
+  if (row) {
+    row = strchr(row + 1, '\n') + 1;
+    char *end;
+    CHECK_REL(strtod(row, &end), 2.0 * N / (4.0 * F * F * 1e-4), 1e-8);
+    for (int q = 0; q < 3; q++) CHECK(strtod(end + 1, &end) == 0);
   }
   free(t);
 }
@@ -182,20 +244,7 @@ static const char *DRUM =
     "  box: {lo: [-0.04, -0.04, -0.001], hi: [0.04, 0.04, 0.021]}\n"
     "  gravity: [0, -9.81, 0]\n"
     "  seed: 9\n"
-    "materials:\n"
-    "  - {name: powder, E: 2.5e6, nu: 0.25, e: 0.1, mu_s: 0.5, density: 1030}\n"
-    "classes:\n"
-    "  - {name: primary, radius: 1.0e-3, material: powder}\n"
-    "walls:\n"
-    "  - name: drum\n"
-    "    cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.03}\n"
-    "    material: powder\n"
-    "    rotation: {origin: [0, 0, 0], axis: [0, 0, 1], rpm: 30}\n"
-    "  - {name: front, plane: {point: [0, 0, 0], normal: [0, 0, 1]}, material: powder}\n"
-    "  - {name: back, plane: {point: [0, 0, 0.02], normal: [0, 0, -1]}, material: powder}\n"
-    "fill:\n"
-    "  - region: {box: {lo: [-0.02, -0.028, 0.002], hi: [0.02, -0.005, 0.018]}}\n"
-    "    count: 250\n"
+    WET_DRUM_BED
     "spray:\n"
     "  point: [0, 0.005, 0.01]\n"
     "  axis: [0, -1, 0]\n"
@@ -264,10 +313,63 @@ static void drum_classes(void) {
   gs_dem_case_free(c);
 }
 
+/* The collision log of a gas of 12^3 particles in a box of planes. */
+static gs_dem_pair_log log_run(int threads) {
+  omp_set_num_threads(threads);
+  gs_dem_params prm = {.dt = 2e-6, .gravity = {0, 0, -9.81}, .skin = 5e-4, .lo = {0, 0, 0},
+                       .hi = {0.04, 0.04, 0.04}, .nclass = 1};
+  gs_error err = {0};
+  gs_dem *d = gs_dem_alloc(&prm, &err);
+  gs_dem_set_parallel_min(d, 0);
+  gs_dem_material m = {.E = 8e6, .nu = 0.2, .e = 0.4, .mu_s = 0.5, .mu_r = 0.2, .density = 500};
+  CHECK(gs_dem_add_type(d, &m, 0, &err) == 0);
+  const double o[3] = {0, 0, 0}, n[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const double h[3] = {0.04, 0.04, 0.04}, nm[3][3] = {{-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
+  for (int a = 0; a < 3; a++) {
+    CHECK(gs_dem_add_plane(d, "lo", o, n[a], &m, &err) >= 0);
+    CHECK(gs_dem_add_plane(d, "hi", h, nm[a], &m, &err) >= 0);
+  }
+  uint64_t q = 12345;
+  for (int k = 0; k < 1728; k++) {
+    double x[3] = {0.0025 + 0.003 * (k % 12), 0.0025 + 0.003 * ((k / 12) % 12), 0.0025 + 0.003 * (k / 144)}, v[3];
+    for (int a = 0; a < 3; a++) {
+      q = q * 6364136223846793005ULL + 1442695040888963407ULL;
+      v[a] = ((double)(q >> 11) / 9007199254740992.0 - 0.5) * 2.0;
+    }
+    CHECK(gs_dem_add_particle(d, 0, 1.2e-3, x, v, NULL, &err) == k);
+  }
+  CHECK(gs_dem_pair_log_enable(d, &err) == 0);
+  CHECK(gs_dem_run(d, 700, &err) == 0);
+  gs_dem_pair_log L = *d->plog;
+  d->plog->r = NULL;
+  gs_dem_free(d);
+  omp_set_num_threads(1);
+  return L;
+}
+
+static void log_threads(void) {
+  gs_dem_pair_log a = log_run(1), b = log_run(2);
+  int same = a.n == b.n;
+  double dv = 0;
+  for (size_t k = 0; same && k < a.n; k++) {
+    same &= a.r[k].ida == b.r[k].ida && a.r[k].idb == b.r[k].idb && a.r[k].ida < a.r[k].idb;
+    dv = fmax(dv, fabs(a.r[k].vn - b.r[k].vn) / fmax(1e-3, a.r[k].vn));
+  }
+  fprintf(stderr, "log: %zu vs %zu collisions with 1 and 2 threads, %s pairs, largest vn difference %.3g\n", a.n,
+          b.n, same ? "same" : "DIFFERENT", dv);
+  CHECK(a.n > 500);
+  CHECK(same);
+  CHECK(dv < 1e-9);
+  free(a.r);
+  free(b.r);
+}
+
 int main(void) {
   if (dt_scratch_begin("granulation")) return 1;
   merge_conserves();
+  growth();
   rules();
+  log_threads();
   update_statistics();
   drum_classes();
   dt_scratch_end();

@@ -8,6 +8,8 @@
  *    (1 %) against the exact distribution P(theta <= x) = (1 - cos x) /
  *    (1 - cos half_angle) of directions uniform over the cone's solid angle,
  *    and the mean direction across the axis is 0 within 4 standard errors;
+ *  - a droplet under gravity and an added acceleration that cancels it
+ *    flies straight at its exit speed (the hook the gas drag will use);
  *  - the injected number follows the mass rate exactly (whole droplets);
  *  - a sprayed drum with an outlet: the liquid ledger of spray.csv balances
  *    to round-off at every output, with liquid on particles, on walls and
@@ -23,6 +25,7 @@
 
 #include "dem/dem_wet.h"
 #include "dem_testlib.h"
+#include "wet_testlib.h"
 
 static gs_dem *one_particle(double r, double gy) {
   gs_dem_params prm = {.dt = 1e-5, .gravity = {0, gy, 0}, .skin = 2e-4, .lo = {-0.05, -0.05, -0.05},
@@ -54,7 +57,8 @@ static void single_droplet(void) {
   z.end = 1e-3;
   z.mass_rate = 1.5 * md / z.end;
   CHECK(gs_dem_spray_init(&s, &z, 7, &err) == 0);
-  const double m0 = d->p.m[0];
+  const double m0 = d->p.m[0], I0 = 1.0 / d->p.invI[0];
+  d->p.wz[0] = 3.0; /* a spinning particle keeps its angular momentum */
   int steps = 0;
   while (s.absorbed == 0 && steps < 2000) {
     CHECK(gs_dem_run(d, 1, &err) == 0);
@@ -70,6 +74,8 @@ static void single_droplet(void) {
   CHECK(s.n == 0);
   CHECK(d->p.vl[0] == s.vd); /* exactly its volume */
   CHECK_REL(d->p.m[0], m0 + s.md, 1e-15);
+  CHECK_REL(1.0 / d->p.invI[0], I0 * d->p.m[0] / m0, 1e-14);
+  CHECK_REL(d->p.wz[0] / d->p.invI[0], 3.0 * I0, 1e-14);
   /* momentum: the droplet's at impact (it moved at 2 m/s straight down) */
   CHECK_REL(d->p.m[0] * d->p.vy[0], -2.0 * s.md, 1e-12);
   CHECK(fabs(d->p.vx[0]) < 1e-6 * fabs(d->p.vy[0]));
@@ -77,6 +83,44 @@ static void single_droplet(void) {
   gs_dem_spray_ledger(&s, d, &l);
   CHECK(l.injected == l.on_particles);
   CHECK(l.airborne == 0 && l.on_walls == 0 && l.left == 0);
+  gs_dem_spray_free(&s);
+  gs_dem_free(d);
+}
+
+static void cancel_gravity(void *ctx, const double x[3], const double v[3], double a[3]) {
+  (void)x, (void)v;
+  const double *g = ctx;
+  for (int k = 0; k < 3; k++) a[k] = -g[k];
+}
+
+static void accel_hook(void) {
+  gs_dem *d = one_particle(1e-4, -9.81);
+  d->p.x[0] = 0.04;
+  gs_error err = {0};
+  gs_dem_nozzle z = nozzle(1e-6, 0);
+  const double md = 1000 * M_PI / 6 * 1e-9;
+  z.end = d->prm.dt * 1.5;
+  z.mass_rate = 1.5 * md / z.end;
+  gs_dem_spray s;
+  CHECK(gs_dem_spray_init(&s, &z, 1, &err) == 0);
+  s.accel = cancel_gravity;
+  s.accel_ctx = d->prm.gravity;
+  for (int k = 0; k < 100; k++) {
+    CHECK(gs_dem_run(d, 1, &err) == 0);
+    CHECK(gs_dem_spray_step(&s, d, &err) == 0);
+  }
+  CHECK(s.n == 1);
+  if (s.n == 1) {
+    CHECK_ABS(s.drop[0].v[1], -2.0, 1e-12);
+    CHECK_ABS(s.drop[0].x[1], 0.01 - 100 * d->prm.dt * 2.0, 1e-12);
+  }
+  /* a non-finite acceleration stops the run naming the step */
+  double nan_g[3] = {NAN, 0, 0};
+  s.accel_ctx = nan_g;
+  CHECK(gs_dem_run(d, 1, &err) == 0);
+  CHECK(gs_dem_spray_step(&s, d, &err) == GS_ENUMERIC);
+  CHECK(strstr(err.msg, "non-finite") && strstr(err.msg, "step 101"));
+  fprintf(stderr, "stopped as expected: %s\n", err.msg);
   gs_dem_spray_free(&s);
   gs_dem_free(d);
 }
@@ -156,20 +200,7 @@ static const char *DRUM =
     "  box: {lo: [-0.04, -0.04, -0.001], hi: [0.04, 0.04, 0.021]}\n"
     "  gravity: [0, -9.81, 0]\n"
     "  seed: 5\n"
-    "materials:\n"
-    "  - {name: powder, E: 2.5e6, nu: 0.25, e: 0.1, mu_s: 0.5, density: 1030}\n"
-    "classes:\n"
-    "  - {name: primary, radius: 1.0e-3, material: powder}\n"
-    "walls:\n"
-    "  - name: drum\n"
-    "    cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.03}\n"
-    "    material: powder\n"
-    "    rotation: {origin: [0, 0, 0], axis: [0, 0, 1], rpm: 30}\n"
-    "  - {name: front, plane: {point: [0, 0, 0], normal: [0, 0, 1]}, material: powder}\n"
-    "  - {name: back, plane: {point: [0, 0, 0.02], normal: [0, 0, -1]}, material: powder}\n"
-    "fill:\n"
-    "  - region: {box: {lo: [-0.02, -0.028, 0.002], hi: [0.02, -0.005, 0.018]}}\n"
-    "    count: 250\n"
+    WET_DRUM_BED
     "outlets:\n"
     "  - region: {box: {lo: [0.012, -0.03, -0.001], hi: [0.03, -0.02, 0.021]}}\n"
     "spray:\n"
@@ -275,6 +306,7 @@ int main(void) {
   if (dt_scratch_begin("spray")) return 1;
   single_droplet();
   cone_statistics();
+  accel_hook();
   drum_ledger();
   bad_input();
   dt_scratch_end();

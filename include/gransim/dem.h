@@ -169,6 +169,7 @@ typedef struct {
   const int *type;
   const long *id;
   const double *t_in; /* time each particle entered */
+  const double *vs, *vl; /* solid and liquid volume [m^3] (liquid from spray droplets) */
 } gs_dem_view;
 void gs_dem_get_view(const gs_dem *d, gs_dem_view *v);
 double gs_dem_time(const gs_dem *d);

@@ -113,6 +113,13 @@ int gs_dem_impact_table_write(const char *path, const char *comment, size_t ncla
                               int edges_volume, const double *rate, const double *mu, const double *sigma,
                               gs_error *err);
 
+/* Write a collision-frequency kernel table, the file the `table` kernel
+ * reads (src/kernel/kernel_table.c): the comment lines (each starting with
+ * '#', may be NULL), a line naming the measure of the edges, `edges, e0, ...,
+ * en`, then the n x n matrix C (row-major). */
+int gs_dem_kernel_table_write(const char *path, const char *comment, size_t nclass, const double *edges,
+                              int edges_volume, const double *C, gs_error *err);
+
 /* Duration of a head-on Hertz contact (s): effective mass meff (kg), radius reff (m), modulus estar
  * (Pa, 1/E* = sum (1 - nu^2)/E), impact speed v (m/s), restitution e (>= 1 or <= 0: elastic,
  * 2.868 (meff^2 / (reff estar^2 v))^(1/5); else the LIGGGHTS viscoelastic damping for e, contact

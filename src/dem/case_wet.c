@@ -58,6 +58,9 @@ static int read_granulation(gs_dem_case *c, gs_cfg_node *g, double rmin, gs_erro
   if (fabs(q->every_k * c->prm.dt - q->every) > 1e-6 * q->every)
     return gs_cfg_fail(gs_cfg_get(g, "every"), err, "expected a whole number of time steps (dem.time_step %g s)",
                        c->prm.dt);
+  double tg = 100 * c->prm.dt;
+  if ((rc = gs_cfg_double_range(g, "growth_time", 0, tg, 0, 0, HUGE_VAL, 0, &tg, err))) return rc;
+  q->growth_k = (long)round(tg / c->prm.dt);
   q->rule.type = gs_registry_pick(rule, (const void *const *)gs_dem_rule_types, "success rule", err);
   if (!q->rule.type) return err->code;
   if ((rc = q->rule.type->read(rule, &q->rule, err)) || (rc = gs_cfg_check_unused(rule, err))) return rc;
@@ -65,6 +68,9 @@ static int read_granulation(gs_dem_case *c, gs_cfg_node *g, double rmin, gs_erro
   if ((rc = read_classes(g, "solid_classes", 4.0 / 3.0 * M_PI * rmin * rmin * rmin, &q->ds, &q->ns, err)) ||
       (rc = read_classes(g, "liquid_classes", vd, &q->dl, &q->nl, err)))
     return rc;
+  /* the per-update counts are a dense matrix over pairs of classes */
+  if (q->ns * q->nl > 1024)
+    return gs_cfg_fail(g, err, "solid_classes.count x liquid_classes.count = %d: at most 1024 classes", q->ns * q->nl);
   return gs_cfg_check_unused(g, err);
 }
 

@@ -35,8 +35,14 @@ typedef struct {
   double injected, on_particles, airborne, on_walls, left;
 } gs_dem_liquid_ledger;
 
+/* An acceleration on a droplet besides gravity (the gas phase's drag, for
+ * one): a[3] at position x and velocity v [m/s^2]. */
+typedef void (*gs_dem_drop_accel)(void *ctx, const double x[3], const double v[3], double a[3]);
+
 typedef struct {
   gs_dem_nozzle noz;
+  gs_dem_drop_accel accel;  /* NULL: gravity only */
+  void *accel_ctx;
   double vd, md, rd;        /* droplet volume, mass, radius */
   double e1[3], e2[3];      /* unit vectors normal to the axis */
   gsl_rng *rng;
@@ -104,6 +110,13 @@ typedef struct {
   uint8_t *used;            /* aggregated in this update */
   size_t idx_cap, cls_cap;
   double *ncoll, *nagg;     /* per class pair */
+  double *kn, *kexp;        /* per pair of solid classes, over the run: collisions
+                               and the exposure, the sum of F_a F_b dt over the updates */
+  char path_kernel[4200];
+  /* aggregates whose contact radius still grows to their size (growth.c) */
+  long growth_k;            /* steps the growth takes (0: the full size at once) */
+  struct gs_dem_growing *grow;
+  size_t ngrow, grow_cap;
 } gs_dem_granulation;
 
 /* Class (0 .. ns*nl-1) of a particle of solid volume vs and liquid vl:
@@ -119,6 +132,18 @@ void gs_dem_granulation_free(gs_dem_granulation *g);
 /* Merge particle j into particle i: summed solid, liquid and mass, at the
  * centre of mass with the momentum-conserving velocity; j is marked dead. */
 void gs_dem_merge(gs_dem *d, size_t i, size_t j);
+
+/* ---- aggregate growth (growth.c) ------------------------------------------ */
+typedef struct gs_dem_growing {
+  long id, step0;
+  double r0, r1;            /* contact radius at the merge and the aggregate's own */
+} gs_dem_growing;
+/* Particle i was just merged with a partner: its contact radius restarts at
+ * r0 and grows linearly to its size over g->growth_k steps. */
+int gs_dem_growth_add(gs_dem_granulation *g, gs_dem *d, size_t i, double r0, gs_error *err);
+/* Advance the growing radii (every growth_k/10 steps, each time followed by
+ * a neighbour-list rebuild, so no contact is missed). */
+void gs_dem_growth_step(gs_dem_granulation *g, gs_dem *d);
 
 /* ---- case keys and driver (case_wet.c, wet_run.c) ------------------------ */
 typedef struct gs_dem_wet {

@@ -25,6 +25,7 @@
 
 static int write_state(gs_dem_granulation *g, const gs_dem *d, uint64_t nwet, uint64_t ncol,
                        uint64_t nagg, gs_error *err);
+static int write_kernel(const gs_dem_granulation *g, gs_error *err);
 
 int gs_dem_granulation_class(const gs_dem_granulation *g, double vs, double vl) {
   double a = floor(vs / g->ds + 0.5), b = floor(vl / g->dl + 0.5);
@@ -71,8 +72,11 @@ int gs_dem_granulation_start(gs_dem_granulation *g, gs_dem *d, const char *dir, 
   const size_t nc = (size_t)g->ns * g->nl;
   g->ncoll = calloc(nc * nc, sizeof(double));
   g->nagg = calloc(nc * nc, sizeof(double));
+  g->kn = calloc((size_t)g->ns * g->ns, sizeof(double));
+  g->kexp = calloc((size_t)g->ns * g->ns, sizeof(double));
   g->rng = gsl_rng_alloc(gsl_rng_mt19937);
-  if (!g->ncoll || !g->nagg || !g->rng) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  if (!g->ncoll || !g->nagg || !g->kn || !g->kexp || !g->rng) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  snprintf(g->path_kernel, sizeof g->path_kernel, "%s/granulation_kernel.csv", dir);
   gsl_rng_set(g->rng, (unsigned long)(seed ^ 0x9e3779b9ULL));
   int rc = gs_dem_pair_log_enable(d, err);
   if (rc) return rc;
@@ -86,7 +90,7 @@ int gs_dem_granulation_start(gs_dem_granulation *g, gs_dem *d, const char *dir, 
   fprintf(g->f_cls, "time,solid_class,liquid_class,solid_volume,liquid_volume,particles\n");
   fprintf(g->f_col, "time,solid_class_a,liquid_class_a,solid_class_b,liquid_class_b,particles_a,particles_b,"
                     "interval,collisions,aggregations,C_ab\n");
-  return write_state(g, d, 0, 0, 0, err);
+  return (rc = write_kernel(g, err)) ? rc : write_state(g, d, 0, 0, 0, err);
 }
 
 static int grow(void **ptr, size_t *cap, size_t need, size_t elem, gs_error *err) {
@@ -134,6 +138,36 @@ static int write_state(gs_dem_granulation *g, const gs_dem *d, uint64_t nwet, ui
   return GS_OK;
 }
 
+/* The run's collision frequencies between solid classes as a `table`
+ * kernel file (the writer of gransim dem-reduce), rewritten at every update:
+ * C_ab = N_ab / sum(F_a F_b dt) and C_aa = 2 N_aa / sum(F_a^2 dt), the
+ * convention of the PBM's pair loop (docs/models.md, "Collision
+ * frequencies"). */
+static int write_kernel(const gs_dem_granulation *g, gs_error *err) {
+  const size_t n = (size_t)g->ns;
+  double *C = malloc(n * n * sizeof(double)), *e = malloc((n + 1) * sizeof(double));
+  if (!C || !e) {
+    free(C);
+    free(e);
+    return gs_error_set(err, GS_ENOMEM, "out of memory");
+  }
+  for (size_t a = 0; a < n; a++)
+    for (size_t b = 0; b < n; b++) {
+      const double x = g->kexp[a * n + b];
+      C[a * n + b] = x > 0 ? (a == b ? 2 : 1) * g->kn[a * n + b] / x : 0;
+    }
+  for (size_t k = 0; k <= n; k++) e[k] = (k + 0.5) * g->ds;
+  char comment[400];
+  snprintf(comment, sizeof comment,
+           "# gransim dem granulation: collision frequency C_ab [1/s per pair of particles] between classes of "
+           "solid volume, %ld update(s) to t = %.9g s;\n# C_ab = N_ab / sum(F_a F_b dt), C_aa = 2 N_aa / "
+           "sum(F_a^2 dt); 0 for classes never populated\n", g->updates, g->t_last);
+  int rc = gs_dem_kernel_table_write(g->path_kernel, comment, n, e, 1, C, err);
+  free(C);
+  free(e);
+  return rc;
+}
+
 static gs_dem_partner partner(const gs_dem_particles *p, size_t i) {
   return (gs_dem_partner){p->m[i], p->r[i], p->vs[i], p->vl[i]};
 }
@@ -177,7 +211,13 @@ int gs_dem_granulation_update(gs_dem_granulation *g, gs_dem *d, gs_error *err) {
     if (!g->rule.type->success(&g->rule, &a, &b, q->vn, u)) continue;
     /* the larger solid survives (the earlier particle on a tie) */
     const int keep_a = p->vs[ia] >= p->vs[ib];
-    gs_dem_merge(d, keep_a ? (size_t)ia : (size_t)ib, keep_a ? (size_t)ib : (size_t)ia);
+    const size_t keep = keep_a ? (size_t)ia : (size_t)ib;
+    const double r0 = fmax(p->r[ia], p->r[ib]);
+    gs_dem_merge(d, keep, keep_a ? (size_t)ib : (size_t)ia);
+    if (g->growth_k > 0 && (rc = gs_dem_growth_add(g, d, keep, r0, err))) {
+      free(pop);
+      return rc;
+    }
     g->used[q->ida] = g->used[q->idb] = 1;
     g->nagg[(size_t)ca * nc + cb] += 1;
     nagg++;
@@ -192,12 +232,26 @@ int gs_dem_granulation_update(gs_dem_granulation *g, gs_dem *d, gs_error *err) {
   for (size_t a = 0; a < nc; a++)
     for (size_t b = a; b < nc; b++) {
       const double N = g->ncoll[a * nc + b];
+      const size_t sa = a / g->nl, sb = b / g->nl;
+      g->kn[sa * g->ns + sb] += N;
+      if (sa != sb) g->kn[sb * g->ns + sa] += N;
       if (N == 0) continue;
-      const double C = pop[a] > 0 && pop[b] > 0 && span > 0 ? N / (pop[a] * pop[b] * span) : 0;
+      const double C = pop[a] > 0 && pop[b] > 0 && span > 0 ? (a == b ? 2 : 1) * N / (pop[a] * pop[b] * span) : 0;
       fprintf(g->f_col, "%.9g,%zu,%zu,%zu,%zu,%.0f,%.0f,%.9g,%.0f,%.0f,%.9g\n", t, a / g->nl + 1, a % g->nl,
               b / g->nl + 1, b % g->nl, pop[a], pop[b], span, N, g->nagg[a * nc + b], C);
     }
+  /* the exposure of the solid classes over this interval */
+  double *fs = calloc((size_t)g->ns, sizeof(double));
+  if (!fs) {
+    free(pop);
+    return gs_error_set(err, GS_ENOMEM, "out of memory");
+  }
+  for (size_t a = 0; a < nc; a++) fs[a / g->nl] += pop[a];
+  for (int a = 0; a < g->ns; a++)
+    for (int b = 0; b < g->ns; b++) g->kexp[a * g->ns + b] += fs[a] * fs[b] * span;
+  free(fs);
   free(pop);
+  if ((rc = write_kernel(g, err))) return rc;
   /* drop the merged-away particles now, so that every view and output of
    * this time sees the particles the classes describe */
   if (nagg && ((rc = gs_dem_prepare(d, err)) || (rc = gs_dem_rebuild(d, err)))) return rc;
@@ -226,6 +280,12 @@ void gs_dem_granulation_free(gs_dem_granulation *g) {
   free(g->used);
   free(g->ncoll);
   free(g->nagg);
+  free(g->kn);
+  free(g->kexp);
+  free(g->grow);
+  g->kn = g->kexp = NULL;
+  g->grow = NULL;
+  g->ngrow = g->grow_cap = 0;
   g->rng = NULL;
   g->cls = g->idx = NULL;
   g->used = NULL;

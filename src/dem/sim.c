@@ -337,6 +337,7 @@ void gs_dem_get_view(const gs_dem *d, gs_dem_view *v) {
   v->vx = p->vx, v->vy = p->vy, v->vz = p->vz;
   v->wx = p->wx, v->wy = p->wy, v->wz = p->wz;
   v->r = p->r, v->m = p->m, v->type = p->type, v->id = p->id, v->t_in = p->t_in;
+  v->vs = p->vs, v->vl = p->vl;
 }
 
 double gs_dem_time(const gs_dem *d) { return d->t; }

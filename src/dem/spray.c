@@ -60,8 +60,10 @@ void gs_dem_absorb(gs_dem *d, size_t i, double vol, double mass, const double v[
   p->vx[i] = (p->m[i] * p->vx[i] + mass * v[0]) / m;
   p->vy[i] = (p->m[i] * p->vy[i] + mass * v[1]) / m;
   p->vz[i] = (p->m[i] * p->vz[i] + mass * v[2]) / m;
-  /* spin: the droplet brings no angular momentum about the centre it joins */
-  const double I0 = 1.0 / p->invI[i], I1 = 0.4 * m * p->r[i] * p->r[i];
+  /* spin: the droplet brings no angular momentum about the centre it joins;
+   * the moment of inertia grows with the mass at the same size (not from the
+   * contact radius, which lags behind the size of a growing aggregate) */
+  const double I0 = 1.0 / p->invI[i], I1 = I0 * m / p->m[i];
   p->wx[i] *= I0 / I1;
   p->wy[i] *= I0 / I1;
   p->wz[i] *= I0 / I1;
@@ -131,14 +133,22 @@ int gs_dem_spray_step(gs_dem_spray *s, gs_dem *d, gs_error *err) {
       }
     }
   }
-  /* move (semi-implicit Euler under gravity), then settle each droplet */
+  /* move (semi-implicit Euler under gravity and the optional acceleration),
+   * then settle each droplet */
   size_t keep = 0;
   for (size_t k = 0; k < s->n; k++) {
     gs_dem_drop q = s->drop[k];
+    double acc[3] = {0, 0, 0};
+    if (s->accel) s->accel(s->accel_ctx, q.x, q.v, acc);
     for (int a = 0; a < 3; a++) {
-      q.v[a] += dt * d->prm.gravity[a];
+      q.v[a] += dt * (d->prm.gravity[a] + acc[a]);
       q.x[a] += dt * q.v[a];
     }
+    if (!isfinite(q.x[0] + q.x[1] + q.x[2] + q.v[0] + q.v[1] + q.v[2]))
+      return gs_error_set(err, GS_ENUMERIC,
+                          "spray: droplet %zu of %zu airborne has a non-finite position or velocity at t = %g s "
+                          "(step %ld); its acceleration besides gravity is not finite",
+                          k, s->n, t, d->step);
     long i = touched_particle(d, q.x, s->rd);
     if (i >= 0) {
       gs_dem_absorb(d, (size_t)i, s->vd, s->md, q.v);

@@ -1,5 +1,5 @@
 /* Legacy VTK output for ParaView: particles as points with radius, class,
- * id and velocity; wall meshes as triangles at their current position. */
+ * id, liquid content l / (s + l) and velocity; wall meshes as triangles at their current position. */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,6 +24,11 @@ int gs_dem_write_vtk_particles(const gs_dem *d, const char *path, gs_error *err)
   for (size_t i = 0; i < v.n; i++) fprintf(fp, "%d\n", gs_dem_type_class(d, v.type[i]));
   fprintf(fp, "SCALARS id int 1\nLOOKUP_TABLE default\n");
   for (size_t i = 0; i < v.n; i++) fprintf(fp, "%ld\n", v.id[i]);
+  fprintf(fp, "SCALARS liquid_content double 1\nLOOKUP_TABLE default\n");
+  for (size_t i = 0; i < v.n; i++) {
+    const double t = v.vs[i] + v.vl[i];
+    fprintf(fp, "%.6g\n", t > 0 ? v.vl[i] / t : 0);
+  }
   fprintf(fp, "VECTORS velocity double\n");
   for (size_t i = 0; i < v.n; i++) fprintf(fp, "%.6g %.6g %.6g\n", v.vx[i], v.vy[i], v.vz[i]);
   int bad = ferror(fp);

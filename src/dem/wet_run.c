@@ -37,7 +37,10 @@ int gs_dem_wet_advance(gs_dem_case *c, long nsteps, gs_error *err) {
   for (long s = 0; s < nsteps && !rc; s++) {
     rc = gs_dem_run(d, 1, err);
     if (!rc && w->has_spray) rc = gs_dem_spray_step(&w->spray, d, err);
-    if (!rc && w->has_gran && d->step % w->gran.every_k == 0) rc = gs_dem_granulation_update(&w->gran, d, err);
+    if (!rc && w->has_gran) {
+      gs_dem_growth_step(&w->gran, d);
+      if (d->step % w->gran.every_k == 0) rc = gs_dem_granulation_update(&w->gran, d, err);
+    }
   }
   return rc;
 }

@@ -699,31 +699,40 @@ int gs_dem_data_write_impacts(const gs_dem_data *d, const char *path, gs_error *
   return rc;
 }
 
+int gs_dem_kernel_table_write(const char *path, const char *comment, size_t nclass, const double *edges,
+                              int edges_volume, const double *C, gs_error *err) {
+  FILE *fp = fopen(path, "w");
+  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  if (comment) fputs(comment, fp);
+  fprintf(fp, "# edges measure particle %s: use `kernel: {type: table, measure: %s, file: ...}`\nedges",
+          edges_volume ? "volume [m^3]" : "diameter [m]", edges_volume ? "volume" : "diameter");
+  for (size_t i = 0; i <= nclass; i++) fprintf(fp, ", %.10g", edges[i]);
+  fprintf(fp, "\n");
+  for (size_t i = 0; i < nclass; i++) {
+    for (size_t j = 0; j < nclass; j++) fprintf(fp, "%s%.10g", j ? ", " : "", C[i * nclass + j]);
+    fprintf(fp, "\n");
+  }
+  int bad = ferror(fp);
+  if (fclose(fp) || bad) return gs_error_set(err, GS_EIO, "%s: write failed", path);
+  return GS_OK;
+}
+
 int gs_dem_data_write_table(const gs_dem_data *d, const char *path, gs_error *err) {
   size_t n = d->nclass;
   double *e = malloc((n + 1) * sizeof(double));
   if (!e) return gs_error_set(err, GS_ENOMEM, "out of memory");
-  int volume = d->edges_volume;
-  int erc = table_edges(d, path, e, err);
-  if (erc) {
+  int rc = table_edges(d, path, e, err);
+  if (rc) {
     free(e);
-    return erc;
+    return rc;
   }
-  FILE *fp = fopen(path, "w");
-  if (!fp) { free(e); return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno)); }
-  fprintf(fp, "# gransim dem-reduce: DEM collision frequency C_ij [1/s per pair of particles], mean of %zu "
-          "snapshot(s) (steps %ld..%ld);\n# C_ij = E_ij/(N_i N_j), C_ii = 2 E_ii/N_i^2, E = current contacts / "
-          "contact time (t_c = %.6g s for class 1-1)\n# edges measure particle %s: use `kernel: {type: table, "
-          "measure: %s, file: ...}`\nedges", d->nsnap, d->nsnap ? d->steps[0] : 0, d->nsnap ? d->steps[d->nsnap - 1] : 0,
-          d->contact_time, volume ? "volume [m^3]" : "diameter [m]", volume ? "volume" : "diameter");
-  for (size_t i = 0; i <= n; i++) fprintf(fp, ", %.10g", e[i]);
-  fprintf(fp, "\n");
-  for (size_t i = 0; i < n; i++) {
-    for (size_t j = 0; j < n; j++) fprintf(fp, "%s%.10g", j ? ", " : "", d->collision[i * n + j]);
-    fprintf(fp, "\n");
-  }
+  char comment[600];
+  snprintf(comment, sizeof comment,
+           "# gransim dem-reduce: DEM collision frequency C_ij [1/s per pair of particles], mean of %zu "
+           "snapshot(s) (steps %ld..%ld);\n# C_ij = E_ij/(N_i N_j), C_ii = 2 E_ii/N_i^2, E = current contacts / "
+           "contact time (t_c = %.6g s for class 1-1)\n",
+           d->nsnap, d->nsnap ? d->steps[0] : 0, d->nsnap ? d->steps[d->nsnap - 1] : 0, d->contact_time);
+  rc = gs_dem_kernel_table_write(path, comment, n, e, d->edges_volume, d->collision, err);
   free(e);
-  int bad = ferror(fp);
-  if (fclose(fp) || bad) return gs_error_set(err, GS_EIO, "%s: write failed", path);
-  return GS_OK;
+  return rc;
 }
