@@ -110,6 +110,10 @@ struct gs_model {
   int size_axes;  /* bitmask of axes summed into the granule volume for sizes (d10/d50/d90) */
   double *size_volume; /* ncells: granule volume used for diameters */
   char dir[1024];      /* directory of the case file, for relative paths in it ("." default) */
+  /* The case's distributions (initial, feeds) as asked and as the grid holds
+   * them, and the tolerance they are held to (distribution.h).  Behind a
+   * pointer: feeds report while they are built from a const model. */
+  struct gs_disc_log *disc;
   /* Scratch sets each mechanism keeps (OpenMP's maximum threads when the
    * model was built): an evaluation context's slot picks one, so that
    * threads evaluating different compartments at once never share scratch. */
