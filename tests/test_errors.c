@@ -256,7 +256,7 @@ static void test_distorted_inputs(void) {
   }
 }
 
-/* Resources: output.count 10^7 of 400 cells would write 41 GB; 10^6
+/* Resources: output.count 10^7 of 400 cells would write 34.7 GB; 10^6
  * compartments of 20 cells need at least 10 GB (a lower bound: the state's
  * vectors and the pages each mechanism keeps per compartment). */
 static void test_limits(void) {

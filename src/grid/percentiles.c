@@ -94,4 +94,6 @@ void gs_size_percentiles_ranges(const gs_size_range *r, size_t n, gs_size_point 
   }
   /* round-off may leave the walk's total just below the weights' sum */
   while (next < np) out[next++] = ev[m - 1].v;
+  /* cube roots only for the percentiles (docs/performance.md) */
+  for (int i = 0; i < np; i++) out[i] = gs_diameter(out[i]);
 }

@@ -2,11 +2,12 @@
  *
  * Percentiles d10/d50/d90 are volume-weighted percentiles of the
  * volume-equivalent diameter d = (6 V / pi)^(1/3), V = sum of the size axes.
- * Each cell's volume N V (V at the pivot) is spread evenly in d between the
- * diameters of its edges, so the cumulative volume fraction is linear within
- * cells and the percentiles move continuously with the numbers (as point
- * masses they jumped by whole cells on tiny changes); a single occupied
- * cell gives d10, d50, d90 at 0.1, 0.5, 0.9 of its diameter range. */
+ * Each cell's volume N V (V at the pivot) is spread evenly between the
+ * granule volumes of its edges, so the cumulative volume fraction is linear
+ * within cells and the percentiles move continuously with the numbers (as
+ * point masses they jumped by whole cells on tiny changes); a single
+ * occupied cell gives d10, d50, d90 at the diameters of 0.1, 0.5, 0.9 of its
+ * volume range. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,9 +28,9 @@ double gs_moment(const gs_model *m, const double *y, size_t comp, const int *pow
 }
 
 /* Volume-weighted percentiles p[0..np-1] (fractions) of the diameter, the
- * volume of each occupied cell spread evenly in diameter between the
- * granule volumes of its lower and upper edges (the size axes' edges summed,
- * plus the carried volume per particle, which vol holds at the pivot). */
+ * volume of each occupied cell spread evenly between the granule volumes of
+ * its lower and upper edges (the size axes' edges summed, plus the carried
+ * volume per particle, which vol holds at the pivot). */
 static void percentiles(const gs_model *m, const double *vol, const double *N, const double *p,
                         int np, double *out) {
   const gs_grid *g = &m->grid;
@@ -53,7 +54,7 @@ static void percentiles(const gs_model *m, const double *vol, const double *N, c
         lo += g->axis[d].edges[idx[d]];
         hi += g->axis[d].edges[idx[d] + 1];
       }
-    r[k++] = (gs_size_range){gs_diameter(lo), gs_diameter(hi), N[c] * vol[c]};
+    r[k++] = (gs_size_range){lo, hi, N[c] * vol[c]};
   }
   gs_size_percentiles_ranges(r, k, scratch, p, np, out);
   free(r);
