@@ -10,6 +10,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_sf_gamma.h>
+
 #include "gransim/distribution.h"
 #include "pbm_testlib.h"
 
@@ -271,8 +274,24 @@ static void test_limits(void) {
   EXPECT_INPUT(GRID400 "output: {end: 1}\nlimits: {output: 1}\n", "unknown key 'output'", "memory_gb, output_gb");
 }
 
+/* GSL's errors: the handler libgransim installs when loaded records them and
+ * returns (GSL's default aborts the process), so the caller can name the key. */
+static void test_gsl_errors(void) {
+  gs_gsl_clear();
+  CHECK(!*gs_gsl_reason());
+  gsl_sf_result r;
+  CHECK(gsl_sf_beta_inc_e(-1, 1, 0.5, &r) == GSL_EDOM);
+  CHECK(strstr(gs_gsl_reason(), "input domain error") && strstr(gs_gsl_reason(), "beta_inc.c"));
+  gs_error e = {0};
+  CHECK(gs_gsl_error(&e, GS_EINPUT, "mechanisms[0].daughters") == GS_EINPUT);
+  CHECK(strstr(e.msg, "mechanisms[0].daughters: GSL: ") == e.msg);
+  gs_gsl_clear();
+  CHECK(!*gs_gsl_reason());
+}
+
 int main(void) {
   omp_set_num_threads(1); /* small grids: threads only add overhead */
+  test_gsl_errors();
   test_case_errors();
   test_distorted_inputs();
   test_limits();
