@@ -260,8 +260,9 @@ static void test_distorted_inputs(void) {
 }
 
 /* Resources: output.count 10^7 of 400 cells would write 34.7 GB; 10^6
- * compartments of 20 cells need at least 10 GB (a lower bound: the state's
- * vectors and the pages each mechanism keeps per compartment). */
+ * compartments of 20 cells with aggregation need at least 14.4 GB (a lower
+ * bound: the state's vectors and the 3 pages aggregation keeps per
+ * compartment). */
 static void test_limits(void) {
   EXPECT_INPUT(GRID400 "output: {end: 1, count: 10000000}\n",
                "bad.yaml:2: output", "10000000 output times of 1 compartments x 400 cells would write",
@@ -269,7 +270,7 @@ static void test_limits(void) {
   EXPECT_INPUT("grid: {compartments: 1000000, axes: [{name: v, type: geometric, min: 1, ratio: 2, cells: 20}]}\n"
                "mechanisms: [{type: aggregation, kernel: {type: constant, beta0: 1}}]\n"
                "output: {end: 1}\nlimits: {memory_gb: 4}\n",
-               "bad.yaml:1: grid", "needs at least", "1000000 compartments x 20 cells, 1 mechanisms",
+               "bad.yaml:1: grid", "needs at least 14.4 GB", "1000000 compartments x 20 cells; the state's vectors and 3 pages",
                "more than limits.memory_gb = 4 GB");
   EXPECT_INPUT(GRID400 "output: {end: 1}\nlimits: {output: 1}\n", "unknown key 'output'", "memory_gb, output_gb");
 }

@@ -75,6 +75,9 @@ typedef struct gs_mech_type {
    * is k times comp's numbers and carried totals).  Per-compartment steps
    * need it to hand each compartment's discharge to the next. */
   double (*outflow_rate)(void *self, size_t comp);
+  /* Pages (GS_APART) it keeps per compartment, for the memory a case is
+   * estimated to need before it is built (limits.memory_gb). */
+  int pages_per_compartment;
 } gs_mech_type;
 
 typedef struct gs_mechanism {

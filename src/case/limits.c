@@ -9,10 +9,6 @@
  * the integrator's stages and error estimate (Runge-Kutta-Fehlberg: 6
  * stages, y0, yerr, two derivatives; CVODE holds more). */
 #define STATE_VECTORS 12
-/* Pages a mechanism may keep per compartment: threads evaluating
- * neighbouring compartments write their choices on pages of their own
- * (GS_APART); aggregation keeps two. */
-#define PAGES_PER_MECHANISM 2
 /* Characters of a summary.csv value: 10 significant digits, sign, point,
  * exponent, separator. */
 #define CSV_CHARS 17
@@ -33,10 +29,9 @@ int gs_limits_read(gs_cfg_node *root, gs_limits *lim, gs_error *err) {
   return rc;
 }
 
-double gs_limits_memory_bytes(const gs_model *m, size_t nmech) {
+double gs_limits_memory_bytes(const gs_model *m, int pages) {
   const double per_comp = (double)m->grid.ncells * (1 + m->ncarried) + 2.0 * m->nvol;
-  return (double)m->grid.ncomp * (STATE_VECTORS * 8 * per_comp +
-                                  (double)nmech * PAGES_PER_MECHANISM * (double)GS_APART);
+  return (double)m->grid.ncomp * (STATE_VECTORS * 8 * per_comp + pages * (double)GS_APART);
 }
 
 double gs_limits_output_bytes(const gs_model *m, size_t ntimes) {
@@ -50,15 +45,25 @@ double gs_limits_output_bytes(const gs_model *m, size_t ntimes) {
 
 int gs_limits_check_memory(const gs_limits *lim, gs_cfg_node *root, const gs_model *m,
                            gs_error *err) {
+  /* the pages the mechanisms keep per compartment (their types as named:
+   * an unknown one is reported when the mechanisms are read) */
   gs_cfg_node *mech = gs_cfg_get(root, "mechanisms");
-  const double need = gs_limits_memory_bytes(m, mech ? gs_cfg_size(mech) : 0) / 1e9;
+  int pages = 0;
+  for (size_t i = 0; gs_cfg_kind_of(mech) == GS_CFG_SEQ && i < gs_cfg_size(mech); i++) {
+    gs_cfg_node *item = gs_cfg_item(mech, i);
+    const char *type = gs_cfg_kind_of(item) == GS_CFG_MAP ? gs_cfg_scalar(gs_cfg_get(item, "type")) : NULL;
+    const gs_mech_type *t = type ? gs_mech_lookup(type) : NULL;
+    if (t) pages += t->pages_per_compartment;
+  }
+  const double need = gs_limits_memory_bytes(m, pages) / 1e9;
   if (need <= lim->memory_gb) return GS_OK;
   return gs_cfg_fail(gs_cfg_get(root, "grid"), err,
                      "a run of this case needs at least %.3g GB of memory (%zu compartments x %zu "
-                     "cells, %zu mechanisms), more than limits.memory_gb = %.3g GB%s: use fewer "
-                     "compartments or cells, or raise limits.memory_gb on a larger machine",
-                     need, m->grid.ncomp, m->grid.ncells, mech ? gs_cfg_size(mech) : 0,
-                     lim->memory_gb, lim->node ? "" : " (80 % of this machine's memory)");
+                     "cells; the state's vectors and %d pages per compartment that the mechanisms "
+                     "keep), more than limits.memory_gb = %.3g GB%s: use fewer compartments or "
+                     "cells, or raise limits.memory_gb on a larger machine",
+                     need, m->grid.ncomp, m->grid.ncells, pages, lim->memory_gb,
+                     lim->node ? "" : " (80 % of this machine's memory)");
 }
 
 int gs_limits_check_output(const gs_limits *lim, gs_cfg_node *root, const gs_model *m,

@@ -16,7 +16,7 @@ typedef struct {
 int gs_limits_read(gs_cfg_node *root, gs_limits *lim, gs_error *err);
 /* Before the mechanisms are built: the least memory a run of this grid and
  * these mechanisms needs (the state's vectors and the pages each mechanism
- * keeps per compartment). */
+ * keeps per compartment, gs_mech_type.pages_per_compartment). */
 int gs_limits_check_memory(const gs_limits *lim, gs_cfg_node *root, const gs_model *m,
                            gs_error *err);
 /* Once the output times are known: the bytes result.h5 and summary.csv
@@ -24,5 +24,5 @@ int gs_limits_check_memory(const gs_limits *lim, gs_cfg_node *root, const gs_mod
 int gs_limits_check_output(const gs_limits *lim, gs_cfg_node *root, const gs_model *m,
                            size_t ntimes, gs_error *err);
 double gs_limits_output_bytes(const gs_model *m, size_t ntimes);
-double gs_limits_memory_bytes(const gs_model *m, size_t nmech);
+double gs_limits_memory_bytes(const gs_model *m, int pages);
 #endif
