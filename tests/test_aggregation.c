@@ -362,11 +362,9 @@ static void test_negligible_cells(void) {
  * lies on a cell edge; the edge belongs to the cell above (grid.h,
  * gs_axis_locate_snapped), so all births pooled in a cell sit on its lower
  * edge, halfway between two pivots, and the cell average places them exactly
- * as fixed pivot does.  Before the rule, round-off put about 18 % of the sums
- * one cell low, pooled with those of the other edge (2.8e-3 apart in mass
- * fraction on this case).  The case is the issue's: 320 equidistant classes,
- * continuum Brownian kernel (Dyssol's agglomeration test has the same grid
- * and kernel).  Pivots at the right edges put every sum on an edge and on a
+ * as fixed pivot does.  Before the rule, round-off put some of the sums one
+ * cell low, pooled with those of the other edge.  The case is after issue
+ * 29's: 320 equidistant classes, continuum Brownian kernel.  Pivots at the right edges put every sum on an edge and on a
  * pivot at once.  The run stops (t = 2, M0 0.19) while the distribution at
  * the last edge is below 1e-17: there the schemes differ by design (fixed
  * pivot clamps each product above the last pivot, cell average pools the
