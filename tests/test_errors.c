@@ -10,6 +10,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_sf_gamma.h>
+
+#include "gransim/distribution.h"
 #include "pbm_testlib.h"
 
 /* The case must fail to build with code `code` and a message containing
@@ -222,9 +226,76 @@ static void test_tight_tolerance(void) {
   }
 }
 
+/* ---- distributions the grid would distort, resources beyond the limits ---------- */
+/* The issue's case: an exponential of mean 0.2 on a linear grid of cells 1
+ * wide sits on the first pivot (0.5) with 2.52 times its volume; so does a
+ * feed's distribution.  The message names the key, the quantity, the
+ * represented and the requested value and the tolerance; a tolerance above
+ * the error lets the same case build, and the log holds the comparison. */
+#define GRID400 "grid: {axes: [{name: v, type: linear, min: 0, max: 400, cells: 400}]}\n"
+static void test_distorted_inputs(void) {
+  EXPECT_INPUT(GRID400 "initial: {type: exponential, number: 1, mean: 0.2}\noutput: {end: 1}\n",
+               "bad.yaml:2: initial", "volume of axis 'v' of 0.504717 instead of the requested 0.2",
+               "discretisation.tolerance = 0.01", "refine the grid");
+  EXPECT_INPUT(GRID400 "output: {end: 1}\nmechanisms:\n"
+                       "  - {type: feed, distribution: {type: gamma, number: 2, mean: 0.3, shape: 2}}\n",
+               "bad.yaml:4: mechanisms[0].distribution", "volume of axis 'v'", "requested 0.6",
+               "discretisation.tolerance = 0.01");
+  EXPECT_INPUT(GRID400 "initial: {type: exponential, number: 1, mean: 0.2}\noutput: {end: 1}\n"
+                       "discretisation: {tolerance: 0}\n",
+               "bad.yaml:4: discretisation.tolerance = '0': expected a number > 0");
+  gs_case c;
+  if (!tl_case(GRID400 "initial: [{type: exponential, number: 1, mean: 0.2}, {type: exponential, number: 1, mean: 20}]\n"
+                       "output: {end: 1}\ndiscretisation: {tolerance: 2}\n", &c)) {
+    const gs_disc_log *log = c.model.disc;
+    CHECK(log->n == 2 && log->tolerance == 2);
+    if (log->n == 2) {
+      CHECK(fabs(log->r[0].volume[0][1] / 0.504717 - 1) < 1e-6 && log->r[0].volume[0][0] == 0.2);
+      CHECK(fabs(gs_disc_error(&log->r[0]) - 1.523585) < 1e-5);
+      /* a distribution the grid resolves: the cells' first moments are kept */
+      CHECK(gs_disc_error(&log->r[1]) < 1e-3 && strstr(log->r[1].key, "t.yaml:2: initial[1]"));
+    }
+    gs_case_free(&c);
+  }
+}
+
+/* Resources: output.count 10^7 of 400 cells would write 34.7 GB; 10^6
+ * compartments of 20 cells with aggregation need at least 14.4 GB (a lower
+ * bound: the state's vectors and the 3 pages aggregation keeps per
+ * compartment). */
+static void test_limits(void) {
+  EXPECT_INPUT(GRID400 "output: {end: 1, count: 10000000}\n",
+               "bad.yaml:2: output", "10000000 output times of 1 compartments x 400 cells would write",
+               "more than limits.output_gb = 10 GB");
+  EXPECT_INPUT("grid: {compartments: 1000000, axes: [{name: v, type: geometric, min: 1, ratio: 2, cells: 20}]}\n"
+               "mechanisms: [{type: aggregation, kernel: {type: constant, beta0: 1}}]\n"
+               "output: {end: 1}\nlimits: {memory_gb: 4}\n",
+               "bad.yaml:1: grid", "needs at least 14.4 GB", "1000000 compartments x 20 cells; the state's vectors and 3 pages",
+               "more than limits.memory_gb = 4 GB");
+  EXPECT_INPUT(GRID400 "output: {end: 1}\nlimits: {output: 1}\n", "unknown key 'output'", "memory_gb, output_gb");
+}
+
+/* GSL's errors: the handler libgransim installs when loaded records them and
+ * returns (GSL's default aborts the process), so the caller can name the key. */
+static void test_gsl_errors(void) {
+  gs_gsl_clear();
+  CHECK(!*gs_gsl_reason());
+  gsl_sf_result r;
+  CHECK(gsl_sf_beta_inc_e(-1, 1, 0.5, &r) == GSL_EDOM);
+  CHECK(strstr(gs_gsl_reason(), "input domain error") && strstr(gs_gsl_reason(), "beta_inc.c"));
+  gs_error e = {0};
+  CHECK(gs_gsl_error(&e, GS_EINPUT, "mechanisms[0].daughters") == GS_EINPUT);
+  CHECK(strstr(e.msg, "mechanisms[0].daughters: GSL: ") == e.msg);
+  gs_gsl_clear();
+  CHECK(!*gs_gsl_reason());
+}
+
 int main(void) {
   omp_set_num_threads(1); /* small grids: threads only add overhead */
+  test_gsl_errors();
   test_case_errors();
+  test_distorted_inputs();
+  test_limits();
   test_table_errors();
   test_run_errors();
   test_tight_tolerance();

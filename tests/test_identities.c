@@ -32,6 +32,7 @@
  * flux (sum |dydt| x); 1e-10 where quadrature is involved.  The observed
  * errors are ~1e-15..1e-13 (printed at the end); a wrong weight, a factor 2
  * or a sign error gives O(1) errors. */
+#include <float.h>
 #include <gsl/gsl_cdf.h>
 #include <gsl/gsl_integration.h>
 #include <gsl/gsl_randist.h>
@@ -171,13 +172,19 @@ static void ref_place(const gs_grid *g, const double *v, double count, double *d
 }
 
 /* Cell containing v by the edges (last cell includes its upper edge), or -1. */
+/* The cell of a pivot sum: a sum within 16 epsilons (relative) of an edge
+ * is on it (docs/models.md, "Sums on cell edges"), an edge belongs to the
+ * cell above, the last edge to the last cell. */
 static long ref_cell(const gs_grid *g, const double *v) {
   size_t c = 0;
   for (int k = 0; k < g->dim; k++) {
     const gs_axis *ax = &g->axis[k];
-    if (v[k] < ax->edges[0] || v[k] > ax->edges[ax->n]) return -1;
+    double x = v[k];
+    for (size_t e = 0; e <= ax->n; e++)
+      if (fabs(x - ax->edges[e]) <= 16 * DBL_EPSILON * fmax(fabs(x), ax->edges[e])) x = ax->edges[e];
+    if (x < ax->edges[0] || x > ax->edges[ax->n]) return -1;
     size_t i = 0;
-    while (i + 1 < ax->n && ax->edges[i + 1] <= v[k]) i++;
+    while (i + 1 < ax->n && ax->edges[i + 1] <= x) i++;
     c += i * g->stride[k];
   }
   return (long)c;

@@ -102,6 +102,23 @@ typedef struct gs_size_point {
 void gs_size_percentiles(gs_size_point *pts, gs_size_point *scratch, size_t n, const double *p,
                          int np, double *out);
 
+/* A cell's part of a size distribution: weight w >= 0 spread evenly over
+ * the granule volumes [lo, hi] (lo < hi), so that the cumulative
+ * distribution is linear in the volume between the volumes of the cells'
+ * edges. */
+typedef struct gs_size_range {
+  double lo, hi, w;
+} gs_size_range;
+
+/* Weighted percentiles p[0..np) (fractions, ascending) of the
+ * volume-equivalent diameter of the ranges r[0..n): the diameter of the
+ * volume where the cumulative weight reaches p times the total.  Unlike
+ * point masses they move continuously with the weights (a percentile jumps
+ * only across volumes that hold no weight at all, to the start of the next
+ * weight).  NaN when there is no weight; scratch holds 4 n points. */
+void gs_size_percentiles_ranges(const gs_size_range *r, size_t n, gs_size_point *scratch,
+                                const double *p, int np, double *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -75,6 +75,9 @@ typedef struct gs_mech_type {
    * is k times comp's numbers and carried totals).  Per-compartment steps
    * need it to hand each compartment's discharge to the next. */
   double (*outflow_rate)(void *self, size_t comp);
+  /* Pages (GS_APART) it keeps per compartment, for the memory a case is
+   * estimated to need before it is built (limits.memory_gb). */
+  int pages_per_compartment;
 } gs_mech_type;
 
 typedef struct gs_mechanism {
@@ -110,6 +113,10 @@ struct gs_model {
   int size_axes;  /* bitmask of axes summed into the granule volume for sizes (d10/d50/d90) */
   double *size_volume; /* ncells: granule volume used for diameters */
   char dir[1024];      /* directory of the case file, for relative paths in it ("." default) */
+  /* The case's distributions (initial, feeds) as asked and as the grid holds
+   * them, and the tolerance they are held to (distribution.h).  Behind a
+   * pointer: feeds report while they are built from a const model. */
+  struct gs_disc_log *disc;
   /* Scratch sets each mechanism keeps (OpenMP's maximum threads when the
    * model was built): an evaluation context's slot picks one, so that
    * threads evaluating different compartments at once never share scratch. */

@@ -8,6 +8,7 @@
 
 #include "gransim/case.h"
 #include "gransim/distribution.h"
+#include "case/limits.h"
 
 /* ---- grid ------------------------------------------------------------------ */
 static int read_axis(gs_cfg_node *n, gs_axis *ax, gs_error *err) {
@@ -163,13 +164,23 @@ static int read_initial_one(gs_cfg_node *n, gs_model *m, double *y, gs_error *er
   if (!rc) rc = read_carried_ratio(n, m, ratio, err);
   double *added = rc ? NULL : gs_calloc(nc, sizeof(double), err);
   if (!rc && !added) rc = GS_ENOMEM;
-  if (!rc) rc = gs_distribution_add(n, &m->grid, added, 0, err);
+  if (!rc) rc = gs_distribution_add(n, &m->grid, added, 0, m->disc, err);
   for (size_t c = 0; !rc && c < nc; c++) {
     y[(size_t)(comp - 1) * nc + c] += added[c];
     for (int q = 0; q < m->ncarried; q++)
       gs_model_carried(m, y, (size_t)(comp - 1), q)[c] += ratio[q] * added[c] * m->grid.volume[c];
   }
   free(added);
+  return rc;
+}
+
+/* discretisation: {tolerance}: the largest relative error of number, volume
+ * or mean size with which the grid may hold a distribution of the case. */
+static int read_discretisation(gs_cfg_node *root, gs_model *m, gs_error *err) {
+  gs_cfg_node *n = gs_cfg_get(root, "discretisation");
+  int rc = n ? gs_cfg_require_kind(n, GS_CFG_MAP, err) : GS_OK;
+  if (!rc) rc = gs_cfg_double_range(n, "tolerance", 0, GS_DISC_TOLERANCE, 0, 1, HUGE_VAL, 0, &m->disc->tolerance, err);
+  if (!rc && n) rc = gs_cfg_check_unused(n, err);
   return rc;
 }
 
@@ -411,15 +422,20 @@ int gs_case_from_cfg(gs_cfg *cfg, gs_case *c, gs_error *err) {
   if (!rc) snprintf(c->title, sizeof c->title, "%s", title);
   const char *desc;
   if (!rc) rc = gs_cfg_string_opt(root, "description", "", &desc, err);
+  gs_limits lim;
   if (!rc) rc = read_grid(root, &c->model, err);
+  if (!rc) rc = gs_limits_read(root, &lim, err);
+  if (!rc) rc = gs_limits_check_memory(&lim, root, &c->model, err);
   if (!rc) snprintf(c->model.dir, sizeof c->model.dir, "%s", gs_cfg_dir(cfg));
   if (!rc) {
     c->y0 = gs_calloc(c->model.nstate + c->model.nledger, sizeof(double), err);
     if (!c->y0) rc = GS_ENOMEM;
   }
+  if (!rc) rc = read_discretisation(root, &c->model, err);
   if (!rc) rc = read_initial(root, &c->model, c->y0, err);
   if (!rc) rc = read_mechanisms(root, &c->model, err);
   if (!rc) rc = read_output(root, c, err);
+  if (!rc) rc = gs_limits_check_output(&lim, root, &c->model, c->ntimes, err);
   if (!rc) rc = read_checks(root, &c->checks, err);
   if (!rc) rc = setup_ode(root, c, err);
   if (!rc) implicit_mass_tolerance(root, c);

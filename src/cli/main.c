@@ -16,6 +16,7 @@
 
 #include "cli/commands.h"
 #include "gransim/case.h"
+#include "gransim/distribution.h"
 #include "gransim/run.h"
 #include "gransim/kernel.h"
 #include "gransim/parallel.h"
@@ -62,6 +63,15 @@ static int is_coupled(gs_cfg *cfg) {
   for (size_t i = 0; gs_cfg_kind_of(root) == GS_CFG_MAP && i < gs_cfg_size(root); i++)
     if (!strcmp(gs_cfg_key_at(root, i), "coupling")) return 1;
   return 0;
+}
+
+/* How the grid holds each distribution of the case (distribution.h). */
+static void print_discretisation(FILE *fp, const gs_model *m) {
+  char line[1024];
+  for (size_t i = 0; m->disc && i < m->disc->n; i++) {
+    gs_disc_format(&m->disc->r[i], &m->grid, m->disc->tolerance, line, sizeof line);
+    fprintf(fp, "  discretisation: %s\n", line);
+  }
 }
 
 static int cmd_run(int argc, char **argv) {
@@ -125,6 +135,7 @@ static int cmd_run(int argc, char **argv) {
     gs_case_free(&c);
     return 1;
   }
+  if (opt.progress != 0 && gs_parallel_rank() == 0 && !opt.resume) print_discretisation(stderr, &c.model);
   gs_run_report rep;
   int rc = gs_case_run(&c, &opt, NULL, &rep, &err);
   /* under MPI rank 0 speaks for all; another rank only for its own failure */
@@ -177,6 +188,7 @@ static int cmd_check(int argc, char **argv) {
            "from %g to %g, integrator %s\n",
            argv[0], g->dim, g->ncells, g->ncomp, c.model.nmech, c.ntimes, c.times[0],
            c.times[c.ntimes - 1], c.integrator.type->name);
+    print_discretisation(stdout, &c.model);
   }
   gs_case_free(&c);
   return rc ? 1 : 0;

@@ -1,6 +1,7 @@
-/* See gs_size_percentiles in gransim/grid.h.  Shared by the sectional
- * summaries (src/pbm/summary.c: a point per cell) and the stochastic
- * solver's (src/swa/summary.c: a point per particle). */
+/* See gs_size_percentiles and gs_size_percentiles_ranges in
+ * gransim/grid.h: point masses for the stochastic solver's summaries
+ * (src/swa/summary.c: a point per particle), ranges for the sectional ones
+ * (src/pbm/summary.c: a range per cell). */
 #include <math.h>
 
 #include "gransim/grid.h"
@@ -60,4 +61,39 @@ void gs_size_percentiles(gs_size_point *pts, gs_size_point *scratch, size_t n, c
     prev = i;
   }
   while (next < np) out[next++] = gs_diameter(pts[prev].v);
+}
+
+void gs_size_percentiles_ranges(const gs_size_range *r, size_t n, gs_size_point *scratch,
+                                const double *p, int np, double *out) {
+  /* The cumulative weight is piecewise linear: its slope changes by
+   * w / (hi - lo) at lo and back at hi.  Sort those 2 n events and walk. */
+  gs_size_point *ev = scratch;
+  size_t m = 0;
+  double total = 0;
+  for (size_t i = 0; i < n; i++) {
+    if (!(r[i].w > 0) || !(r[i].hi > r[i].lo)) continue;
+    const double slope = r[i].w / (r[i].hi - r[i].lo);
+    ev[m++] = (gs_size_point){r[i].lo, slope};
+    ev[m++] = (gs_size_point){r[i].hi, -slope};
+    total += r[i].w;
+  }
+  if (!m) {
+    for (int i = 0; i < np; i++) out[i] = NAN;
+    return;
+  }
+  ev = sort_by_volume(ev, scratch + 2 * n, m);
+  double F = 0, slope = 0, x = ev[0].v;
+  int next = 0;
+  for (size_t i = 0; i < m && next < np; i++) {
+    const double F_end = F + slope * (ev[i].v - x);
+    for (; next < np && p[next] * total <= F_end; next++)
+      out[next] = slope > 0 ? fmin(x + (p[next] * total - F) / slope, ev[i].v) : x;
+    F = F_end;
+    slope += ev[i].w;
+    x = ev[i].v;
+  }
+  /* round-off may leave the walk's total just below the weights' sum */
+  while (next < np) out[next++] = ev[m - 1].v;
+  /* cube roots only for the percentiles (docs/performance.md) */
+  for (int i = 0; i < np; i++) out[i] = gs_diameter(out[i]);
 }

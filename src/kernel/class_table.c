@@ -1,11 +1,13 @@
 /* Tables over size classes, shared by the tabulated kernel and the DEM
  * impact selection function (see class_table.h). */
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "gransim/grid.h"
 #include "gransim/kernel.h"
 #include "kernel/class_table.h"
 
@@ -89,17 +91,32 @@ int gs_class_table_read(const char *path, size_t rows, gs_class_table *tf, gs_er
 
 size_t *gs_class_table_assign(const gs_class_table *tf, const double *size, size_t ncells,
                               int diameter, const char *path, gs_error *err) {
-  size_t *cls = gs_malloc(ncells * sizeof(size_t), err), outside = 0;
+  gs_axis classes; /* the edges as an axis, to place sizes by the grid's rule */
+  if (gs_axis_from_edges(&classes, "classes", tf->edges, tf->n + 1, NULL, err)) return NULL;
+  size_t *cls = gs_malloc(ncells * sizeof(size_t), err), outside = 0, on_edge = 0, first = 0;
   for (size_t c = 0; cls && c < ncells; c++) {
     double s = diameter ? gs_diameter(size[c]) : size[c];
-    size_t i = 0;
-    while (i + 1 < tf->n && s >= tf->edges[i + 1]) i++;
-    if (s < tf->edges[0] || s > tf->edges[tf->n]) outside++;
+    /* [e_i, e_i+1): a size on an inner edge (to round-off) takes the class above */
+    size_t i = gs_axis_locate_snapped(&classes, s);
+    if (i == GS_NOWHERE) {
+      outside++;
+      i = s < tf->edges[0] ? 0 : tf->n - 1;
+    } else if (i > 0 && fabs(s - tf->edges[i]) <= 16 * DBL_EPSILON * tf->edges[i]) {
+      if (!on_edge) first = c;
+      on_edge++;
+    }
     cls[c] = i;
   }
+  gs_axis_free(&classes);
   if (outside)
     fprintf(stderr, "gransim: warning: %s: %zu of %zu grid cells lie outside the table's classes "
             "[%g, %g] and use the nearest class\n", path, outside, ncells, tf->edges[0], tf->edges[tf->n]);
+  if (on_edge)
+    fprintf(stderr, "gransim: warning: %s: %zu of %zu grid cells have their %s on an edge between "
+            "two classes (the first: cell %zu, %.17g) and take the class above it (classes are "
+            "[e_i, e_i+1)); move the table's edges off the pivots to make the choice yours\n",
+            path, on_edge, ncells, diameter ? "diameter" : "size", first,
+            diameter ? gs_diameter(size[first]) : size[first]);
   return cls;
 }
 

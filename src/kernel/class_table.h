@@ -18,8 +18,11 @@ typedef struct {
 } gs_class_table;
 
 int gs_class_table_read(const char *path, size_t rows, gs_class_table *tf, gs_error *err);
-/* Class of each cell by its size measure (a diameter when `diameter`); cells
- * outside the edges take the nearest class, with one warning on stderr. */
+/* Class of each cell by its size measure (a diameter when `diameter`):
+ * class i holds [e_i, e_i+1), so a size on an inner edge (to a few ulps,
+ * gs_axis_locate_snapped) takes the class above it, and the last edge the
+ * last class.  Cells outside the edges take the nearest class; each of the
+ * two cases gives one warning on stderr. */
 size_t *gs_class_table_assign(const gs_class_table *tf, const double *size, size_t ncells,
                               int diameter, const char *path, gs_error *err);
 void gs_class_table_free(gs_class_table *tf);

@@ -36,6 +36,7 @@
  * middle leaves those rows as they were.  The metadata cache does not evict
  * (h5_open), so the chunk index and extents reach the disk only at the
  * flushes of a commit, as in rule 1. */
+#include "gransim/distribution.h"
 #include "gransim/output.h"
 
 #include <errno.h>
@@ -331,6 +332,47 @@ static int write_case(gs_output *o, const char *text, const char *name, gs_error
   return rc;
 }
 
+/* /discretisation: each distribution of the case (initial, feeds) as asked
+ * and as the grid holds it (distribution.h), so that a result file says
+ * what its initial state and feeds stand for. */
+static int write_discretisation(gs_output *o, const gs_model *m, gs_error *err) {
+  const gs_disc_log *log = m->disc;
+  const size_t n = log ? log->n : 0, w = 1 + (size_t)m->grid.dim;
+  hid_t g = H5Gcreate2(o->file, "discretisation", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  if (g < 0) return h5_error(err, o->h5_path, "create group /discretisation");
+  double *buf = gs_calloc(2 * n * w + n + 1, sizeof *buf, err);
+  size_t keys_len = 1;
+  for (size_t i = 0; i < n; i++) keys_len += strlen(log->r[i].key) + 1;
+  char *keys = gs_calloc(keys_len, 1, err);
+  int rc = buf && keys ? GS_OK : GS_ENOMEM;
+  for (size_t i = 0; !rc && i < n; i++) {
+    const gs_disc_report *r = &log->r[i];
+    buf[i * w] = r->number[0];
+    buf[(n + i) * w] = r->number[1];
+    for (int k = 0; k < m->grid.dim; k++) {
+      buf[i * w + 1 + (size_t)k] = r->volume[k][0];
+      buf[(n + i) * w + 1 + (size_t)k] = r->volume[k][1];
+    }
+    buf[2 * n * w + i] = gs_disc_error(r);
+    if (i) strcat(keys, "\n");
+    strcat(keys, r->key);
+  }
+  if (!rc) buf[2 * n * w + n] = log ? log->tolerance : GS_DISC_TOLERANCE;
+  if (!rc && (write_vector(g, "requested", buf, n * w) < 0 ||
+              write_vector(g, "represented", buf + n * w, n * w) < 0 ||
+              write_vector(g, "error", buf + 2 * n * w, n) < 0 ||
+              write_vector(g, "tolerance", buf + 2 * n * w + n, 1) < 0 ||
+              set_str_attr(g, "keys", keys) < 0 ||
+              set_str_attr(g, "layout", "requested and represented: per distribution (keys), its "
+                                         "number, then the volume of every axis; error: the largest "
+                                         "relative error of number, volumes and mean sizes") < 0))
+    rc = h5_error(err, o->h5_path, "write /discretisation");
+  free(buf);
+  free(keys);
+  if (H5Gclose(g) < 0 && !rc) rc = h5_error(err, o->h5_path, "close group /discretisation");
+  return rc;
+}
+
 /* gzip only where this HDF5 build can actually encode it. */
 static int deflate_usable(void) {
   unsigned int info = 0;
@@ -612,6 +654,7 @@ static int build_skeleton(gs_output *o, const gs_model *m, const char *text, con
   if (o->file < 0) return h5_error(err, o->h5_path, "create the file");
   int rc = write_grid(o, &m->grid, err);
   if (!rc) rc = write_case(o, text, name, err);
+  if (!rc) rc = write_discretisation(o, m, err);
   if (!rc) rc = create_all_series(o, err);
   return rc;
 }

@@ -789,4 +789,5 @@ const gs_mech_type gs_mech_aggregation = {
     .rates = agg_rhs,
     .number_rates = agg_number_rates,
     .free = agg_free,
+    .pages_per_compartment = 3, /* wet_ok, cs, span */
 };

@@ -1,6 +1,7 @@
 /* Discretisation of distribution specs; see include/gransim/distribution.h. */
 #include <gsl/gsl_cdf.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,9 +32,11 @@ static double cum_moment(const marginal_t *m, double x) {
   return m->mean * gsl_cdf_gamma_P(x, m->shape + 1, m->mean / m->shape);
 }
 
-/* Per-axis weights conserving number and first moment cell by cell. */
+/* Per-axis weights conserving number and first moment cell by cell; in
+ * inside[0..1] the number and first moment within the grid's edges (what
+ * the weights should hold: `coverage` governs the rest). */
 static int marginal_weights(const marginal_t *m, const gs_axis *ax, double coverage,
-                            gs_cfg_node *node, double *w, gs_error *err) {
+                            gs_cfg_node *node, double *w, double *inside, gs_error *err) {
   memset(w, 0, ax->n * sizeof(double));
   double below_n = cum_number(m, ax->edges[0]), below_m = cum_moment(m, ax->edges[0]);
   double above_n = 1 - cum_number(m, ax->edges[ax->n]);
@@ -46,6 +49,8 @@ static int marginal_weights(const marginal_t *m, const gs_axis *ax, double cover
                        "set 'coverage')",
                        ax->name, ax->edges[0], ax->edges[ax->n], below_n + above_n,
                        (below_m + above_m) / m->mean, coverage);
+  inside[0] = cum_number(m, ax->edges[ax->n]) - below_n;
+  inside[1] = cum_moment(m, ax->edges[ax->n]) - below_m;
   for (size_t i = 0; i < ax->n; i++) {
     double cn = cum_number(m, ax->edges[i + 1]) - cum_number(m, ax->edges[i]);
     double cm = cum_moment(m, ax->edges[i + 1]) - cum_moment(m, ax->edges[i]);
@@ -80,8 +85,8 @@ static int per_axis(gs_cfg_node *node, const char *key, const gs_grid *g, double
 }
 
 static int add_product(gs_cfg_node *node, const gs_grid *g, double number, int type,
-                       double coverage, double *dst, gs_error *err) {
-  double *mean = NULL, *shape = NULL, *w[GS_MAX_DIM] = {0};
+                       double coverage, double *dst, gs_disc_report *req, gs_error *err) {
+  double *mean = NULL, *shape = NULL, *w[GS_MAX_DIM] = {0}, inside[GS_MAX_DIM][2];
   int rc = per_axis(node, "mean", g, &mean, err);
   if (!rc && type == D_GAMMA) rc = per_axis(node, "shape", g, &shape, err);
   for (int k = 0; !rc && k < g->dim; k++) {
@@ -91,7 +96,14 @@ static int add_product(gs_cfg_node *node, const gs_grid *g, double number, int t
     marginal_t m = {mean[k], shape ? shape[k] : 1, type == D_EXPONENTIAL};
     w[k] = gs_malloc(g->axis[k].n * sizeof(double), err);
     if (!w[k]) rc = GS_ENOMEM;
-    else rc = marginal_weights(&m, &g->axis[k], coverage, node, w[k], err);
+    else rc = marginal_weights(&m, &g->axis[k], coverage, node, w[k], inside[k], err);
+  }
+  /* asked: the part within the grid's edges, of the product of the axes */
+  for (int k = 0; !rc && k < g->dim; k++) {
+    req->number[0] *= inside[k][0];
+    req->volume[k][0] = number * inside[k][1];
+    for (int j = 0; j < g->dim; j++)
+      if (j != k) req->volume[k][0] *= inside[j][0];
   }
   size_t idx[GS_MAX_DIM];
   for (size_t c = 0; !rc && c < g->ncells; c++) {
@@ -107,7 +119,7 @@ static int add_product(gs_cfg_node *node, const gs_grid *g, double number, int t
 }
 
 static int add_point(gs_cfg_node *node, const gs_grid *g, double number, double *dst,
-                     gs_error *err) {
+                     gs_disc_report *req, gs_error *err) {
   double *at = NULL;
   int rc = per_axis(node, "at", g, &at, err);
   for (int k = 0; !rc && k < g->dim; k++) {
@@ -118,12 +130,13 @@ static int add_point(gs_cfg_node *node, const gs_grid *g, double number, double 
                        ax->name, ax->pivots[0], ax->pivots[ax->n - 1]);
   }
   if (!rc) gs_lever_place(g, GS_NOWHERE, at, number, dst, NULL);
+  for (int k = 0; !rc && k < g->dim; k++) req->volume[k][0] = number * at[k];
   free(at);
   return rc;
 }
 
 static int add_cell(gs_cfg_node *node, const gs_grid *g, double number, double *dst,
-                    gs_error *err) {
+                    gs_disc_report *req, gs_error *err) {
   double *index = NULL;
   size_t idx[GS_MAX_DIM];
   int rc = per_axis(node, "index", g, &index, err);
@@ -135,6 +148,7 @@ static int add_cell(gs_cfg_node *node, const gs_grid *g, double number, double *
     else idx[k] = (size_t)index[k] - 1;
   }
   if (!rc) dst[gs_grid_index(g, idx)] += number;
+  for (int k = 0; !rc && k < g->dim; k++) req->volume[k][0] = number * g->axis[k].pivots[idx[k]];
   free(index);
   return rc;
 }
@@ -143,7 +157,7 @@ static int add_cell(gs_cfg_node *node, const gs_grid *g, double number, double *
  * `weights` (one per cell, >= 0): `number` shared in proportion to weights
  * (the inlet of Sampat et al. (2018): given numbers on the diagonal of the solid bins). */
 static int add_cells(gs_cfg_node *node, const gs_grid *g, double number, double *dst,
-                     gs_error *err) {
+                     gs_disc_report *req, gs_error *err) {
   gs_cfg_node *list = NULL;
   double *w = NULL, total = 0;
   size_t nw = 0;
@@ -173,13 +187,80 @@ static int add_cells(gs_cfg_node *node, const gs_grid *g, double number, double 
       else idx[k] = (size_t)v - 1;
     }
     if (!rc) dst[gs_grid_index(g, idx)] += number * w[i] / total;
+    for (int k = 0; !rc && k < g->dim; k++) req->volume[k][0] += number * w[i] / total * g->axis[k].pivots[idx[k]];
   }
   free(w);
   return rc;
 }
 
+double gs_disc_error(const gs_disc_report *r) {
+  double e = r->number[0] > 0 ? fabs(r->number[1] / r->number[0] - 1) : 0;
+  for (int k = 0; k < r->dim; k++) {
+    const double *v = r->volume[k];
+    if (!(v[0] > 0)) continue;
+    e = fmax(e, fabs(v[1] / v[0] - 1));
+    if (r->number[1] > 0) e = fmax(e, fabs((v[1] / r->number[1]) / (v[0] / r->number[0]) - 1));
+  }
+  return e;
+}
+
+void gs_disc_log_free(gs_disc_log *log) {
+  free(log->r);
+  log->r = NULL;
+  log->n = 0;
+}
+
+void gs_disc_format(const gs_disc_report *r, const gs_grid *g, double tolerance, char *buf,
+                    size_t len) {
+  size_t at = (size_t)snprintf(buf, len, "%s: the grid holds number %.6g (asked %.6g)", r->key,
+                               r->number[1], r->number[0]);
+  for (int k = 0; k < r->dim && at < len; k++)
+    at += (size_t)snprintf(buf + at, len - at, ", volume of '%s' %.6g (asked %.6g)",
+                           g->axis[k].name, r->volume[k][1], r->volume[k][0]);
+  if (at < len)
+    snprintf(buf + at, len - at, "; largest relative error %.2g (discretisation.tolerance %g)",
+             gs_disc_error(r), tolerance);
+}
+
+/* What the cells added (add) hold against what was asked (rep); refuses an
+ * error above the log's tolerance naming the worst quantity. */
+static int compare(gs_cfg_node *node, const gs_grid *g, const double *add, gs_disc_report *rep,
+                   gs_disc_log *log, gs_error *err) {
+  for (size_t c = 0; c < g->ncells; c++) {
+    rep->number[1] += add[c];
+    for (int k = 0; k < g->dim; k++) rep->volume[k][1] += add[c] * g->x[c * (size_t)g->dim + (size_t)k];
+  }
+  snprintf(rep->key, sizeof rep->key, "%s:%d: %s", gs_cfg_file(node), gs_cfg_line(node), gs_cfg_path(node));
+  gs_disc_report *grown = realloc(log->r, (log->n + 1) * sizeof *grown);
+  if (!grown) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  log->r = grown;
+  log->r[log->n++] = *rep;
+  const double e = gs_disc_error(rep);
+  if (!(e > log->tolerance)) return GS_OK;
+  /* name the quantity with the largest error */
+  char what[GS_NAME_LEN + 32] = "number";
+  double asked = rep->number[0], held = rep->number[1], worst = fabs(held / asked - 1);
+  for (int k = 0; k < g->dim; k++) {
+    const double *v = rep->volume[k];
+    if (v[0] > 0 && fabs(v[1] / v[0] - 1) > worst) {
+      worst = fabs(v[1] / v[0] - 1);
+      snprintf(what, sizeof what, "volume of axis '%s'", g->axis[k].name);
+      asked = v[0];
+      held = v[1];
+    }
+  }
+  return gs_cfg_fail(node, err,
+                     "the grid holds this distribution with a %s of %.6g instead of the requested "
+                     "%.6g (relative error %.3g; with the mean sizes %.3g > "
+                     "discretisation.tolerance = %g): its cells are too coarse where it lies "
+                     "(a cell's content with its mean below the first pivot or above the last "
+                     "can only sit on that pivot); refine the grid there or raise "
+                     "discretisation.tolerance",
+                     what, held, asked, worst, e, log->tolerance);
+}
+
 int gs_distribution_add(gs_cfg_node *node, const gs_grid *g, double *dst, int keep_open,
-                        gs_error *err) {
+                        gs_disc_log *log, gs_error *err) {
   static const char *const types[] = {"point", "cell", "exponential", "gamma", "cells", NULL};
   int type = 0;
   double number = 0, coverage = 0;
@@ -189,12 +270,19 @@ int gs_distribution_add(gs_cfg_node *node, const gs_grid *g, double *dst, int ke
   if (!rc) rc = gs_cfg_double_range(node, "number", 1, 0, 0, 1, HUGE_VAL, 0, &number, err);
   if (!rc) rc = gs_cfg_double_range(node, "coverage", 0, 1e-6, 0, 0, 1, 0, &coverage, err);
   if (rc) return rc;
+  /* into a field of its own first, to compare it with what was asked */
+  double *add = gs_calloc(g->ncells, sizeof *add, err);
+  if (!add) return GS_ENOMEM;
+  gs_disc_report rep = {.dim = g->dim, .number = {number, 0}};
   switch (type) {
-  case D_POINT: rc = add_point(node, g, number, dst, err); break;
-  case D_CELL: rc = add_cell(node, g, number, dst, err); break;
-  case D_CELLS: rc = add_cells(node, g, number, dst, err); break;
-  default: rc = add_product(node, g, number, type, coverage, dst, err); break;
+  case D_POINT: rc = add_point(node, g, number, add, &rep, err); break;
+  case D_CELL: rc = add_cell(node, g, number, add, &rep, err); break;
+  case D_CELLS: rc = add_cells(node, g, number, add, &rep, err); break;
+  default: rc = add_product(node, g, number, type, coverage, add, &rep, err); break;
   }
+  if (!rc && log) rc = compare(node, g, add, &rep, log, err);
+  for (size_t c = 0; !rc && c < g->ncells; c++) dst[c] += add[c];
+  free(add);
   if (!rc && !keep_open) rc = gs_cfg_check_unused(node, err);
   return rc;
 }

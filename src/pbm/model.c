@@ -6,6 +6,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "gransim/distribution.h"
 #include "gransim/pbm.h"
 #include "gransim/threads.h"
 #include "pbm/sums.h"
@@ -39,6 +40,9 @@ int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err) {
   m->size_volume = gs_malloc(m->grid.ncells * sizeof(double), err);
   if (!m->size_volume) return GS_ENOMEM;
   memcpy(m->size_volume, m->grid.volume, m->grid.ncells * sizeof(double));
+  m->disc = gs_calloc(1, sizeof *m->disc, err);
+  if (!m->disc) return GS_ENOMEM;
+  m->disc->tolerance = GS_DISC_TOLERANCE;
   return GS_OK;
 }
 
@@ -103,6 +107,8 @@ void gs_model_free(gs_model *m) {
     if (m->mech[i].type->free) m->mech[i].type->free(m->mech[i].self);
   free(m->mech);
   free(m->size_volume);
+  if (m->disc) gs_disc_log_free(m->disc);
+  free(m->disc);
   gs_grid_free(&m->grid);
   memset(m, 0, sizeof *m);
 }

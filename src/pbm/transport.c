@@ -46,7 +46,7 @@ static int feed_create(gs_cfg_node *node, const gs_model *m, void **self, gs_err
   if (!rc) rc = gs_cfg_double_range(node, "start", 0, 0, -HUGE_VAL, 0, HUGE_VAL, 0, &F->start, err);
   if (!rc) rc = gs_cfg_double_range(node, "end", 0, HUGE_VAL, F->start, 1, HUGE_VAL, 0, &F->end, err);
   if (!rc) rc = gs_cfg_map_req(node, "distribution", &dist, err);
-  if (!rc) rc = gs_distribution_add(dist, g, F->rate, 0, err);
+  if (!rc) rc = gs_distribution_add(dist, g, F->rate, 0, m->disc, err);
   gs_cfg_node *ratios = rc ? NULL : gs_cfg_get(node, "carried_ratio");
   if (ratios) {
     rc = gs_cfg_require_kind(ratios, GS_CFG_MAP, err);
