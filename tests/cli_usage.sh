@@ -9,7 +9,7 @@ stdout_has "usage: gransim <command>"
 run_rc 0 "$BIN" --version
 version=$(sed -n 's/^project(gransim VERSION \([0-9.]*\).*/\1/p' "$SRC/CMakeLists.txt")
 [ -n "$version" ] || fail "cannot find the project version in $SRC/CMakeLists.txt"
-grep -qx "gransim $version" "$WORK/stdout" || { show_output; fail "--version should print 'gransim $version'"; }
+grep -Eqx "gransim $version( \(.*\))?" "$WORK/stdout" || { show_output; fail "--version should print 'gransim $version', then git describe in parentheses in a checkout"; }
 grep -Eqx "MPI: (yes|no)" "$WORK/stdout" || { show_output; fail "--version should say whether gransim was built with MPI"; }
 
 run_rc 0 "$BIN" run --help

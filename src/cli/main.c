@@ -15,15 +15,14 @@
 #endif
 
 #include "cli/commands.h"
+#include "gransim/api.h"
 #include "gransim/case.h"
 #include "gransim/run.h"
 #include "gransim/kernel.h"
 #include "gransim/parallel.h"
 #include "gransim/swa.h"
+#include "gransim/version.h"
 
-#ifndef GRANSIM_VERSION
-#define GRANSIM_VERSION "unknown"
-#endif
 
 static void usage(FILE *fp) {
   fprintf(fp,
@@ -52,7 +51,7 @@ static void usage(FILE *fp) {
           "                         with classes from the PBM grid, then the PBM with its tables\n\n"
           "options: --help, --version; `gransim <command> --help` for details.\n"
           "Case file format: docs/case-files.md\n",
-          GRANSIM_VERSION);
+          gs_version());
 }
 
 /* A coupled case (a `coupling:` key at the top level).  The keys are scanned,
@@ -157,28 +156,18 @@ static int cmd_run(int argc, char **argv) {
 
 static int cmd_check(int argc, char **argv) {
   if (argc != 1 || argv[0][0] == '-') {
-    printf("usage: gransim check CASE\n\nReads and validates CASE; prints what it describes.\n");
+    printf("usage: gransim check CASE\n\nReads and validates CASE of any kind (sectional, stochastic with\n"
+           "solver.method: swa, DEM, coupled) without running it; prints what it describes.\n"
+           "A misspelt key is reported at its line with the nearest valid key.\n");
     return argc == 1 && !strcmp(argv[0], "--help") ? 0 : 2;
   }
   gs_error err = {0};
-  gs_case c;
-  gs_cfg *cfg = gs_cfg_load_file(argv[0], &err);
-  if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_check_swa(cfg, argv[0]);
-  if (cfg && is_coupled(cfg)) { /* checked stage by stage */
-    gs_cfg_free(cfg);
-    return gs_cmd_couple_check(argv[0]);
-  }
-  memset(&c, 0, sizeof c);
-  int rc = cfg ? gs_case_from_cfg(cfg, &c, &err) : err.code;
+  char desc[1024];
+  gs_api_case *c = gs_api_case_load(argv[0], &err);
+  int rc = c ? gs_api_case_check(c, desc, sizeof desc, &err) : err.code;
   if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
-  else {
-    const gs_grid *g = &c.model.grid;
-    printf("%s: valid. %d axes, %zu cells x %zu compartments, %zu mechanisms, %zu output times "
-           "from %g to %g, integrator %s\n",
-           argv[0], g->dim, g->ncells, g->ncomp, c.model.nmech, c.ntimes, c.times[0],
-           c.times[c.ntimes - 1], c.integrator.type->name);
-  }
-  gs_case_free(&c);
+  else printf("%s: valid. %s\n", argv[0], desc);
+  gs_api_case_free(c);
   return rc ? 1 : 0;
 }
 
@@ -264,7 +253,7 @@ int main(int argc, char **argv) {
     return argc < 2 ? 2 : 0;
   }
   if (!strcmp(argv[1], "--version")) {
-    printf("gransim %s\nMPI: %s\n", GRANSIM_VERSION, gs_parallel_have_mpi() ? "yes" : "no");
+    printf("gransim %s\nMPI: %s\n", gs_version(), gs_parallel_have_mpi() ? "yes" : "no");
     return 0;
   }
   /* the commands that run threads */

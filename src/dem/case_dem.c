@@ -456,14 +456,20 @@ static int load(gs_dem_case *c, gs_error *err) {
 }
 
 gs_dem_case *gs_dem_case_load(const char *path, gs_error *err) {
+  gs_cfg *cfg = gs_cfg_load_file(path, err);
+  return cfg ? gs_dem_case_from_cfg(cfg, err) : NULL;
+}
+
+gs_dem_case *gs_dem_case_from_cfg(gs_cfg *cfg, gs_error *err) {
   gs_dem_case *c = calloc(1, sizeof *c);
   if (!c) {
+    gs_cfg_free(cfg);
     gs_error_set(err, GS_ENOMEM, "out of memory");
     return NULL;
   }
-  snprintf(c->path, sizeof c->path, "%s", path);
-  c->cfg = gs_cfg_load_file(path, err);
-  if (!c->cfg || load(c, err)) {
+  snprintf(c->path, sizeof c->path, "%s", gs_cfg_name(cfg));
+  c->cfg = cfg;
+  if (load(c, err)) {
     gs_dem_case_free(c);
     return NULL;
   }
