@@ -18,7 +18,7 @@ static int vec3(gs_cfg_node *map, const char *key, int required, const double *d
                 gs_error *err) {
   gs_cfg_node *n = gs_cfg_get(map, key);
   if (!n) {
-    if (required) return gs_cfg_fail(map, err, "missing key '%s' (a list of 3 numbers)", key);
+    if (required) return gs_cfg_missing(map, key, "(a list of 3 numbers)", err);
     memcpy(out, def, 3 * sizeof(double));
     return GS_OK;
   }
@@ -78,7 +78,7 @@ static int read_lognormal(gs_cfg_node *n, gs_dem_class *cl, gs_error *err) {
   int type = 0;
   double med, gsd;
   int rc = gs_cfg_get(n, "type") ? gs_cfg_enum_opt(n, "type", types, 0, &type, err)
-                                  : gs_cfg_fail(n, err, "missing key 'type' (a radius distribution: lognormal)");
+                                  : gs_cfg_missing(n, "type", "(a radius distribution: lognormal)", err);
   if (!rc) rc = gs_cfg_double_range(n, "median", 1, 0, 0, 1, HUGE_VAL, 0, &med, err);
   if (!rc) rc = gs_cfg_double_range(n, "gsd", 1, 0, 1, 1, HUGE_VAL, 0, &gsd, err);
   if (rc) return rc;
