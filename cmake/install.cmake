@@ -36,3 +36,27 @@ install(FILES ${PROJECT_SOURCE_DIR}/docs/gransim.1 DESTINATION ${CMAKE_INSTALL_M
 install(FILES ${PROJECT_SOURCE_DIR}/scripts/gransim-completion.bash
   DESTINATION ${CMAKE_INSTALL_DATADIR}/bash-completion/completions RENAME gransim)
 install(FILES LICENSE CHANGELOG.md README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
+
+# The Python package: under the prefix's dist-packages of Debian's python3
+# (lib/python3.X/dist-packages, on sys.path for /usr/local), with _paths.py
+# giving the library's path relative to the package.
+find_program(GRANSIM_PYTHON python3 PATHS /usr/bin NO_DEFAULT_PATH)
+if(NOT GRANSIM_PYTHON)
+  find_program(GRANSIM_PYTHON python3)
+endif()
+set(GRANSIM_PYTHON_VERSION 3)
+if(GRANSIM_PYTHON)
+  execute_process(COMMAND ${GRANSIM_PYTHON} -c "import sys; print('%d.%d' % sys.version_info[:2])"
+                  OUTPUT_VARIABLE GRANSIM_PYTHON_VERSION OUTPUT_STRIP_TRAILING_WHITESPACE)
+endif()
+set(GRANSIM_PYTHON_INSTALL_DIR lib/python${GRANSIM_PYTHON_VERSION}/dist-packages CACHE STRING
+    "where cmake --install puts the Python package gransim, relative to the prefix")
+file(RELATIVE_PATH GRANSIM_PY_TO_LIB /${GRANSIM_PYTHON_INSTALL_DIR}/gransim
+     /${CMAKE_INSTALL_LIBDIR}/libgransim.so.${PROJECT_VERSION_MAJOR})
+file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/python_paths.py
+     "# written by cmake --install: libgransim relative to this package\nLIBRARY = \"${GRANSIM_PY_TO_LIB}\"\n")
+install(DIRECTORY python/gransim DESTINATION ${GRANSIM_PYTHON_INSTALL_DIR}
+  FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
+install(FILES ${CMAKE_CURRENT_BINARY_DIR}/python_paths.py DESTINATION ${GRANSIM_PYTHON_INSTALL_DIR}/gransim
+  RENAME _paths.py)
+install(FILES python/examples/sweep_psd.py DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples/python)

@@ -88,4 +88,14 @@ run_rc 0 cc -std=c11 -o "$WORK/user-static" "$WORK/user.c" $cflags $static_libs 
 ! ldd "$WORK/user-static" | grep -q libgransim || fail "user-static should not need libgransim.so"
 run_rc 0 "$WORK/user-static" "$WORK/out-static"
 stdout_has "M0 1.000000 0.666667 0.500000"
+
+# the Python package, installed, finds the installed library by itself
+pydir=$(sed -n 's/^GRANSIM_PYTHON_INSTALL_DIR:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
+python=$(sed -n 's/^GRANSIM_PYTHON:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
+[ -f "$PREFIX/$pydir/gransim/__init__.py" ] || fail "the Python package is not in $PREFIX/$pydir"
+(cd "$WORK" && env -u GRANSIM_LIBRARY PYTHONPATH="$PREFIX/$pydir" "$python" -c '
+import gransim, os, sys
+lib = gransim._lib._name
+assert os.path.realpath(lib).startswith(os.path.realpath(sys.argv[1])), lib
+print(gransim.version())' "$PREFIX") >"$WORK/stdout" 2>"$WORK/stderr" || { show_output; fail "the installed Python package does not load its library"; }
 echo "cli_install: ok"
