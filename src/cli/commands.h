@@ -1,4 +1,6 @@
-/* Subcommands implemented in their own files. */
+/* Subcommands implemented in their own files.  Each takes the arguments
+ * after `gransim`: argv[0] is the subcommand's name (getopt_long skips it,
+ * messages name it; src/cli/options.h). */
 #ifndef GRANSIM_CLI_COMMANDS_H
 #define GRANSIM_CLI_COMMANDS_H
 int gs_cmd_validate(int argc, char **argv);

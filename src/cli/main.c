@@ -15,6 +15,7 @@
 #endif
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "gransim/api.h"
 #include "gransim/case.h"
 #include "gransim/run.h"
@@ -66,8 +67,14 @@ static int is_coupled(gs_cfg *cfg) {
 static int cmd_run(int argc, char **argv) {
   const char *path = NULL, *out = NULL;
   gs_run_options opt = {.progress = -1};
-  for (int i = 0; i < argc; i++) {
-    if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+  static const struct option opts[] = {
+      {"help", no_argument, NULL, GS_CLI_HELP}, {"out", required_argument, NULL, 'o'},
+      {"resume", no_argument, NULL, 'r'},      {"quiet", no_argument, NULL, 'q'},
+      {"progress", no_argument, NULL, 'p'},    {"timings", no_argument, NULL, 'T'},
+      {"threads", required_argument, NULL, 't'}, {0}};
+  gs_cli_begin();
+  for (int o, n; (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
+    case GS_CLI_HELP:
       printf("usage: gransim run CASE --out DIR [--resume] [--quiet] [--threads N] [--timings]\n\n"
              "Runs CASE and writes DIR/result.h5 (HDF5: grid, times, numbers per cell and\n"
              "compartment, ledger, summary, case echo) and DIR/summary.csv (one row per output\n"
@@ -80,28 +87,25 @@ static int cmd_run(int argc, char **argv) {
              "step agreements, the outputs and the final write, and the compartments it held\n"
              "at the end (they move to balance the ranks); on one rank also the rates of each\n"
              "compartment and the most a split of them over 2, 3, ... ranks could gain\n"
-             "(with --threads 1).\n");
+             "(with --threads 1).  Options take their value as --out DIR or --out=DIR.\n");
       return 0;
-    } else if (!strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
-    else if (!strcmp(argv[i], "--resume")) opt.resume = 1;
-    else if (!strcmp(argv[i], "--quiet")) opt.progress = 0;
-    else if (!strcmp(argv[i], "--progress")) opt.progress = 1;
-    else if (!strcmp(argv[i], "--timings")) opt.timings = 1;
-    else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
-      int n = atoi(argv[++i]);
-      if (n < 1) {
-        fprintf(stderr, "gransim run: --threads needs a positive integer, got '%s'\n", argv[i]);
-        return 2;
-      }
+    case 'o': out = optarg; break;
+    case 'r': opt.resume = 1; break;
+    case 'q': opt.progress = 0; break;
+    case 'p': opt.progress = 1; break;
+    case 'T': opt.timings = 1; break;
+    case 't':
+      if (gs_cli_positive("run", "threads", optarg, &n)) return 2;
       omp_set_num_threads(n);
-    } else if (argv[i][0] == '-') {
-      fprintf(stderr, "gransim run: unknown option '%s' (see gransim run --help)\n", argv[i]);
-      return 2;
-    } else if (!path) path = argv[i];
-    else {
+      break;
+    default: return 2;
+    }
+  for (int i = optind; i < argc; i++) {
+    if (path) {
       fprintf(stderr, "gransim run: unexpected argument '%s'\n", argv[i]);
       return 2;
     }
+    path = argv[i];
   }
   if (!path || !out) {
     fprintf(stderr, "usage: gransim run CASE --out DIR (see gransim run --help)\n");
@@ -155,12 +159,19 @@ static int cmd_run(int argc, char **argv) {
 }
 
 static int cmd_check(int argc, char **argv) {
-  if (argc != 1 || argv[0][0] == '-') {
+  static const struct option opts[] = {{"help", no_argument, NULL, GS_CLI_HELP}, {0}};
+  int help = 0;
+  gs_cli_begin();
+  for (int o; (o = gs_cli_next(argc, argv, opts)) != -1;)
+    if (o == GS_CLI_HELP) help = 1;
+    else return 2;
+  if (help || argc - optind != 1) {
     printf("usage: gransim check CASE\n\nReads and validates CASE of any kind (sectional, stochastic with\n"
            "solver.method: swa, DEM, coupled) without running it; prints what it describes.\n"
            "A misspelt key is reported at its line with the nearest valid key.\n");
-    return argc == 1 && !strcmp(argv[0], "--help") ? 0 : 2;
+    return help ? 0 : 2;
   }
+  argv += optind;
   gs_error err = {0};
   char desc[1024];
   gs_api_case *c = gs_api_case_load(argv[0], &err);
@@ -235,8 +246,9 @@ static void wait_passively(int argc, char **argv) {
   if (getenv("OMP_WAIT_POLICY") || getenv("GOMP_SPINCOUNT")) return;
   /* one thread never waits for another: no need to pay a second start */
   int threads = omp_get_max_threads();
-  for (int i = 2; i + 1 < argc; i++)
-    if (!strcmp(argv[i], "--threads")) threads = atoi(argv[i + 1]);
+  for (int i = 2; i < argc; i++)
+    if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[i + 1]);
+    else if (!strncmp(argv[i], "--threads=", 10)) threads = atoi(argv[i] + 10);
   if (threads < 2) return;
   if (setenv("OMP_WAIT_POLICY", "passive", 1)) return;
   execv("/proc/self/exe", argv);
@@ -262,31 +274,31 @@ int main(int argc, char **argv) {
     keep_freed_memory();
     /* MPI only for runs, and only when launched by mpirun (gransim/parallel.h) */
     gs_parallel_init(&argc, &argv);
-    int rc = cmd_run(argc - 2, argv + 2);
+    int rc = cmd_run(argc - 1, argv + 1);
     gs_parallel_finalize();
     return rc;
   }
-  if (!strcmp(argv[1], "check")) return cmd_check(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "check")) return cmd_check(argc - 1, argv + 1);
   if (!strcmp(argv[1], "list")) return cmd_list();
-  if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 2, argv + 2);
-  if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 2, argv + 2);
-  if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 1, argv + 1);
   if (!strcmp(argv[1], "sweep")) { /* under mpirun the ranks share the runs */
     gs_parallel_init(&argc, &argv);
-    int rc = gs_cmd_sweep(argc - 2, argv + 2);
+    int rc = gs_cmd_sweep(argc - 1, argv + 1);
     gs_parallel_finalize();
     return rc;
   }
-  if (!strcmp(argv[1], "fit")) return gs_cmd_fit(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "fit")) return gs_cmd_fit(argc - 1, argv + 1);
   if (!strcmp(argv[1], "couple")) {
     /* MPI started only to see the ranks: gransim couple refuses more than one */
     gs_parallel_init(&argc, &argv);
-    int rc = gs_cmd_couple(argc - 2, argv + 2);
+    int rc = gs_cmd_couple(argc - 1, argv + 1);
     gs_parallel_finalize();
     return rc;
   }
-  if (!strcmp(argv[1], "sensitivity")) return gs_cmd_sensitivity(argc - 2, argv + 2);
-  if (!strcmp(argv[1], "optimise")) return gs_cmd_optimise(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "sensitivity")) return gs_cmd_sensitivity(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "optimise")) return gs_cmd_optimise(argc - 1, argv + 1);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;
