@@ -23,4 +23,7 @@ for cmd in $commands; do
       fail "the bash completion lacks '$o' of gransim $cmd"
   done
 done
+# the man page names the project's version
+version=$(sed -n 's/^project(gransim VERSION \([0-9.]*\).*/\1/p' "$SRC/CMakeLists.txt")
+grep -q "^\.TH GRANSIM 1 .* \"gransim $version\"" "$MAN" || fail "docs/gransim.1's .TH line does not name gransim $version"
 echo "cli_man: ok"

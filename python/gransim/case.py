@@ -65,9 +65,9 @@ class Case:
         return cls(handle, text, name, None)
 
     def __del__(self):
-        if getattr(self, "_handle", None):
-            L.lib.gs_api_case_free(self._handle)
-            self._handle = None
+        handle, self._handle = getattr(self, "_handle", None), None
+        if handle and L is not None and L.lib is not None:  # not at interpreter exit
+            L.lib.gs_api_case_free(handle)
 
     def copy(self):
         """An independent copy with the same keys set."""
