@@ -252,6 +252,12 @@ bad misspelt-grid.yaml 1 "gird:
 output: {end: 1}" \
   "unknown key 'gird' in the top level: did you mean 'grid'?"
 
+bad misspelt-axis-type.yaml 3 "grid:
+  axes:
+    - {name: solid, tpye: linear, min: 0, max: 10, cells: 20}
+output: {end: 1}" \
+  "unknown key 'tpye' in grid.axes[0]: did you mean 'type'?" "(linear, geometric or edges)"
+
 # every kind of case: stochastic, DEM and coupled cases are recognised
 run_rc 0 "$BIN" check "$SRC/examples/twin-screw.yaml"
 stdout_has "twin-screw.yaml: valid. swa solver"
