@@ -13,6 +13,7 @@
 
 #include <stddef.h>
 
+#include "gransim/cfg.h"
 #include "gransim/error.h"
 
 #ifdef __cplusplus
@@ -38,6 +39,8 @@ int gs_api_case_set(gs_api_case *c, const char *dotted, const char *value, gs_er
 /* The kind of the case as it stands (solver.method may have been changed). */
 gs_api_kind gs_api_case_kind(const gs_api_case *c);
 const char *gs_api_kind_name(gs_api_kind kind); /* "sectional", "swa", "dem", "coupled" */
+/* The kind of a loaded case file, from its top-level keys (nothing marked used). */
+gs_api_kind gs_api_kind_of_cfg(gs_cfg *cfg);
 
 /* Read and validate the case as a run would, without running it; desc gets
  * one line saying what it describes. */

@@ -82,13 +82,13 @@ static int has_top(gs_cfg *cfg, const char *key) {
   return 0;
 }
 
-static gs_api_kind kind_of(gs_cfg *cfg) {
+gs_api_kind gs_api_kind_of_cfg(gs_cfg *cfg) {
   if (has_top(cfg, "coupling")) return GS_API_COUPLED;
   if (has_top(cfg, "dem") && !has_top(cfg, "grid")) return GS_API_DEM;
   return gs_swa_case_wanted(cfg) ? GS_API_SWA : GS_API_SECTIONAL;
 }
 
-gs_api_kind gs_api_case_kind(const gs_api_case *c) { return kind_of(c->base); }
+gs_api_kind gs_api_case_kind(const gs_api_case *c) { return gs_api_kind_of_cfg(c->base); }
 
 const char *gs_api_kind_name(gs_api_kind kind) {
   static const char *const names[] = {"sectional", "swa", "dem", "coupled"};
@@ -117,7 +117,7 @@ static int coupled_path(const gs_api_case *c, gs_error *err) {
 }
 
 int gs_api_case_check(const gs_api_case *c, char *desc, size_t n, gs_error *err) {
-  gs_api_kind kind = kind_of(c->base);
+  gs_api_kind kind = gs_api_kind_of_cfg(c->base);
   if (kind == GS_API_COUPLED) {
     int rc = coupled_path(c, err);
     return rc ? rc : gs_couple_check(c->path, desc, n, err);
@@ -157,7 +157,7 @@ int gs_api_case_check(const gs_api_case *c, char *desc, size_t n, gs_error *err)
 
 int gs_api_case_run(const gs_api_case *c, const char *out_dir, int progress, gs_error *err) {
   if (progress < 0) progress = isatty(2);
-  gs_api_kind kind = kind_of(c->base);
+  gs_api_kind kind = gs_api_kind_of_cfg(c->base);
   if (kind == GS_API_COUPLED) {
     gs_couple_options opt = {.out_dir = out_dir, .progress = progress};
     int rc = coupled_path(c, err);

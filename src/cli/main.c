@@ -55,15 +55,6 @@ static void usage(FILE *fp) {
           gs_version());
 }
 
-/* A coupled case (a `coupling:` key at the top level).  The keys are scanned,
- * not asked for, so that other cases' unknown-key messages do not offer it. */
-static int is_coupled(gs_cfg *cfg) {
-  gs_cfg_node *root = gs_cfg_root(cfg);
-  for (size_t i = 0; gs_cfg_kind_of(root) == GS_CFG_MAP && i < gs_cfg_size(root); i++)
-    if (!strcmp(gs_cfg_key_at(root, i), "coupling")) return 1;
-  return 0;
-}
-
 static int cmd_run(int argc, char **argv) {
   const char *path = NULL, *out = NULL;
   gs_run_options opt = {.progress = -1};
@@ -115,10 +106,13 @@ static int cmd_run(int argc, char **argv) {
   gs_error err = {0};
   gs_case c;
   gs_cfg *cfg = gs_cfg_load_file(path, &err);
-  if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_run_swa(cfg, path, out, opt.progress, opt.resume);
-  if (cfg && is_coupled(cfg)) {
-    fprintf(stderr, "gransim: %s is a coupled PBM-DEM case (a `coupling:` section): run it with "
-            "`gransim couple %s --out %s`\n", path, path, out);
+  const gs_api_kind kind = cfg ? gs_api_kind_of_cfg(cfg) : GS_API_SECTIONAL;
+  if (kind == GS_API_SWA) return gs_cmd_run_swa(cfg, path, out, opt.progress, opt.resume);
+  if (kind == GS_API_COUPLED || kind == GS_API_DEM) {
+    fprintf(stderr, "gransim: %s is a %s: run it with `gransim %s %s --out %s`\n", path,
+            kind == GS_API_DEM ? "DEM case (a `dem:` section and no grid)"
+                               : "coupled PBM-DEM case (a `coupling:` section)",
+            kind == GS_API_DEM ? "dem" : "couple", path, out);
     gs_cfg_free(cfg);
     return 1;
   }
