@@ -228,6 +228,51 @@ mechanisms:
       file: no-such-table.csv" \
   "mechanisms[0].kernel.file" "no-such-table.csv" "cannot open kernel table"
 
+# misspelt keys: the nearest valid key is suggested; a misspelt required key
+# is reported at its own line, not as missing at its section's
+bad misspelt-optional.yaml 4 "$GRID_1D
+output: {end: 1, cuont: 5}" \
+  "unknown key 'cuont' in output; did you mean 'count'?"
+bad misspelt-required.yaml 8 "$GRID_1D
+output: {end: 1}
+mechanisms:
+  - type: aggregation
+    # the kernel, misspelt
+    kernal: {type: constant, beta0: 1}" \
+  "unknown key 'kernal' in mechanisms[0]: did you mean 'kernel'?" "missing key 'kernel'"
+bad misspelt-type.yaml 7 "$GRID_1D
+output: {end: 1}
+mechanisms:
+  - type: aggregation
+    kernel: {type: constnat, beta0: 1}" \
+  "unknown kernel type (did you mean 'constant'?)"
+bad misspelt-grid.yaml 1 "gird:
+  axes:
+    - {name: solid, type: linear, min: 0, max: 10, cells: 20}
+output: {end: 1}" \
+  "unknown key 'gird' in the top level: did you mean 'grid'?"
+
+bad misspelt-axis-type.yaml 3 "grid:
+  axes:
+    - {name: solid, tpye: linear, min: 0, max: 10, cells: 20}
+output: {end: 1}" \
+  "unknown key 'tpye' in grid.axes[0]: did you mean 'type'?" "(linear, geometric or edges)"
+
+# every kind of case: stochastic, DEM and coupled cases are recognised
+run_rc 0 "$BIN" check "$SRC/examples/twin-screw.yaml"
+stdout_has "twin-screw.yaml: valid. swa solver"
+run_rc 0 "$BIN" check "$SRC/examples/dem-corimix.yaml"
+stdout_has "dem-corimix.yaml: valid. DEM case: 3 size classes"
+run_rc 1 "$BIN" run "$SRC/examples/dem-corimix.yaml" --out "$WORK/dem-run"
+stderr_has "is a DEM case (a \`dem:\` section and no grid): run it with \`gransim dem "
+[ ! -e "$WORK/dem-run" ] || fail "gransim run of a DEM case created its output folder"
+run_rc 0 "$BIN" check "$SRC/examples/corimix-coupled.yaml"
+stdout_has "corimix-coupled.yaml: valid. one_way:"
+bad dem-misspelt.yaml 3 "dem: {time_step: 1.0e-5, duration: 0.01, box: {lo: [0, 0, 0], hi: [1, 1, 1]}}
+materials: [{name: glass, E: 1.0e7, nu: 0.3, e: 0.5, mu_s: 0.5, density: 2500}]
+clases: [{name: a, radius: 1.0e-3, material: glass}]" \
+  "unknown key 'clases' in the top level: did you mean 'classes'?"
+
 # YAML-level errors
 bad syntax.yaml 5 "$GRID_1D
 output: {end: 1

@@ -8,7 +8,7 @@ set -euo pipefail
 SRC=$2
 cd "$SRC"
 # lowest first; one line per layer: folder, then the public headers it owns
-LAYERS="core error parallel threads
+LAYERS="core error parallel threads version
 cfg cfg
 grid grid
 kernel kernel
@@ -23,6 +23,7 @@ dem dem
 liggghts liggghts
 study study
 couple couple
+api api
 cli"
 declare -A rank_of_folder rank_of_header
 r=0

@@ -9,7 +9,7 @@ stdout_has "usage: gransim <command>"
 run_rc 0 "$BIN" --version
 version=$(sed -n 's/^project(gransim VERSION \([0-9.]*\).*/\1/p' "$SRC/CMakeLists.txt")
 [ -n "$version" ] || fail "cannot find the project version in $SRC/CMakeLists.txt"
-grep -qx "gransim $version" "$WORK/stdout" || { show_output; fail "--version should print 'gransim $version'"; }
+grep -Eqx "gransim $version( \(.*\))?" "$WORK/stdout" || { show_output; fail "--version should print 'gransim $version', then git describe in parentheses in a checkout"; }
 grep -Eqx "MPI: (yes|no)" "$WORK/stdout" || { show_output; fail "--version should say whether gransim was built with MPI"; }
 
 run_rc 0 "$BIN" run --help
@@ -33,6 +33,29 @@ run_rc 2 "$BIN" run case.yaml --out "$WORK/o" --threads 0
 stderr_has "--threads needs a positive integer"
 run_rc 2 "$BIN" check
 run_rc 2 "$BIN" check a.yaml b.yaml
+# options by getopt_long: --key=value as well as --key value, anywhere on the line
+ok=$(write_case ok.yaml "$GRID_1D
+initial: {type: cell, index: 3, number: 1}
+mechanisms: [{type: aggregation, kernel: {type: constant, beta0: 0.01}}]
+output: {end: 1, count: 3}")
+run_rc 0 "$BIN" run --out="$WORK/eq" --threads=1 "$ok" --quiet
+[ -s "$WORK/eq/summary.csv" ] || fail "run --out=DIR wrote no $WORK/eq/summary.csv"
+run_rc 0 "$BIN" run "$ok" --out "$WORK/sp" --threads 1 --quiet
+cmp -s "$WORK/eq/summary.csv" "$WORK/sp/summary.csv" || fail "--out=DIR and --out DIR ran differently"
+run_rc 0 "$BIN" sweep "$ok" --set=mechanisms.0.kernel.beta0=0.01,0.02 --out="$WORK/sw" --threads=1 --quiet
+[ "$(grep -c ',ok,' "$WORK/sw/sweep.csv")" = 2 ] || fail "sweep with --set=KEY=V1,V2 did not run 2 runs"
+run_rc 2 "$BIN" run "$ok" --ot "$WORK/o"
+stderr_has "gransim run: unknown option '--ot'; did you mean '--out'?"
+run_rc 2 "$BIN" run "$ok" --out
+stderr_has "gransim run: option '--out' needs a value"
+run_rc 2 "$BIN" run "$ok" --out "$WORK/o" --quiet=yes
+stderr_has "gransim run: option '--quiet' takes no value"
+run_rc 2 "$BIN" run "$ok" --out "$WORK/o" --threads=0
+stderr_has "--threads needs a positive integer, got '0'"
+run_rc 2 "$BIN" dem --chek "$ok"
+stderr_has "gransim dem: unknown option '--chek'; did you mean '--check'?"
+run_rc 2 "$BIN" sweep "$ok" --sett=a=1 --out "$WORK/o"
+stderr_has "unknown option '--sett=a=1'; did you mean '--set'?"
 
 # list: every registered type under its heading
 run_rc 0 "$BIN" list

@@ -4,6 +4,8 @@
 #define _POSIX_C_SOURCE 200809L /* mkdtemp, rmdir */
 #include "gransim/cfg.h"
 
+#include "cfg/nearest.h"
+
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -373,7 +375,8 @@ static void test_unused(void) {
   gs_cfg_get(a1, "ratio");
   int rc = gs_cfg_check_unused(a1, &e);
   CHECK_ERR(rc, e, GS_EINPUT,
-            "case.yaml:10: unknown key 'ratoi' in grid.axes[1]; expected one of: name, cells, ratio");
+            "case.yaml:10: unknown key 'ratoi' in grid.axes[1]; did you mean 'ratio'? expected one of: name, "
+            "cells, ratio");
 
   /* Nothing queried: the section takes no keys. */
   gs_cfg_node *a0 = gs_cfg_item(gs_cfg_get(gs_cfg_get(root, "grid"), "axes"), 0);
@@ -516,7 +519,62 @@ static void test_set_scalar(void) {
   gs_cfg_free(c);
 }
 
+/* "Did you mean ...?": the edit distance, the nearest word, an unknown key,
+ * a misspelt required key reported at its own line, a dotted path and a
+ * registry name. */
+static void test_suggestions(void) {
+  CHECK(gs_edit_distance("kernel", "kernel") == 0);
+  CHECK(gs_edit_distance("kernal", "kernel") == 1); /* substitution */
+  CHECK(gs_edit_distance("ratoi", "ratio") == 1);   /* two neighbours swapped */
+  CHECK(gs_edit_distance("kernl", "kernel") == 1);  /* deletion */
+  CHECK(gs_edit_distance("Kernel", "kernel") == 0); /* case ignored */
+  CHECK(gs_edit_distance("", "abc") == 3 && gs_edit_distance("abc", "") == 3);
+  CHECK(gs_edit_distance("growth", "breakage") == 7);
+  const char *const keys[] = {"type", "kernel", "redistribution", "count"};
+  CHECK(!strcmp(gs_nearest_word("kernal", keys, 4), "kernel"));
+  CHECK(!strcmp(gs_nearest_word("redistributon", keys, 4), "redistribution"));
+  CHECK(!strcmp(gs_nearest_word("cont", keys, 4), "count"));
+  CHECK(gs_nearest_word("kernel", keys, 4) == NULL);  /* a valid key is no typo */
+  CHECK(gs_nearest_word("colour", keys, 4) == NULL);  /* nothing near */
+  CHECK(gs_nearest_word("tpye", keys, 4) != NULL);    /* swap in a short word */
+  CHECK(gs_nearest_word("ab", keys, 4) == NULL);      /* never the whole word */
+
+  gs_error e = {0};
+  gs_cfg *c = load("mechanisms:\n"       /* 1 */
+                   "  - type: aggregation\n" /* 2 */
+                   "    kernal: {type: constnt, beta0: 1}\n" /* 3 */
+                   "    redistribution: fixed_pivot\n", /* 4 */
+                   &e);
+  if (!c) return;
+  gs_cfg_node *m = gs_cfg_item(gs_cfg_get(gs_cfg_root(c), "mechanisms"), 0);
+  gs_cfg_node *k = NULL;
+  const char *s;
+  CHECK(gs_cfg_string_req(m, "type", &s, &e) == GS_OK);
+  /* the required key is missing, the misspelt one is named at its own line */
+  int rc = gs_cfg_map_req(m, "kernel", &k, &e);
+  CHECK_ERR(rc, e, GS_EINPUT, "case.yaml:3: unknown key 'kernal' in mechanisms[0]: did you mean 'kernel'?",
+            "missing key 'kernel'");
+  rc = gs_cfg_missing(m, "count", "(a number)", &e); /* nothing near: the section's line */
+  CHECK_ERR(rc, e, GS_EINPUT, "case.yaml:2: missing key 'count' (a number) in mechanisms[0]");
+  /* an unknown key read after the others */
+  gs_cfg_get(m, "kernel");
+  gs_cfg_get(m, "redistribution");
+  rc = gs_cfg_check_unused(m, &e);
+  CHECK_ERR(rc, e, GS_EINPUT, "case.yaml:3: unknown key 'kernal' in mechanisms[0]; did you mean 'kernel'?");
+  /* dotted paths */
+  CHECK(gs_cfg_find(c, "mechanisms.0.kernel.beta0", &e) == NULL);
+  CHECK(has(&e, "the case has no 'kernel' in mechanisms[0]") && has(&e, "did you mean 'kernal'?"));
+  /* registry names */
+  static const struct named { const char *name; } constant = {"constant"}, sum = {"sum"};
+  const void *const types[] = {&constant, &sum, NULL};
+  gs_cfg_node *kernal = gs_cfg_get(m, "kernal");
+  CHECK(gs_registry_pick(kernal, types, "kernel", &e) == NULL);
+  CHECK(has(&e, "unknown kernel type (did you mean 'constant'?); expected one of: constant, sum"));
+  gs_cfg_free(c);
+}
+
 int main(void) {
+  test_suggestions();
   test_structure();
   test_root_sequence_paths();
   test_number_syntax();

@@ -408,7 +408,7 @@ static void errors(void) {
       "solver: {method: swa, coordinates: [solid, liquid]}\n"
       "mechanisms:\n  - {type: penetration, rate: 1}\n"
       "output: {end: 1}\n");
-  CHECK(msg && strstr(msg, "bad.yaml:6: mechanisms[0]: missing key 'external_liquid'"));
+  CHECK(msg && strstr(msg, "bad.yaml:6: missing key 'external_liquid' (the default coordinate"));
   if (msg) fprintf(stderr, "error: %s\n", msg);
   msg = sw_case_error(
       "grid:\n  axes: [{name: solid, type: linear, min: 0, max: 1, cells: 2}]\n"

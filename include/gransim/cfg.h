@@ -118,8 +118,15 @@ int gs_cfg_node_double(const gs_cfg_node *n, double *out, gs_error *err);
  * read (src/couple).  The new node takes map's file and line for messages. */
 int gs_cfg_set_scalar(gs_cfg_node *map, const char *key, const char *text, gs_error *err);
 
+/* "FILE:LINE: missing key 'key' HINT in PATH" (hint may be NULL),
+ * e.g. "(linear, geometric or edges)"; but when map has a key nobody asked
+ * for that looks like a misspelling of key, the message is at that key's own
+ * line: "FILE:LINE: unknown key 'kernal' in PATH: did you mean 'kernel'?
+ * (missing key 'kernel' ...)".  Returns GS_EINPUT. */
+int gs_cfg_missing(const gs_cfg_node *map, const char *key, const char *hint, gs_error *err);
+
 /* Report the first key of map that no accessor asked for:
- *   case.yaml:7: unknown key 'ratoi' in grid.axes[0]; expected one of: name, type, cells, ratio
+ *   case.yaml:7: unknown key 'ratoi' in grid.axes[0]: did you mean 'ratio'? expected one of: name, type, cells, ratio
  * Also fails if map is not a map.  Call after reading all keys of a section. */
 int gs_cfg_check_unused(const gs_cfg_node *map, gs_error *err);
 

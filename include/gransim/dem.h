@@ -22,6 +22,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "gransim/cfg.h"
 #include "gransim/dem_data.h"
 #include "gransim/error.h"
 
@@ -226,6 +227,10 @@ typedef struct gs_dem_case_s gs_dem_case;
 /* Read and validate a DEM case; builds the simulation (meshes read, walls
  * placed) but inserts nothing yet. */
 gs_dem_case *gs_dem_case_load(const char *path, gs_error *err);
+/* The same from a loaded case file (taken over, also on failure): a caller
+ * that changed keys (gs_cfg_set) first.  Relative mesh paths resolve against
+ * gs_cfg_dir. */
+gs_dem_case *gs_dem_case_from_cfg(gs_cfg *cfg, gs_error *err);
 /* One line describing the case (for `gransim dem --check`). */
 void gs_dem_case_describe(const gs_dem_case *c, char *buf, size_t n);
 /* Run it, writing the tables, time series and VTK files into out_dir. */

@@ -18,7 +18,7 @@ static int read_axis(gs_cfg_node *n, gs_axis *ax, gs_error *err) {
   if (!rc) rc = gs_cfg_string_req(n, "name", &name, err);
   if (!rc && (strlen(name) == 0 || strlen(name) >= GS_NAME_LEN || strpbrk(name, " ,/\t")))
     rc = gs_cfg_fail(gs_cfg_get(n, "name"), err, "expected a name of 1-%d characters without spaces, commas or '/'", GS_NAME_LEN - 1);
-  if (!rc && !gs_cfg_get(n, "type")) rc = gs_cfg_fail(n, err, "missing key 'type' (linear, geometric or edges)");
+  if (!rc && !gs_cfg_get(n, "type")) rc = gs_cfg_missing(n, "type", "(linear, geometric or edges)", err);
   if (!rc) rc = gs_cfg_enum_opt(n, "type", types, 0, &type, err);
   if (rc) return rc;
   if (type == 0) {

@@ -5,6 +5,7 @@
  * can name the file, line and path of the value it rejects, and so that
  * unused keys can be reported after a section has been read. */
 #include "gransim/cfg.h"
+#include "cfg/nearest.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -569,10 +570,18 @@ gs_cfg_node *gs_cfg_find(gs_cfg *cfg, const char *dotted, gs_error *err) {
       for (size_t i = 0; i < n->n && !next; i++)
         if (strcmp(n->entries[i].key, part) == 0) next = n->entries[i].value;
       if (!next) {
-        char keys[512];
+        char keys[512], hint[128] = "";
         gs_keys_of(n, keys, sizeof keys);
-        gs_error_set(err, GS_EINPUT, "key '%s': the case has no '%s' in %s (it has: %s)", dotted,
-                     part, where, keys);
+        const gs_cfg_entry *near = NULL;
+        for (size_t i = 0; i < n->n; i++) {
+          const char *const one[] = {n->entries[i].key};
+          if (gs_nearest_word(part, one, 1) &&
+              (!near || gs_edit_distance(part, one[0]) < gs_edit_distance(part, near->key)))
+            near = &n->entries[i];
+        }
+        if (near) snprintf(hint, sizeof hint, "; did you mean '%s'?", near->key);
+        gs_error_set(err, GS_EINPUT, "key '%s': the case has no '%s' in %s (it has: %s)%s", dotted,
+                     part, where, keys, hint);
         return NULL;
       }
       n = next;
@@ -691,11 +700,31 @@ int gs_cfg_require_kind(const gs_cfg_node *n, gs_cfg_kind kind, gs_error *err) {
 
 /* --- typed accessors --------------------------------------------------------------- */
 
-static int gs_missing(const gs_cfg_node *map, const char *key, gs_error *err) {
+/* A key of map that nothing asked for and that looks like a misspelling of
+ * key, or NULL. */
+static const gs_cfg_entry *gs_misspelt(const gs_cfg_node *map, const char *key) {
+  for (size_t i = 0; map->kind == GS_CFG_MAP && i < map->n; i++) {
+    const gs_cfg_entry *e = &map->entries[i];
+    const char *const one[] = {key};
+    if (!e->used && gs_nearest_word(e->key, one, 1)) return e;
+  }
+  return NULL;
+}
+
+int gs_cfg_missing(const gs_cfg_node *map, const char *key, const char *hint, gs_error *err) {
   if (!map)
     return gs_error_set(err, GS_EINPUT, "missing key '%s' (the configuration is empty)", key);
-  return gs_error_set(err, GS_EINPUT, "%s:%d: missing key '%s' in %s", map->file, map->line, key,
-                      gs_path_shown(map));
+  const gs_cfg_entry *typo = gs_misspelt(map, key);
+  if (typo) /* at the misspelt key's own line, where the fix is */
+    return gs_error_set(err, GS_EINPUT, "%s:%d: unknown key '%s' in %s: did you mean '%s'? (missing key '%s'%s%s)",
+                        map->file, typo->line, typo->key, gs_path_shown(map), key, key, hint ? " " : "",
+                        hint ? hint : "");
+  return gs_error_set(err, GS_EINPUT, "%s:%d: missing key '%s'%s%s in %s", map->file, map->line, key,
+                      hint ? " " : "", hint ? hint : "", gs_path_shown(map));
+}
+
+static int gs_missing(const gs_cfg_node *map, const char *key, gs_error *err) {
+  return gs_cfg_missing(map, key, NULL, err);
 }
 
 /* Look key up for an accessor.  *out is NULL when absent; fails if map is
@@ -961,7 +990,7 @@ int gs_cfg_per_comp(gs_cfg_node *map, const char *key, int required, double def,
                     int lo_strict, size_t n, double *out, gs_error *err) {
   gs_cfg_node *node = gs_cfg_get(map, key);
   if (!node) {
-    if (required) return gs_cfg_fail(map, err, "missing key '%s'", key);
+    if (required) return gs_missing(map, key, err);
     for (size_t z = 0; z < n; z++) out[z] = def;
     return GS_OK;
   }
@@ -989,10 +1018,12 @@ int gs_cfg_check_unused(const gs_cfg_node *map, gs_error *err) {
     if (map->nasked == 0)
       return gs_error_set(err, GS_EINPUT, "%s:%d: unknown key '%s' in %s; this section takes no keys",
                           map->file, e->line, e->key, gs_path_shown(map));
-    char list[1024];
+    char list[1024], hint[128] = "";
     gs_join(list, sizeof list, (const char *const *)map->asked, map->nasked);
-    return gs_error_set(err, GS_EINPUT, "%s:%d: unknown key '%s' in %s; expected one of: %s",
-                        map->file, e->line, e->key, gs_path_shown(map), list);
+    const char *near = gs_nearest_word(e->key, (const char *const *)map->asked, map->nasked);
+    if (near) snprintf(hint, sizeof hint, "did you mean '%s'? ", near);
+    return gs_error_set(err, GS_EINPUT, "%s:%d: unknown key '%s' in %s; %sexpected one of: %s",
+                        map->file, e->line, e->key, gs_path_shown(map), hint, list);
   }
   return GS_OK;
 }

@@ -1,4 +1,6 @@
-/* Subcommands implemented in their own files. */
+/* Subcommands implemented in their own files.  Each takes the arguments
+ * after `gransim`: argv[0] is the subcommand's name (getopt_long skips it,
+ * messages name it; src/cli/options.h). */
 #ifndef GRANSIM_CLI_COMMANDS_H
 #define GRANSIM_CLI_COMMANDS_H
 int gs_cmd_validate(int argc, char **argv);
@@ -11,8 +13,7 @@ int gs_cmd_couple(int argc, char **argv);
 int gs_cmd_couple_check(const char *path);
 int gs_cmd_sensitivity(int argc, char **argv); /* src/cli/sensitivity.c */
 int gs_cmd_optimise(int argc, char **argv);   /* src/cli/optimise.c */
-/* Cases with solver.method = swa (src/cli/swa_cmd.c); both take over cfg. */
+/* Cases with solver.method = swa (src/cli/swa_cmd.c); takes over cfg. */
 typedef struct gs_cfg gs_cfg;
 int gs_cmd_run_swa(gs_cfg *cfg, const char *path, const char *out, int progress, int resume);
-int gs_cmd_check_swa(gs_cfg *cfg, const char *path);
 #endif

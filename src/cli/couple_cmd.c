@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "gransim/couple.h"
 #include "gransim/parallel.h"
 
@@ -39,30 +40,30 @@ int gs_cmd_couple(int argc, char **argv) {
   const char *path = NULL;
   gs_couple_options opt = {.progress = 1};
   int check = 0;
-  for (int i = 0; i < argc; i++) {
-    if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-      couple_usage(stdout);
-      return 0;
-    } else if (!strcmp(argv[i], "--out") && i + 1 < argc) opt.out_dir = argv[++i];
-    else if (!strcmp(argv[i], "--check")) check = 1;
-    else if (!strcmp(argv[i], "--resume")) opt.resume = 1;
-    else if (!strcmp(argv[i], "--quiet")) opt.progress = 0;
-    else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
-      int n = atoi(argv[++i]);
-      if (n < 1) {
-        fprintf(stderr, "gransim couple: --threads needs a positive integer, got '%s'\n", argv[i]);
-        return 2;
-      }
+  static const struct option opts[] = {
+      {"help", no_argument, NULL, GS_CLI_HELP}, {"out", required_argument, NULL, 'o'},
+      {"check", no_argument, NULL, 'c'},        {"resume", no_argument, NULL, 'r'},
+      {"quiet", no_argument, NULL, 'q'},        {"threads", required_argument, NULL, 't'},
+      {0}};
+  gs_cli_begin();
+  for (int o, n; (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
+    case GS_CLI_HELP: couple_usage(stdout); return 0;
+    case 'o': opt.out_dir = optarg; break;
+    case 'c': check = 1; break;
+    case 'r': opt.resume = 1; break;
+    case 'q': opt.progress = 0; break;
+    case 't':
+      if (gs_cli_positive("couple", "threads", optarg, &n)) return 2;
       omp_set_num_threads(n);
+      break;
+    default: return 2;
     }
-    else if (argv[i][0] == '-') {
-      fprintf(stderr, "gransim couple: unknown option '%s' (see gransim couple --help)\n", argv[i]);
-      return 2;
-    } else if (!path) path = argv[i];
-    else {
+  for (int i = optind; i < argc; i++) {
+    if (path) {
       fprintf(stderr, "gransim couple: unexpected argument '%s'\n", argv[i]);
       return 2;
     }
+    path = argv[i];
   }
   if (!path || (!opt.out_dir && !check)) {
     couple_usage(stderr);

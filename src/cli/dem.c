@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "gransim/dem.h"
 #include "gransim/liggghts.h"
 
@@ -41,36 +42,33 @@ int gs_cmd_dem(int argc, char **argv) {
   const char *path = NULL, *out = NULL;
   int check = 0, progress = 1;
   gs_lig_options lig = {.ranks = 0, .launcher = NULL, .binary = NULL, .progress = 1};
-  for (int i = 0; i < argc; i++) {
-    if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-      dem_usage(stdout);
-      return 0;
-    } else if (!strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
-    else if (!strcmp(argv[i], "--check")) check = 1;
-    else if (!strcmp(argv[i], "--quiet")) progress = 0;
-    else if (!strcmp(argv[i], "--launcher") && i + 1 < argc) lig.launcher = argv[++i];
-    else if (!strcmp(argv[i], "--ranks") && i + 1 < argc) {
-      lig.ranks = atoi(argv[++i]);
-      if (lig.ranks < 1) {
-        fprintf(stderr, "gransim dem: --ranks needs a positive integer, got '%s'\n", argv[i]);
-        return 2;
-      }
-    }
-    else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
-      int n = atoi(argv[++i]);
-      if (n < 1) {
-        fprintf(stderr, "gransim dem: --threads needs a positive integer, got '%s'\n", argv[i]);
-        return 2;
-      }
+  static const struct option opts[] = {
+      {"help", no_argument, NULL, GS_CLI_HELP},    {"out", required_argument, NULL, 'o'},
+      {"check", no_argument, NULL, 'c'},           {"quiet", no_argument, NULL, 'q'},
+      {"launcher", required_argument, NULL, 'l'}, {"ranks", required_argument, NULL, 'r'},
+      {"threads", required_argument, NULL, 't'},  {0}};
+  gs_cli_begin();
+  for (int o, n; (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
+    case GS_CLI_HELP: dem_usage(stdout); return 0;
+    case 'o': out = optarg; break;
+    case 'c': check = 1; break;
+    case 'q': progress = 0; break;
+    case 'l': lig.launcher = optarg; break;
+    case 'r':
+      if (gs_cli_positive("dem", "ranks", optarg, &lig.ranks)) return 2;
+      break;
+    case 't':
+      if (gs_cli_positive("dem", "threads", optarg, &n)) return 2;
       omp_set_num_threads(n);
-    } else if (argv[i][0] == '-') {
-      fprintf(stderr, "gransim dem: unknown option '%s' (see gransim dem --help)\n", argv[i]);
-      return 2;
-    } else if (!path) path = argv[i];
-    else {
+      break;
+    default: return 2;
+    }
+  for (int i = optind; i < argc; i++) {
+    if (path) {
       fprintf(stderr, "gransim dem: unexpected argument '%s'\n", argv[i]);
       return 2;
     }
+    path = argv[i];
   }
   if (!path || (!out && !check)) {
     dem_usage(stderr);

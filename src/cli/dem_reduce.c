@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "gransim/dem_data.h"
 
 static void reduce_usage(FILE *fp) {
@@ -61,40 +62,48 @@ int gs_cmd_dem_reduce(int argc, char **argv) {
   double *edges = NULL;
   size_t nedges = 0;
   int rc = 0;
-  for (int i = 0; i < argc && !rc; i++) {
-    const char *a = argv[i];
-    int has = i + 1 < argc;
-    if (!strcmp(a, "--help") || !strcmp(a, "-h")) { reduce_usage(stdout); free(edges); return 0; }
-    else if (!strcmp(a, "--out") && has) out = argv[++i];
-    else if (!strcmp(a, "--impacts") && has) impacts = argv[++i];
-    else if (!strcmp(a, "--E") && has) rc = num_arg(a, argv[++i], &opt.youngs);
-    else if (!strcmp(a, "--nu") && has) rc = num_arg(a, argv[++i], &opt.poisson);
-    else if (!strcmp(a, "--rho") && has) rc = num_arg(a, argv[++i], &opt.density);
-    else if (!strcmp(a, "--e") && has) rc = num_arg(a, argv[++i], &opt.restitution);
-    else if (!strcmp(a, "--wall-E") && has) rc = num_arg(a, argv[++i], &opt.wall_youngs);
-    else if (!strcmp(a, "--wall-nu") && has) rc = num_arg(a, argv[++i], &opt.wall_poisson);
-    else if (!strcmp(a, "--contact-time") && has) rc = num_arg(a, argv[++i], &opt.contact_time);
-    else if (!strcmp(a, "--min-speed") && has) rc = num_arg(a, argv[++i], &opt.min_speed);
-    else if (!strcmp(a, "--prefix") && has) opt.contact_prefix = argv[++i];
-    else if (!strcmp(a, "--edges") && has) { free(edges); rc = edges_arg(argv[++i], &edges, &nedges); }
-    else if (!strcmp(a, "--contacts") && has) {
-      const char *m = argv[++i];
+  static const struct option opts[] = {
+      {"help", no_argument, NULL, GS_CLI_HELP},      {"out", required_argument, NULL, 'o'},
+      {"impacts", required_argument, NULL, 'i'},     {"E", required_argument, NULL, 'E'},
+      {"nu", required_argument, NULL, 'n'},          {"rho", required_argument, NULL, 'r'},
+      {"e", required_argument, NULL, 'e'},           {"wall-E", required_argument, NULL, 'W'},
+      {"wall-nu", required_argument, NULL, 'w'},     {"contact-time", required_argument, NULL, 'T'},
+      {"min-speed", required_argument, NULL, 's'},   {"prefix", required_argument, NULL, 'p'},
+      {"edges", required_argument, NULL, 'g'},       {"contacts", required_argument, NULL, 'c'},
+      {"measure", required_argument, NULL, 'm'},     {0}};
+  gs_cli_begin();
+  for (int o; !rc && (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
+    case GS_CLI_HELP: reduce_usage(stdout); free(edges); return 0;
+    case 'o': out = optarg; break;
+    case 'i': impacts = optarg; break;
+    case 'E': rc = num_arg("--E", optarg, &opt.youngs); break;
+    case 'n': rc = num_arg("--nu", optarg, &opt.poisson); break;
+    case 'r': rc = num_arg("--rho", optarg, &opt.density); break;
+    case 'e': rc = num_arg("--e", optarg, &opt.restitution); break;
+    case 'W': rc = num_arg("--wall-E", optarg, &opt.wall_youngs); break;
+    case 'w': rc = num_arg("--wall-nu", optarg, &opt.wall_poisson); break;
+    case 'T': rc = num_arg("--contact-time", optarg, &opt.contact_time); break;
+    case 's': rc = num_arg("--min-speed", optarg, &opt.min_speed); break;
+    case 'p': opt.contact_prefix = optarg; break;
+    case 'g': free(edges); rc = edges_arg(optarg, &edges, &nedges); break;
+    case 'c': {
       static const char *const names[] = {"auto", "ppcoll", "cc", "cc-partner"};
       int k = 0;
-      while (k < 4 && strcmp(m, names[k])) k++;
-      if (k == 4) { fprintf(stderr, "gransim dem-reduce: --contacts: expected auto, ppcoll, cc or cc-partner, got '%s'\n", m); rc = 2; }
+      while (k < 4 && strcmp(optarg, names[k])) k++;
+      if (k == 4) { fprintf(stderr, "gransim dem-reduce: --contacts: expected auto, ppcoll, cc or cc-partner, got '%s'\n", optarg); rc = 2; }
       else opt.contacts_from = k;
-    } else if (!strcmp(a, "--measure") && has) {
-      const char *m = argv[++i];
-      if (!strcmp(m, "volume")) opt.edges_volume = 1;
-      else if (!strcmp(m, "diameter")) opt.edges_volume = 0;
-      else { fprintf(stderr, "gransim dem-reduce: --measure: expected diameter or volume, got '%s'\n", m); rc = 2; }
-    } else if (a[0] == '-') {
-      fprintf(stderr, "gransim dem-reduce: unknown option '%s' or missing value (see --help)\n", a);
-      rc = 2;
-    } else if (!dir) dir = a;
-    else { fprintf(stderr, "gransim dem-reduce: unexpected argument '%s'\n", a); rc = 2; }
-  }
+      break;
+    }
+    case 'm':
+      if (!strcmp(optarg, "volume")) opt.edges_volume = 1;
+      else if (!strcmp(optarg, "diameter")) opt.edges_volume = 0;
+      else { fprintf(stderr, "gransim dem-reduce: --measure: expected diameter or volume, got '%s'\n", optarg); rc = 2; }
+      break;
+    default: rc = 2;
+    }
+  for (int i = optind; !rc && i < argc; i++)
+    if (!dir) dir = argv[i];
+    else { fprintf(stderr, "gransim dem-reduce: unexpected argument '%s'\n", argv[i]); rc = 2; }
   if (!rc && !dir) { fprintf(stderr, "usage: gransim dem-reduce DIR [--out TABLE.csv] (see --help)\n"); rc = 2; }
   if (rc) { free(edges); return rc; }
 

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "gransim/study.h"
 
 static const char *const FIT_HELP =
@@ -30,23 +31,28 @@ int gs_cmd_fit(int argc, char **argv) {
   gs_fit_result res = {0};
   gs_cfg *cfg = NULL;
   int rc = params ? 0 : 1;
-  for (int i = 0; i < argc && !rc; i++) {
-    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-    if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-      fputs(FIT_HELP, stdout);
-      goto done;
-    } else if (!strcmp(a, "--params") && v) {
-      if (gs_study_parse_range(v, &params[np++], &err)) {
+  static const struct option opts[] = {{"help", no_argument, NULL, GS_CLI_HELP},
+                                       {"params", required_argument, NULL, 'p'},
+                                       {"data", required_argument, NULL, 'd'},
+                                       {0}};
+  gs_cli_begin();
+  for (int o; !rc && (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
+    case GS_CLI_HELP: fputs(FIT_HELP, stdout); goto done;
+    case 'p':
+      if (gs_study_parse_range(optarg, &params[np++], &err)) {
         fprintf(stderr, "gransim fit: %s\n", err.msg);
         rc = 2;
       }
-      i++;
-    } else if (!strcmp(a, "--data") && v) data_path = argv[++i];
-    else if (a[0] == '-' || path) {
-      fprintf(stderr, "gransim fit: unexpected '%s' (see gransim fit --help)\n", a);
+      break;
+    case 'd': data_path = optarg; break;
+    default: rc = 2;
+    }
+  for (int i = optind; !rc && i < argc; i++)
+    if (!path) path = argv[i];
+    else {
+      fprintf(stderr, "gransim fit: unexpected '%s' (see gransim fit --help)\n", argv[i]);
       rc = 2;
-    } else path = a;
-  }
+    }
   if (!rc && (!path || !data_path || !np)) {
     fprintf(stderr, "gransim fit: needs CASE, --data FILE and --params KEY=LO:HI (see gransim fit --help)\n");
     rc = 2;

@@ -15,16 +15,16 @@
 #endif
 
 #include "cli/commands.h"
+#include "cli/options.h"
+#include "gransim/api.h"
 #include "gransim/case.h"
 #include "gransim/distribution.h"
 #include "gransim/run.h"
 #include "gransim/kernel.h"
 #include "gransim/parallel.h"
 #include "gransim/swa.h"
+#include "gransim/version.h"
 
-#ifndef GRANSIM_VERSION
-#define GRANSIM_VERSION "unknown"
-#endif
 
 static void usage(FILE *fp) {
   fprintf(fp,
@@ -53,16 +53,7 @@ static void usage(FILE *fp) {
           "                         with classes from the PBM grid, then the PBM with its tables\n\n"
           "options: --help, --version; `gransim <command> --help` for details.\n"
           "Case file format: docs/case-files.md\n",
-          GRANSIM_VERSION);
-}
-
-/* A coupled case (a `coupling:` key at the top level).  The keys are scanned,
- * not asked for, so that other cases' unknown-key messages do not offer it. */
-static int is_coupled(gs_cfg *cfg) {
-  gs_cfg_node *root = gs_cfg_root(cfg);
-  for (size_t i = 0; gs_cfg_kind_of(root) == GS_CFG_MAP && i < gs_cfg_size(root); i++)
-    if (!strcmp(gs_cfg_key_at(root, i), "coupling")) return 1;
-  return 0;
+          gs_version());
 }
 
 /* How the grid holds each distribution of the case (distribution.h). */
@@ -77,8 +68,14 @@ static void print_discretisation(FILE *fp, const gs_model *m) {
 static int cmd_run(int argc, char **argv) {
   const char *path = NULL, *out = NULL;
   gs_run_options opt = {.progress = -1};
-  for (int i = 0; i < argc; i++) {
-    if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+  static const struct option opts[] = {
+      {"help", no_argument, NULL, GS_CLI_HELP}, {"out", required_argument, NULL, 'o'},
+      {"resume", no_argument, NULL, 'r'},      {"quiet", no_argument, NULL, 'q'},
+      {"progress", no_argument, NULL, 'p'},    {"timings", no_argument, NULL, 'T'},
+      {"threads", required_argument, NULL, 't'}, {0}};
+  gs_cli_begin();
+  for (int o, n; (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
+    case GS_CLI_HELP:
       printf("usage: gransim run CASE --out DIR [--resume] [--quiet] [--threads N] [--timings]\n\n"
              "Runs CASE and writes DIR/result.h5 (HDF5: grid, times, numbers per cell and\n"
              "compartment, ledger, summary, case echo) and DIR/summary.csv (one row per output\n"
@@ -91,28 +88,25 @@ static int cmd_run(int argc, char **argv) {
              "step agreements, the outputs and the final write, and the compartments it held\n"
              "at the end (they move to balance the ranks); on one rank also the rates of each\n"
              "compartment and the most a split of them over 2, 3, ... ranks could gain\n"
-             "(with --threads 1).\n");
+             "(with --threads 1).  Options take their value as --out DIR or --out=DIR.\n");
       return 0;
-    } else if (!strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
-    else if (!strcmp(argv[i], "--resume")) opt.resume = 1;
-    else if (!strcmp(argv[i], "--quiet")) opt.progress = 0;
-    else if (!strcmp(argv[i], "--progress")) opt.progress = 1;
-    else if (!strcmp(argv[i], "--timings")) opt.timings = 1;
-    else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
-      int n = atoi(argv[++i]);
-      if (n < 1) {
-        fprintf(stderr, "gransim run: --threads needs a positive integer, got '%s'\n", argv[i]);
-        return 2;
-      }
+    case 'o': out = optarg; break;
+    case 'r': opt.resume = 1; break;
+    case 'q': opt.progress = 0; break;
+    case 'p': opt.progress = 1; break;
+    case 'T': opt.timings = 1; break;
+    case 't':
+      if (gs_cli_positive("run", "threads", optarg, &n)) return 2;
       omp_set_num_threads(n);
-    } else if (argv[i][0] == '-') {
-      fprintf(stderr, "gransim run: unknown option '%s' (see gransim run --help)\n", argv[i]);
-      return 2;
-    } else if (!path) path = argv[i];
-    else {
+      break;
+    default: return 2;
+    }
+  for (int i = optind; i < argc; i++) {
+    if (path) {
       fprintf(stderr, "gransim run: unexpected argument '%s'\n", argv[i]);
       return 2;
     }
+    path = argv[i];
   }
   if (!path || !out) {
     fprintf(stderr, "usage: gransim run CASE --out DIR (see gransim run --help)\n");
@@ -122,10 +116,13 @@ static int cmd_run(int argc, char **argv) {
   gs_error err = {0};
   gs_case c;
   gs_cfg *cfg = gs_cfg_load_file(path, &err);
-  if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_run_swa(cfg, path, out, opt.progress, opt.resume);
-  if (cfg && is_coupled(cfg)) {
-    fprintf(stderr, "gransim: %s is a coupled PBM-DEM case (a `coupling:` section): run it with "
-            "`gransim couple %s --out %s`\n", path, path, out);
+  const gs_api_kind kind = cfg ? gs_api_kind_of_cfg(cfg) : GS_API_SECTIONAL;
+  if (kind == GS_API_SWA) return gs_cmd_run_swa(cfg, path, out, opt.progress, opt.resume);
+  if (kind == GS_API_COUPLED || kind == GS_API_DEM) {
+    fprintf(stderr, "gransim: %s is a %s: run it with `gransim %s %s --out %s`\n", path,
+            kind == GS_API_DEM ? "DEM case (a `dem:` section and no grid)"
+                               : "coupled PBM-DEM case (a `coupling:` section)",
+            kind == GS_API_DEM ? "dem" : "couple", path, out);
     gs_cfg_free(cfg);
     return 1;
   }
@@ -167,30 +164,26 @@ static int cmd_run(int argc, char **argv) {
 }
 
 static int cmd_check(int argc, char **argv) {
-  if (argc != 1 || argv[0][0] == '-') {
-    printf("usage: gransim check CASE\n\nReads and validates CASE; prints what it describes.\n");
-    return argc == 1 && !strcmp(argv[0], "--help") ? 0 : 2;
+  static const struct option opts[] = {{"help", no_argument, NULL, GS_CLI_HELP}, {0}};
+  int help = 0;
+  gs_cli_begin();
+  for (int o; (o = gs_cli_next(argc, argv, opts)) != -1;)
+    if (o == GS_CLI_HELP) help = 1;
+    else return 2;
+  if (help || argc - optind != 1) {
+    printf("usage: gransim check CASE\n\nReads and validates CASE of any kind (sectional, stochastic with\n"
+           "solver.method: swa, DEM, coupled) without running it; prints what it describes.\n"
+           "A misspelt key is reported at its line with the nearest valid key.\n");
+    return help ? 0 : 2;
   }
+  argv += optind;
   gs_error err = {0};
-  gs_case c;
-  gs_cfg *cfg = gs_cfg_load_file(argv[0], &err);
-  if (cfg && gs_swa_case_wanted(cfg)) return gs_cmd_check_swa(cfg, argv[0]);
-  if (cfg && is_coupled(cfg)) { /* checked stage by stage */
-    gs_cfg_free(cfg);
-    return gs_cmd_couple_check(argv[0]);
-  }
-  memset(&c, 0, sizeof c);
-  int rc = cfg ? gs_case_from_cfg(cfg, &c, &err) : err.code;
+  char desc[8192];
+  gs_api_case *c = gs_api_case_load(argv[0], &err);
+  int rc = c ? gs_api_case_check(c, desc, sizeof desc, &err) : err.code;
   if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
-  else {
-    const gs_grid *g = &c.model.grid;
-    printf("%s: valid. %d axes, %zu cells x %zu compartments, %zu mechanisms, %zu output times "
-           "from %g to %g, integrator %s\n",
-           argv[0], g->dim, g->ncells, g->ncomp, c.model.nmech, c.ntimes, c.times[0],
-           c.times[c.ntimes - 1], c.integrator.type->name);
-    print_discretisation(stdout, &c.model);
-  }
-  gs_case_free(&c);
+  else printf("%s: valid. %s\n", argv[0], desc);
+  gs_api_case_free(c);
   return rc ? 1 : 0;
 }
 
@@ -258,8 +251,9 @@ static void wait_passively(int argc, char **argv) {
   if (getenv("OMP_WAIT_POLICY") || getenv("GOMP_SPINCOUNT")) return;
   /* one thread never waits for another: no need to pay a second start */
   int threads = omp_get_max_threads();
-  for (int i = 2; i + 1 < argc; i++)
-    if (!strcmp(argv[i], "--threads")) threads = atoi(argv[i + 1]);
+  for (int i = 2; i < argc; i++)
+    if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[i + 1]);
+    else if (!strncmp(argv[i], "--threads=", 10)) threads = atoi(argv[i] + 10);
   if (threads < 2) return;
   if (setenv("OMP_WAIT_POLICY", "passive", 1)) return;
   execv("/proc/self/exe", argv);
@@ -276,7 +270,7 @@ int main(int argc, char **argv) {
     return argc < 2 ? 2 : 0;
   }
   if (!strcmp(argv[1], "--version")) {
-    printf("gransim %s\nMPI: %s\n", GRANSIM_VERSION, gs_parallel_have_mpi() ? "yes" : "no");
+    printf("gransim %s\nMPI: %s\n", gs_version(), gs_parallel_have_mpi() ? "yes" : "no");
     return 0;
   }
   /* the commands that run threads */
@@ -285,31 +279,31 @@ int main(int argc, char **argv) {
     keep_freed_memory();
     /* MPI only for runs, and only when launched by mpirun (gransim/parallel.h) */
     gs_parallel_init(&argc, &argv);
-    int rc = cmd_run(argc - 2, argv + 2);
+    int rc = cmd_run(argc - 1, argv + 1);
     gs_parallel_finalize();
     return rc;
   }
-  if (!strcmp(argv[1], "check")) return cmd_check(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "check")) return cmd_check(argc - 1, argv + 1);
   if (!strcmp(argv[1], "list")) return cmd_list();
-  if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 2, argv + 2);
-  if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 2, argv + 2);
-  if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 1, argv + 1);
   if (!strcmp(argv[1], "sweep")) { /* under mpirun the ranks share the runs */
     gs_parallel_init(&argc, &argv);
-    int rc = gs_cmd_sweep(argc - 2, argv + 2);
+    int rc = gs_cmd_sweep(argc - 1, argv + 1);
     gs_parallel_finalize();
     return rc;
   }
-  if (!strcmp(argv[1], "fit")) return gs_cmd_fit(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "fit")) return gs_cmd_fit(argc - 1, argv + 1);
   if (!strcmp(argv[1], "couple")) {
     /* MPI started only to see the ranks: gransim couple refuses more than one */
     gs_parallel_init(&argc, &argv);
-    int rc = gs_cmd_couple(argc - 2, argv + 2);
+    int rc = gs_cmd_couple(argc - 1, argv + 1);
     gs_parallel_finalize();
     return rc;
   }
-  if (!strcmp(argv[1], "sensitivity")) return gs_cmd_sensitivity(argc - 2, argv + 2);
-  if (!strcmp(argv[1], "optimise")) return gs_cmd_optimise(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "sensitivity")) return gs_cmd_sensitivity(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "optimise")) return gs_cmd_optimise(argc - 1, argv + 1);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;

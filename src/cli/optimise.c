@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "gransim/study.h"
 
 static const char *const OPT_HELP =
@@ -70,35 +71,45 @@ int gs_cmd_optimise(int argc, char **argv) {
   gs_cfg *cfg = NULL;
   double *w = NULL;
   int rc = ctl ? 0 : 1;
-  for (int i = 0; i < argc && !rc; i++) {
-    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-    if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-      fputs(OPT_HELP, stdout);
-      goto done;
-    } else if (!strcmp(a, "--controls") && v) {
-      if (gs_study_parse_range(argv[++i], &ctl[nc++], &err)) {
+  static const struct option opts[] = {
+      {"help", no_argument, NULL, GS_CLI_HELP},    {"controls", required_argument, NULL, 'c'},
+      {"target", required_argument, NULL, 'T'},   {"weights", required_argument, NULL, 'w'},
+      {"method", required_argument, NULL, 'm'},   {"max-runs", required_argument, NULL, 'n'},
+      {"tol", required_argument, NULL, 't'},      {0}};
+  gs_cli_begin();
+  for (int o; !rc && (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
+    case GS_CLI_HELP: fputs(OPT_HELP, stdout); goto done;
+    case 'c':
+      if (gs_study_parse_range(optarg, &ctl[nc++], &err)) {
         fprintf(stderr, "gransim optimise: %s\n", err.msg);
         rc = 2;
       }
-    } else if (!strcmp(a, "--target") && v) target_path = argv[++i];
-    else if (!strcmp(a, "--weights") && v) weights = argv[++i];
-    else if (!strcmp(a, "--method") && v) {
-      i++;
-      if (!strcmp(v, "nelder-mead")) opt.method = GS_OPT_NELDER_MEAD;
-      else if (!strcmp(v, "bounded")) opt.method = GS_OPT_BOUNDED;
-      else rc = usage_error("--method: expected nelder-mead or bounded, got '%s'", v);
-    } else if (!strcmp(a, "--max-runs") && v) {
-      long n = atol(argv[++i]);
-      if (n < 1) rc = usage_error("--max-runs needs a positive integer, got '%s'", v);
-      opt.max_runs = (size_t)n;
-    } else if (!strcmp(a, "--tol") && v) {
+      break;
+    case 'T': target_path = optarg; break;
+    case 'w': weights = optarg; break;
+    case 'm':
+      if (!strcmp(optarg, "nelder-mead")) opt.method = GS_OPT_NELDER_MEAD;
+      else if (!strcmp(optarg, "bounded")) opt.method = GS_OPT_BOUNDED;
+      else rc = usage_error("--method: expected nelder-mead or bounded, got '%s'", optarg);
+      break;
+    case 'n': {
       char *end;
-      opt.tol = strtod(argv[++i], &end);
-      if (*end || !(opt.tol > 0)) rc = usage_error("--tol needs a positive number, got '%s'", v);
-    } else if (a[0] == '-') rc = usage_error("unknown option or missing value: '%s'", a);
-    else if (!path) path = a;
-    else rc = usage_error("unexpected argument '%s'", a);
-  }
+      long n = strtol(optarg, &end, 10);
+      if (*end || n < 1) rc = usage_error("--max-runs needs a positive integer, got '%s'", optarg);
+      opt.max_runs = (size_t)(n < 1 ? 1 : n);
+      break;
+    }
+    case 't': {
+      char *end;
+      opt.tol = strtod(optarg, &end);
+      if (*end || !(opt.tol > 0)) rc = usage_error("--tol needs a positive number, got '%s'", optarg);
+      break;
+    }
+    default: rc = 2;
+    }
+  for (int i = optind; !rc && i < argc; i++)
+    if (!path) path = argv[i];
+    else rc = usage_error("unexpected argument '%s'", argv[i]);
   if (!rc && (!path || !target_path || !nc))
     rc = usage_error("%s", "needs CASE, --target FILE and --controls KEY=LO:HI");
   if (rc) goto done;

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "gransim/study.h"
 
 static const char *const SENS_HELP =
@@ -62,45 +63,61 @@ int gs_cmd_sensitivity(int argc, char **argv) {
   gs_sens_result res = {0};
   gs_cfg *cfg = NULL;
   int rc = axes && outputs ? 0 : 1;
-  for (int i = 0; i < argc && !rc; i++) {
-    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-    if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-      fputs(SENS_HELP, stdout);
-      goto done;
-    } else if (!strcmp(a, "--range") && v) {
-      if (gs_study_parse_range(argv[++i], &axes[naxes++], &err)) rc = 2;
-    } else if (!strcmp(a, "--outputs") && v) {
+  static const struct option opts[] = {
+      {"help", no_argument, NULL, GS_CLI_HELP},   {"range", required_argument, NULL, 'R'},
+      {"outputs", required_argument, NULL, 'O'}, {"method", required_argument, NULL, 'm'},
+      {"levels", required_argument, NULL, 'l'},  {"bootstrap", required_argument, NULL, 'b'},
+      {"conf", required_argument, NULL, 'c'},    {"seed", required_argument, NULL, 's'},
+      {"out", required_argument, NULL, 'o'},     {"resume", no_argument, NULL, 'r'},
+      {"quiet", no_argument, NULL, 'q'},         {"progress", no_argument, NULL, 'p'},
+      {"threads", required_argument, NULL, 't'}, {0}};
+  gs_cli_begin();
+  for (int o; !rc && (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
+    case GS_CLI_HELP: fputs(SENS_HELP, stdout); goto done;
+    case 'R':
+      if (gs_study_parse_range(optarg, &axes[naxes++], &err)) rc = 2;
+      break;
+    case 'O':
       free(outputs_text);
-      outputs_text = strdup(argv[++i]);
+      outputs_text = strdup(optarg);
       nout = 0;
-      for (char *s = strtok(outputs_text, ","); s; s = strtok(NULL, ",")) outputs[nout++] = s;
-    } else if (!strcmp(a, "--method") && v) method = argv[++i];
-    else if (!strcmp(a, "--levels") && v) {
-      so.levels = (int)count_of(argv[++i]);
-      if (so.levels < 0) rc = usage_error("--levels needs an even integer, got '%s'", v);
-    } else if (!strcmp(a, "--bootstrap") && v) {
-      long b = count_of(argv[++i]);
-      if (b < 1) rc = usage_error("--bootstrap needs a positive integer, got '%s'", v);
+      for (char *s = outputs_text ? strtok(outputs_text, ",") : NULL; s; s = strtok(NULL, ",")) outputs[nout++] = s;
+      break;
+    case 'm': method = optarg; break;
+    case 'l':
+      so.levels = (int)count_of(optarg);
+      if (so.levels < 0) rc = usage_error("--levels needs an even integer, got '%s'", optarg);
+      break;
+    case 'b': {
+      long b = count_of(optarg);
+      if (b < 1) rc = usage_error("--bootstrap needs a positive integer, got '%s'", optarg);
       so.nboot = (size_t)b;
-    } else if (!strcmp(a, "--conf") && v) {
+      break;
+    }
+    case 'c': {
       char *end;
-      so.conf = strtod(argv[++i], &end);
-      if (*end || !(so.conf > 0 && so.conf < 1)) rc = usage_error("--conf needs a level in (0, 1), got '%s'", v);
-    } else if (!strcmp(a, "--seed") && v) {
-      long s = count_of(argv[++i]);
-      if (s < 0) rc = usage_error("--seed needs a non-negative integer, got '%s'", v);
-      so.seed = (unsigned long)s;
-    } else if (!strcmp(a, "--out") && v) sw.out_dir = argv[++i];
-    else if (!strcmp(a, "--resume")) sw.resume = 1;
-    else if (!strcmp(a, "--quiet")) sw.progress = 0;
-    else if (!strcmp(a, "--progress")) sw.progress = 1;
-    else if (!strcmp(a, "--threads") && v) {
-      sw.threads = atoi(argv[++i]);
-      if (sw.threads < 1) rc = usage_error("--threads needs a positive integer, got '%s'", v);
-    } else if (a[0] == '-') rc = usage_error("unknown option or missing value: '%s'", a);
-    else if (!path) path = a;
-    else rc = usage_error("unexpected argument '%s'", a);
-  }
+      so.conf = strtod(optarg, &end);
+      if (*end || !(so.conf > 0 && so.conf < 1)) rc = usage_error("--conf needs a level in (0, 1), got '%s'", optarg);
+      break;
+    }
+    case 's': {
+      long sd = count_of(optarg);
+      if (sd < 0) rc = usage_error("--seed needs a non-negative integer, got '%s'", optarg);
+      so.seed = (unsigned long)sd;
+      break;
+    }
+    case 'o': sw.out_dir = optarg; break;
+    case 'r': sw.resume = 1; break;
+    case 'q': sw.progress = 0; break;
+    case 'p': sw.progress = 1; break;
+    case 't':
+      if (gs_cli_positive("sensitivity", "threads", optarg, &sw.threads)) rc = 2;
+      break;
+    default: rc = 2;
+    }
+  for (int i = optind; !rc && i < argc; i++)
+    if (!path) path = argv[i];
+    else rc = usage_error("unexpected argument '%s'", argv[i]);
   if (!rc && (!path || !sw.out_dir || !method || !naxes || !nout))
     rc = usage_error("%s", "needs CASE, --range KEY=LO:HI, --outputs COLS, --method sobol:N|morris:R and --out DIR");
   if (!rc) {

@@ -1,4 +1,4 @@
-/* `gransim run` and `gransim check` for cases with solver.method = swa. */
+/* `gransim run` for cases with solver.method = swa. */
 #include <math.h>
 #include <stdio.h>
 #include <unistd.h>
@@ -32,20 +32,6 @@ int gs_cmd_run_swa(gs_cfg *cfg, const char *path, const char *out, int progress,
             (unsigned long long)rep.stats.jumps, (double)rep.stats.jumps / fmax(rep.wall_seconds, 1e-9), (unsigned long long)rep.stats.fictitious,
             (unsigned long long)rep.stats.doublings, (unsigned long long)rep.stats.contractions, out, out);
   gs_swa_report_free(&rep);
-  gs_swa_case_free(&c);
-  return rc ? 1 : 0;
-}
-
-int gs_cmd_check_swa(gs_cfg *cfg, const char *path) {
-  gs_error err = {0};
-  gs_swa_case c;
-  int rc = gs_swa_case_from_cfg(cfg, &c, &err);
-  if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
-  else
-    printf("%s: valid. swa solver, %d coordinates, %zu compartments, %zu mechanisms, %zu runs of %zu "
-           "particles, %zu output times from %g to %g\n",
-           path, c.model.ncoord, c.model.ncomp, c.model.nproc, c.runs, c.model.nmax, c.ntimes, c.times[0],
-           c.times[c.ntimes - 1]);
   gs_swa_case_free(&c);
   return rc ? 1 : 0;
 }

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "gransim/parallel.h"
 #include "gransim/study.h"
 
@@ -67,40 +68,49 @@ int gs_cmd_sweep(int argc, char **argv) {
     rc = 1;
     goto done;
   }
-  for (int i = 0; i < argc && !rc; i++) {
-    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-    if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-      fputs(SWEEP_HELP, stdout);
-      goto done;
-    } else if (!strcmp(a, "--set") && v) {
-      if (gs_study_parse_set(v, &axes[naxes++], &err)) rc = 2;
-      nsets++, i++;
-    } else if (!strcmp(a, "--range") && v) {
-      if (gs_study_parse_range(v, &axes[naxes++], &err)) rc = 2;
-      nranges++, i++;
-    } else if (!strcmp(a, "--design") && v) design = argv[++i];
-    else if (!strcmp(a, "--seed") && v) {
+  static const struct option opts[] = {
+      {"help", no_argument, NULL, GS_CLI_HELP}, {"set", required_argument, NULL, 'S'},
+      {"range", required_argument, NULL, 'R'}, {"design", required_argument, NULL, 'd'},
+      {"seed", required_argument, NULL, 's'},  {"out", required_argument, NULL, 'o'},
+      {"outputs", required_argument, NULL, 'O'}, {"resume", no_argument, NULL, 'r'},
+      {"quiet", no_argument, NULL, 'q'},       {"progress", no_argument, NULL, 'p'},
+      {"threads", required_argument, NULL, 't'}, {0}};
+  gs_cli_begin();
+  for (int o; !rc && (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
+    case GS_CLI_HELP: fputs(SWEEP_HELP, stdout); goto done;
+    case 'S':
+      if (gs_study_parse_set(optarg, &axes[naxes++], &err)) rc = 2;
+      nsets++;
+      break;
+    case 'R':
+      if (gs_study_parse_range(optarg, &axes[naxes++], &err)) rc = 2;
+      nranges++;
+      break;
+    case 'd': design = optarg; break;
+    case 's': {
       char *end;
-      seed = strtoul(v, &end, 10);
-      if (!*v || *end) rc = usage_error("--seed needs a non-negative integer, got '%s'", v);
-      i++;
-    } else if (!strcmp(a, "--out") && v) opt.out_dir = argv[++i];
-    else if (!strcmp(a, "--outputs") && v) {
+      seed = strtoul(optarg, &end, 10);
+      if (!*optarg || *end) rc = usage_error("--seed needs a non-negative integer, got '%s'", optarg);
+      break;
+    }
+    case 'o': opt.out_dir = optarg; break;
+    case 'O':
       free(outputs_text);
-      outputs_text = strdup(v);
+      outputs_text = strdup(optarg);
       opt.noutputs = 0;
-      for (char *s = strtok(outputs_text, ","); s; s = strtok(NULL, ",")) outputs[opt.noutputs++] = s;
-      i++;
-    } else if (!strcmp(a, "--resume")) opt.resume = 1;
-    else if (!strcmp(a, "--quiet")) opt.progress = 0;
-    else if (!strcmp(a, "--progress")) opt.progress = 1;
-    else if (!strcmp(a, "--threads") && v) {
-      opt.threads = atoi(argv[++i]);
-      if (opt.threads < 1) rc = usage_error("--threads needs a positive integer, got '%s'", v);
-    } else if (a[0] == '-') rc = usage_error("unknown option or missing value: '%s'", a);
-    else if (!path) path = a;
-    else rc = usage_error("unexpected argument '%s'", a);
-  }
+      for (char *s = outputs_text ? strtok(outputs_text, ",") : NULL; s; s = strtok(NULL, ",")) outputs[opt.noutputs++] = s;
+      break;
+    case 'r': opt.resume = 1; break;
+    case 'q': opt.progress = 0; break;
+    case 'p': opt.progress = 1; break;
+    case 't':
+      if (gs_cli_positive("sweep", "threads", optarg, &opt.threads)) rc = 2;
+      break;
+    default: rc = 2;
+    }
+  for (int i = optind; !rc && i < argc; i++)
+    if (!path) path = argv[i];
+    else rc = usage_error("unexpected argument '%s'", argv[i]);
   if (rc) {
     if (err.msg[0]) fprintf(stderr, "gransim sweep: %s\n", err.msg);
     goto done;

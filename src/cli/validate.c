@@ -20,6 +20,7 @@
 #include <gsl/gsl_integration.h>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "gransim/case.h"
 #include "gransim/run.h"
 
@@ -326,48 +327,61 @@ static int selected(const char *only, const char *id) {
   return 0;
 }
 
+static void validate_usage(void) {
+  printf("usage: gransim validate [--out FILE] [--quick] [--only ID[,ID...]] [--threads N]\n"
+         "                        [--max-loss X]\n\n"
+         "Runs the grid-refinement study against analytical solutions and writes a\n"
+         "markdown report (default docs/validation.md). --quick skips the finest grids;\n"
+         "--threads sets the OpenMP threads (default: OMP_NUM_THREADS or all);\n"
+         "--max-loss: volume fraction allowed to leave a grid before a run fails\n"
+         "(default 1e-3);\n"
+         "--only runs the named studies (");
+  for (size_t s = 0; s < NSTUDIES; s++) printf("%s%s", s ? ", " : "", studies[s].id);
+  printf(").\nExits 1 if a run fails or the published-error target is missed.\n");
+}
+
 int gs_cmd_validate(int argc, char **argv) {
   const char *out = "docs/validation.md", *only = NULL;
-  int quick = 0;
+  int quick = 0, n;
   char args[256] = ""; /* the options that shape the report, echoed in its header */
-  for (int i = 0; i < argc; i++) {
-    if (!strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
-    else if (!strcmp(argv[i], "--only") && i + 1 < argc) {
-      only = argv[++i];
+  static const struct option opts[] = {
+      {"help", no_argument, NULL, GS_CLI_HELP}, {"out", required_argument, NULL, 'o'},
+      {"only", required_argument, NULL, 'O'},  {"quick", no_argument, NULL, 'q'},
+      {"threads", required_argument, NULL, 't'}, {"max-loss", required_argument, NULL, 'm'},
+      {0}};
+  gs_cli_begin();
+  for (int o; (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
+    case GS_CLI_HELP: validate_usage(); return 0;
+    case 'o': out = optarg; break;
+    case 'O':
+      only = optarg;
       snprintf(args + strlen(args), sizeof args - strlen(args), " --only %s", only);
-    } else if (!strcmp(argv[i], "--quick")) {
+      break;
+    case 'q':
       quick = 1;
       snprintf(args + strlen(args), sizeof args - strlen(args), " --quick");
-    } else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
+      break;
+    case 't':
+      if (gs_cli_positive("validate", "threads", optarg, &n)) return 2;
+      omp_set_num_threads(n);
+      snprintf(args + strlen(args), sizeof args - strlen(args), " --threads %d", n);
+      break;
+    case 'm': {
       char *end;
-      long n = strtol(argv[++i], &end, 10);
-      if (*end || n < 1 || n > 4096) {
-        fprintf(stderr, "gransim validate: --threads needs a positive integer, got '%s'\n", argv[i]);
-        return 2;
-      }
-      omp_set_num_threads((int)n);
-      snprintf(args + strlen(args), sizeof args - strlen(args), " --threads %ld", n);
-    } else if (!strcmp(argv[i], "--max-loss") && i + 1 < argc) {
-      char *end;
-      max_loss = strtod(argv[++i], &end);
+      max_loss = strtod(optarg, &end);
       if (*end || !(max_loss >= 0 && max_loss <= 1)) {
-        fprintf(stderr, "gransim validate: --max-loss needs a number in [0, 1], got '%s'\n", argv[i]);
+        fprintf(stderr, "gransim validate: --max-loss needs a number in [0, 1], got '%s'\n", optarg);
         return 2;
       }
-      snprintf(args + strlen(args), sizeof args - strlen(args), " --max-loss %s", argv[i]);
-    } else {
-      printf("usage: gransim validate [--out FILE] [--quick] [--only ID[,ID...]] [--threads N]\n"
-             "                        [--max-loss X]\n\n"
-             "Runs the grid-refinement study against analytical solutions and writes a\n"
-             "markdown report (default docs/validation.md). --quick skips the finest grids;\n"
-             "--threads sets the OpenMP threads (default: OMP_NUM_THREADS or all);\n"
-             "--max-loss: volume fraction allowed to leave a grid before a run fails\n"
-             "(default 1e-3);\n"
-             "--only runs the named studies (");
-      for (size_t s = 0; s < NSTUDIES; s++) printf("%s%s", s ? ", " : "", studies[s].id);
-      printf(").\nExits 1 if a run fails or the published-error target is missed.\n");
-      return strcmp(argv[i], "--help") ? 2 : 0;
+      snprintf(args + strlen(args), sizeof args - strlen(args), " --max-loss %s", optarg);
+      break;
     }
+    default: return 2;
+    }
+  if (optind < argc) {
+    fprintf(stderr, "gransim validate: unexpected argument '%s'\n", argv[optind]);
+    validate_usage();
+    return 2;
   }
   if (only)
     for (const char *p = only; *p;) {

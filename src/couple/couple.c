@@ -41,7 +41,7 @@ static int read_settings(gs_cfg_node *root, gs_couple_settings *s, gs_cfg_node *
   if ((rc = gs_cfg_map_req(root, "coupling", &cp, err)) ||
       (rc = gs_cfg_enum_opt(cp, "mode", modes, -1, &mode, err)))
     return rc;
-  if (mode < 0) return gs_cfg_fail(cp, err, "missing key 'mode' (one_way)");
+  if (mode < 0) return gs_cfg_missing(cp, "mode", "(one_way)", err);
   if ((rc = gs_cfg_map_req(cp, "classes", &cls, err)) ||
       (rc = gs_cfg_double_range(cls, "min_diameter", 1, 0, 0, 0, HUGE_VAL, 0, &s->dmin, err)) ||
       (rc = gs_cfg_double_range(cls, "max_diameter", 1, 0, s->dmin, 0, HUGE_VAL, 0, &s->dmax, err)) ||
@@ -82,7 +82,7 @@ static int couple_load(const char *path, couple *k, int progress, gs_error *err)
   k->path = path;
   k->dem_line = gs_cfg_line(dem);
   if (!dem)
-    return gs_cfg_fail(root, err, "missing key 'dem' (the DEM case: a `gransim dem` case inline, or its file name)");
+    return gs_cfg_missing(root, "dem", "(the DEM case: a `gransim dem` case inline, or its file name)", err);
   if (gs_cfg_scalar(dem)) { /* a file name, relative to the coupled case */
     const char *f = gs_cfg_scalar(dem);
     char p[4200];

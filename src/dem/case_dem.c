@@ -18,7 +18,7 @@ static int vec3(gs_cfg_node *map, const char *key, int required, const double *d
                 gs_error *err) {
   gs_cfg_node *n = gs_cfg_get(map, key);
   if (!n) {
-    if (required) return gs_cfg_fail(map, err, "missing key '%s' (a list of 3 numbers)", key);
+    if (required) return gs_cfg_missing(map, key, "(a list of 3 numbers)", err);
     memcpy(out, def, 3 * sizeof(double));
     return GS_OK;
   }
@@ -78,7 +78,7 @@ static int read_lognormal(gs_cfg_node *n, gs_dem_class *cl, gs_error *err) {
   int type = 0;
   double med, gsd;
   int rc = gs_cfg_get(n, "type") ? gs_cfg_enum_opt(n, "type", types, 0, &type, err)
-                                  : gs_cfg_fail(n, err, "missing key 'type' (a radius distribution: lognormal)");
+                                  : gs_cfg_missing(n, "type", "(a radius distribution: lognormal)", err);
   if (!rc) rc = gs_cfg_double_range(n, "median", 1, 0, 0, 1, HUGE_VAL, 0, &med, err);
   if (!rc) rc = gs_cfg_double_range(n, "gsd", 1, 0, 1, 1, HUGE_VAL, 0, &gsd, err);
   if (rc) return rc;
@@ -457,14 +457,20 @@ static int load(gs_dem_case *c, gs_error *err) {
 }
 
 gs_dem_case *gs_dem_case_load(const char *path, gs_error *err) {
+  gs_cfg *cfg = gs_cfg_load_file(path, err);
+  return cfg ? gs_dem_case_from_cfg(cfg, err) : NULL;
+}
+
+gs_dem_case *gs_dem_case_from_cfg(gs_cfg *cfg, gs_error *err) {
   gs_dem_case *c = calloc(1, sizeof *c);
   if (!c) {
+    gs_cfg_free(cfg);
     gs_error_set(err, GS_ENOMEM, "out of memory");
     return NULL;
   }
-  snprintf(c->path, sizeof c->path, "%s", path);
-  c->cfg = gs_cfg_load_file(path, err);
-  if (!c->cfg || load(c, err)) {
+  snprintf(c->path, sizeof c->path, "%s", gs_cfg_name(cfg));
+  c->cfg = cfg;
+  if (load(c, err)) {
     gs_dem_case_free(c);
     return NULL;
   }

@@ -57,7 +57,7 @@ static int table_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
   if (!rc) rc = gs_cfg_enum_opt(node, "measure", measures, 0, &measure, err);
   if (!rc && !(size = gs_size_measure_mask(node, g, &k->axes, err))) rc = err->code;
   gs_cfg_node *files = rc ? NULL : gs_cfg_get(node, "file");
-  if (!rc && !files) rc = gs_cfg_fail(node, err, "missing key 'file' (the kernel table)");
+  if (!rc && !files) rc = gs_cfg_missing(node, "file", "(the kernel table)", err);
   size_t nfiles = files && gs_cfg_kind_of(files) == GS_CFG_SEQ ? gs_cfg_size(files) : 1;
   if (!rc && nfiles != 1 && nfiles != g->ncomp)
     rc = gs_cfg_fail(files, err, "expected one file, or one per compartment (%zu)", g->ncomp);

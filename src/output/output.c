@@ -53,10 +53,8 @@
 #include "output/chunk_writer.h"
 #include "output/csv_number.h"
 #include "output/h5_setup.h"
+#include "gransim/version.h"
 
-#ifndef GRANSIM_VERSION
-#define GRANSIM_VERSION "unknown"
-#endif
 
 #define H5_PARTIAL ".result.h5.partial"
 #define H5_NEW ".result.h5.new"
@@ -325,7 +323,7 @@ static int write_case(gs_output *o, const char *text, const char *name, gs_error
   if (set_str_attr(c, "text", text ? text : "") < 0 || set_str_attr(c, "file", name ? name : "") < 0)
     rc = h5_error(err, o->h5_path, "write the attributes text and file of /case");
   if (H5Gclose(c) < 0 && !rc) rc = h5_error(err, o->h5_path, "close group /case");
-  if (!rc && (set_str_attr(o->file, "gransim_version", GRANSIM_VERSION) < 0 ||
+  if (!rc && (set_str_attr(o->file, "gransim_version", gs_version()) < 0 ||
               set_str_attr(o->file, "status", "running") < 0 ||
               set_i64_attr(o->file, "ntimes", 0) < 0))
     rc = h5_error(err, o->h5_path, "write the attributes gransim_version, status, ntimes of /");

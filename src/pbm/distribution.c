@@ -265,7 +265,7 @@ int gs_distribution_add(gs_cfg_node *node, const gs_grid *g, double *dst, int ke
   int type = 0;
   double number = 0, coverage = 0;
   int rc = gs_cfg_require_kind(node, GS_CFG_MAP, err);
-  if (!rc && !gs_cfg_get(node, "type")) rc = gs_cfg_fail(node, err, "missing key 'type' (point, cell, cells, exponential or gamma)");
+  if (!rc && !gs_cfg_get(node, "type")) rc = gs_cfg_missing(node, "type", "(point, cell, cells, exponential or gamma)", err);
   if (!rc) rc = gs_cfg_enum_opt(node, "type", types, 0, &type, err);
   if (!rc) rc = gs_cfg_double_range(node, "number", 1, 0, 0, 1, HUGE_VAL, 0, &number, err);
   if (!rc) rc = gs_cfg_double_range(node, "coverage", 0, 1e-6, 0, 0, 1, 0, &coverage, err);

@@ -62,8 +62,9 @@ int gs_swa_coord_key(gs_cfg_node *node, const char *key, const gs_swa_model *m,
     coord_list(m, known, sizeof known);
     gs_cfg_node *n = gs_cfg_get(node, key);
     if (n) return gs_cfg_fail(n, err, "expected a particle coordinate: one of %s", known);
-    return gs_cfg_fail(node, err, "missing key '%s' (the default coordinate '%s' does not exist; coordinates: %s)",
-                       key, def ? def : "", known);
+    char hint[640];
+    snprintf(hint, sizeof hint, "(the default coordinate '%s' does not exist; coordinates: %s)", def ? def : "", known);
+    return gs_cfg_missing(node, key, hint, err);
   }
   return GS_OK;
 }

@@ -9,10 +9,8 @@
 #include <sys/stat.h>
 
 #include "output/h5_setup.h"
+#include "gransim/version.h"
 
-#ifndef GRANSIM_VERSION
-#define GRANSIM_VERSION "unknown"
-#endif
 
 static int mkdir_p(const char *dir, gs_error *err) {
   char buf[4096];
@@ -125,7 +123,7 @@ static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results
   hid_t cs = H5Gcreate2(f, "case", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   bad |= attr_str(cs, "text", gs_cfg_source(c->cfg)) | attr_str(cs, "file", gs_cfg_name(c->cfg));
   H5Gclose(cs);
-  bad |= attr_str(f, "gransim_version", GRANSIM_VERSION) | attr_str(f, "solver", "swa");
+  bad |= attr_str(f, "gransim_version", gs_version()) | attr_str(f, "solver", "swa");
   bad |= attr_num(f, "runs", (double)c->runs) | attr_num(f, "particles", (double)m->nmax);
   bad |= attr_num(f, "seed", (double)c->seed) | attr_num(f, "jumps", (double)r->stats.jumps);
   bad |= attr_num(f, "fictitious", (double)r->stats.fictitious) | attr_num(f, "ntimes", (double)nt);

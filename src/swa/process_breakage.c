@@ -57,7 +57,7 @@ static int brk_create(gs_cfg_node *node, gs_swa_model *m, void **self, gs_error 
   if (!rc) {
     static const char *const types[] = {"beta", "uniform", NULL};
     int type = 0;
-    if (!gs_cfg_get(d, "type")) rc = gs_cfg_fail(d, err, "missing key 'type' (beta or uniform)");
+    if (!gs_cfg_get(d, "type")) rc = gs_cfg_missing(d, "type", "(beta or uniform)", err);
     if (!rc) rc = gs_cfg_enum_opt(d, "type", types, 0, &type, err);
     b->a = b->b = 1;
     if (!rc && type == 0) rc = gs_cfg_double_range(d, "alpha", 1, 0, 0, 1, HUGE_VAL, 0, &b->a, err);

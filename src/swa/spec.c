@@ -77,7 +77,7 @@ int gs_swa_spec_read(gs_cfg_node *n, const gs_swa_model *m, const gs_grid *g,
   sp->ncoord = m->ncoord;
   sp->mean_weight = 1;
   int rc = gs_cfg_require_kind(n, GS_CFG_MAP, err);
-  if (!rc && !gs_cfg_get(n, "type")) rc = gs_cfg_fail(n, err, "missing key 'type' (point, cell, exponential, gamma or diameters)");
+  if (!rc && !gs_cfg_get(n, "type")) rc = gs_cfg_missing(n, "type", "(point, cell, exponential, gamma or diameters)", err);
   if (!rc) rc = gs_cfg_enum_opt(n, "type", types, 0, &sp->type, err);
   if (!rc && number_key) rc = gs_cfg_double_range(n, number_key, 1, 0, 0, 1, HUGE_VAL, 0, &sp->number, err);
   if (rc) return rc;
@@ -89,7 +89,7 @@ int gs_swa_spec_read(gs_cfg_node *n, const gs_swa_model *m, const gs_grid *g,
     case SPEC_CELL: {
       double idx[GS_SWA_MAX_COORD];
       if (!g) return gs_cfg_fail(n, err, "type cell needs a grid");
-      rc = gs_cfg_get(n, "index") ? GS_OK : gs_cfg_fail(n, err, "missing key 'index'");
+      rc = gs_cfg_get(n, "index") ? GS_OK : gs_cfg_missing(n, "index", NULL, err);
       double *v = NULL;
       size_t cnt = 0;
       if (!rc) rc = gs_cfg_doubles_req(n, "index", 1, &v, &cnt, err);
