@@ -171,7 +171,24 @@ typedef struct {
   const double *t_in; /* time each particle entered */
 } gs_dem_view;
 void gs_dem_get_view(const gs_dem *d, gs_dem_view *v);
+
+/* Hooks for a code coupled to the DEM (a gas phase, src/cfd): `forces` is
+ * called at every step once the contact forces are computed and before they
+ * move the particles, with the particles as they are now (in the engine's
+ * current order, which changes at list rebuilds: key per-particle data by
+ * view->id) and their force arrays, to which it adds external forces [N].
+ * `after_step` is called after every completed step; a non-zero return
+ * (with err set) stops gs_dem_run with that status.  Either may be NULL; a
+ * simulation has one set of hooks (NULL removes them). */
+typedef struct {
+  void (*forces)(const gs_dem_view *v, double *fx, double *fy, double *fz, void *user);
+  int (*after_step)(gs_dem *d, void *user, gs_error *err);
+  void *user;
+} gs_dem_hooks;
+void gs_dem_set_hooks(gs_dem *d, const gs_dem_hooks *h);
+
 double gs_dem_time(const gs_dem *d);
+double gs_dem_dt(const gs_dem *d); /* the time step [s] */
 long gs_dem_step_count(const gs_dem *d);
 int gs_dem_type_class(const gs_dem *d, int type);
 size_t gs_dem_ntypes(const gs_dem *d);

@@ -140,6 +140,7 @@ struct gs_dem {
   int *rm_cls;
   double *rm_rt, *rm_m;
   size_t nrm, rm_cap, rm_taken;
+  gs_dem_hooks hooks; /* external forces and after-step calls (gs_dem_set_hooks) */
   /* removal predicate */
   int (*remove_pred)(const double x[3], void *ctx);
   void *remove_ctx;
