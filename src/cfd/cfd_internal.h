@@ -22,6 +22,7 @@ struct gs_cfd {
   double *eps, *eps_old;  /* cells */
   double *p;              /* cells */
   double *u[3];           /* interstitial velocity on the faces of each axis */
+  double *ef[3];          /* void fraction on the faces (mean of the two cells, or the one) */
   double *k[3], *kv[3];   /* drag: sum of w beta / V, and sum of w beta v / V, per face */
   double *a[3];           /* eps_f / (eps_f rho / dt + K_f): velocity per pressure gradient, per face */
   double *nb, *diag;      /* the pressure equation: 6 couplings and the outlet's diagonal per cell */
@@ -35,7 +36,7 @@ struct gs_cfd {
   double *force;
   long force_cap;
   /* per particle of the current step (view order): beta, stencils */
-  double *beta;
+  double *beta, *epsp;    /* drag coefficient and void fraction at each particle */
   gs_cfd_stencil *st_cell, *st_face[3];
   size_t pcap;
   double ex_part[3], ex_gas[3];
@@ -49,6 +50,8 @@ struct gs_cfd {
 
 /* gas.c */
 int gs_cfd_gas_step(gs_cfd *g, gs_error *err);
+/* Fill ef from eps. */
+void gs_cfd_face_void_fractions(gs_cfd *g);
 size_t gs_cfd_face_index(const gs_cfd *g, int axis, int i, int j, int k);
 /* The face of axis a is moved by the gas (not a wall or the inlet). */
 int gs_cfd_face_solved(const gs_cfd *g, int axis, int i, int j, int k);

@@ -51,7 +51,8 @@ gs_cfd *gs_cfd_create(const gs_cfd_params *p, gs_error *err) {
     ok = (g->u[a] = gs_calloc(g->nface[a], sizeof(double), err)) &&
          (g->k[a] = gs_calloc(g->nface[a], sizeof(double), err)) &&
          (g->kv[a] = gs_calloc(g->nface[a], sizeof(double), err)) &&
-         (g->a[a] = gs_calloc(g->nface[a], sizeof(double), err));
+         (g->a[a] = gs_calloc(g->nface[a], sizeof(double), err)) &&
+         (g->ef[a] = gs_calloc(g->nface[a], sizeof(double), err));
   }
   if (ok) ok = (g->ps = gs_cfd_pressure_create(g->n, err)) != NULL;
   if (!ok) {
@@ -79,10 +80,12 @@ void gs_cfd_free(gs_cfd *g) {
     free(g->k[a]);
     free(g->kv[a]);
     free(g->a[a]);
+    free(g->ef[a]);
     free(g->st_face[a]);
   }
   free(g->st_cell);
   free(g->beta);
+  free(g->epsp);
   free(g->force);
   free(g);
 }
@@ -97,6 +100,15 @@ static double face_eps(const gs_cfd *g, int axis, int i, int j, int k) {
   const size_t dn = lo[axis] >= 0 ? (size_t)lo[0] + (size_t)g->n[0] * ((size_t)lo[1] + (size_t)g->n[1] * lo[2]) : 0;
   if (hiside && lo[axis] >= 0) return 0.5 * (g->eps[up] + g->eps[dn]);
   return hiside ? g->eps[up] : g->eps[dn];
+}
+
+void gs_cfd_face_void_fractions(gs_cfd *g) {
+  for (int a = 0; a < 3; a++) {
+    const int m[3] = {g->n[0] + (a == 0), g->n[1] + (a == 1), g->n[2] + (a == 2)};
+    for (int k = 0; k < m[2]; k++)
+      for (int j = 0; j < m[1]; j++)
+        for (int i = 0; i < m[0]; i++) g->ef[a][gs_cfd_face_index(g, a, i, j, k)] = face_eps(g, a, i, j, k);
+  }
 }
 
 /* The gas-velocity limit: gas crossing more than one cell per step would
@@ -132,7 +144,7 @@ int gs_cfd_gas_step(gs_cfd *g, gs_error *err) {
       for (int j = 0; j < m[1]; j++)
         for (int i = 0; i < m[0]; i++) {
           const size_t f = gs_cfd_face_index(g, a, i, j, k);
-          const double ef = face_eps(g, a, i, j, k);
+          const double ef = g->ef[a][f];
           if (!gs_cfd_face_solved(g, a, i, j, k)) {
             g->u[a][f] = a == 2 ? g->prm.u_inlet / ef : 0;
             g->a[a][f] = 0;
@@ -154,7 +166,7 @@ int gs_cfd_gas_step(gs_cfd *g, gs_error *err) {
           int up[3] = {i, j, k};
           up[a]++;
           const size_t fl = gs_cfd_face_index(g, a, i, j, k), fu = gs_cfd_face_index(g, a, up[0], up[1], up[2]);
-          const double el = face_eps(g, a, i, j, k), eu = face_eps(g, a, up[0], up[1], up[2]);
+          const double el = g->ef[a][fl], eu = g->ef[a][fu];
           div += (eu * g->u[a][fu] - el * g->u[a][fl]) / g->h[a];
           const double h2 = g->h[a] * g->h[a];
           if (cc[a] > 0) g->nb[6 * c + 2 * a] = el * g->a[a][fl] / h2;

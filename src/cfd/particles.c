@@ -109,14 +109,28 @@ static double interp(const gs_cfd_stencil *s, const double *f) {
   return v;
 }
 
+/* The interstitial gas velocity (axis a) at particle i: the superficial
+ * velocity eps_f u_f interpolated from the faces, over the particle's void
+ * fraction.  In a uniform stream eps u is the same on every face, so a
+ * particle at the edge of a bed sees the bed's interstitial velocity, not a
+ * mean with the freeboard's. */
+static double gas_at(const gs_cfd *g, size_t i, int a) {
+  const gs_cfd_stencil *s = &g->st_face[a][i];
+  double v = 0;
+  for (int q = 0; q < 8; q++) v += s->w[q] * g->ef[a][s->idx[q]] * g->u[a][s->idx[q]];
+  return v / g->epsp[i];
+}
+
 static int reserve(gs_cfd *g, size_t n, long max_id, gs_error *err) {
   if (n > g->pcap) {
     size_t cap = n + n / 2 + 16;
     free(g->beta);
+    free(g->epsp);
     free(g->st_cell);
     g->beta = gs_malloc(cap * sizeof(double), err);
+    g->epsp = gs_malloc(cap * sizeof(double), err);
     g->st_cell = gs_malloc(cap * sizeof(gs_cfd_stencil), err);
-    int ok = g->beta && g->st_cell;
+    int ok = g->beta && g->epsp && g->st_cell;
     for (int a = 0; a < 3; a++) {
       free(g->st_face[a]);
       g->st_face[a] = ok ? gs_malloc(cap * sizeof(gs_cfd_stencil), err) : NULL;
@@ -197,6 +211,7 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
                           g->steps, g->t, g->eps[c], i, j, k);
     }
   if (g->steps == 0) memcpy(g->eps_old, g->eps, g->ncell * sizeof(double));
+  gs_cfd_face_void_fractions(g);
   /* drag coefficients from the gas as it is, deposited on the faces */
   for (int a = 0; a < 3; a++) {
     memset(g->k[a], 0, g->nface[a] * sizeof(double));
@@ -204,12 +219,13 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
   }
   for (size_t i = 0; i < n; i++) {
     const double vel[3] = {v->vx[i], v->vy[i], v->vz[i]};
+    g->epsp[i] = interp(&g->st_cell[i], g->eps);
     double s2 = 0;
     for (int a = 0; a < 3; a++) {
-      const double du = interp(&g->st_face[a][i], g->u[a]) - vel[a];
+      const double du = gas_at(g, i, a) - vel[a];
       s2 += du * du;
     }
-    const gs_cfd_drag_in in = {.eps = interp(&g->st_cell[i], g->eps), .d = 2 * v->r[i], .slip = sqrt(s2),
+    const gs_cfd_drag_in in = {.eps = g->epsp[i], .d = 2 * v->r[i], .slip = sqrt(s2),
                                .rho = g->prm.rho, .mu = g->prm.mu};
     const double b = g->prm.drag->beta(&in);
     g->beta[i] = b;
@@ -223,9 +239,10 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
     if (!two_way) continue;
     for (int a = 0; a < 3; a++)
       for (int q = 0; q < 8; q++) {
+        const long f = g->st_face[a][i].idx[q];
         const double wb = g->st_face[a][i].w[q] * b / g->vol;
-        g->k[a][g->st_face[a][i].idx[q]] += wb;
-        g->kv[a][g->st_face[a][i].idx[q]] += wb * vel[a];
+        g->k[a][f] += wb * g->ef[a][f] / g->epsp[i];
+        g->kv[a][f] += wb * vel[a];
       }
   }
   if ((rc = gs_cfd_gas_step(g, err))) return rc;
@@ -262,7 +279,7 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
     const double vp = 4.0 / 3.0 * M_PI * v->r[i] * v->r[i] * v->r[i];
     double *f = g->force + 3 * v->id[i];
     for (int a = 0; a < 3; a++) {
-      const double drag = g->beta[i] * (interp(&g->st_face[a][i], g->u[a]) - vel[a]);
+      const double drag = g->beta[i] * (gas_at(g, i, a) - vel[a]);
       if (two_way) exp_[a] += drag;
       f[a] = drag - vp * interp(&g->st_face[a][i], grad[a]);
     }
