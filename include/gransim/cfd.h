@@ -84,6 +84,16 @@ int gs_cfd_attach(gs_cfd *g, gs_dem *d, gs_error *err);
  * pressure solve that does not converge. */
 int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err);
 
+/* Write DIR/gas.csv (a row every `every` seconds of gas time) and, if
+ * vtk_every > 0, the gas fields as DIR/vtk/gas_NNNNNN.vtr with the ParaView
+ * series DIR/gas.pvd (DIR must exist). */
+int gs_cfd_set_output(gs_cfd *g, const char *dir, double every, double vtk_every, gs_error *err);
+
+/* The gas phase of a DEM case from its `gas` section (docs/case-files.md),
+ * attached to the case's simulation, writing its outputs into out_dir
+ * (NULL: none, for --check).  NULL with err set on bad input. */
+gs_cfd *gs_cfd_case_create(gs_dem_case *c, const char *out_dir, gs_error *err);
+
 /* ---- results (valid until the next step) -------------------------------- */
 void gs_cfd_dims(const gs_cfd *g, int n[3], double h[3]);
 long gs_cfd_steps(const gs_cfd *g);

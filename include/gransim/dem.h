@@ -189,6 +189,7 @@ void gs_dem_set_hooks(gs_dem *d, const gs_dem_hooks *h);
 
 double gs_dem_time(const gs_dem *d);
 double gs_dem_dt(const gs_dem *d); /* the time step [s] */
+void gs_dem_get_params(const gs_dem *d, gs_dem_params *p);
 long gs_dem_step_count(const gs_dem *d);
 int gs_dem_type_class(const gs_dem *d, int type);
 size_t gs_dem_ntypes(const gs_dem *d);
@@ -247,6 +248,11 @@ void gs_dem_case_describe(const gs_dem_case *c, char *buf, size_t n);
 /* Run it, writing the tables, time series and VTK files into out_dir. */
 int gs_dem_case_run(gs_dem_case *c, const char *out_dir, int progress, gs_error *err);
 void gs_dem_case_free(gs_dem_case *c);
+/* The simulation the case runs (for gs_dem_set_hooks), its duration [s], and
+ * its `gas` section (NULL if none; read by src/cfd, gs_cfd_case_create). */
+gs_dem *gs_dem_case_sim(gs_dem_case *c);
+double gs_dem_case_duration(const gs_dem_case *c);
+struct gs_cfg_node *gs_dem_case_gas(gs_dem_case *c);
 /* The engine the case asks for (dem.engine): 0 embedded, 1 LIGGGHTS
  * (include/gransim/liggghts.h runs those). */
 int gs_dem_case_engine(const gs_dem_case *c);

@@ -4,6 +4,8 @@
 #ifndef GRANSIM_CFD_INTERNAL_H
 #define GRANSIM_CFD_INTERNAL_H
 
+#include <stdio.h>
+
 #include "gransim/cfd.h"
 
 typedef struct gs_cfd_psolver gs_cfd_psolver;
@@ -46,6 +48,12 @@ struct gs_cfd {
   int started;
   int failed;
   gs_error fail;
+  /* outputs (output.c) */
+  char out_dir[4096];
+  FILE *csv;
+  double out_every, vtk_every, next_out, next_vtk;
+  double *vtk_t;
+  int nvtk;
 };
 
 /* gas.c */
@@ -65,6 +73,9 @@ void gs_cfd_pressure_free(gs_cfd_psolver *ps);
 int gs_cfd_pressure_solve(gs_cfd_psolver *ps, const double *nb, const double *diag,
                           const double *rhs, double *x, double tol, int max_iter, int *its,
                           double *res);
+
+/* output.c: the rows and field files due at the current time */
+int gs_cfd_write_outputs(gs_cfd *g, gs_error *err);
 
 /* particles.c: trilinear weights of point x on the lattice of cell centres
  * (axis = -1) or of the faces of one axis. */

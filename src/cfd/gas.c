@@ -87,6 +87,8 @@ void gs_cfd_free(gs_cfd *g) {
   free(g->beta);
   free(g->epsp);
   free(g->force);
+  free(g->vtk_t);
+  if (g->csv) fclose(g->csv);
   free(g);
 }
 
@@ -122,7 +124,7 @@ static int check_cfl(const gs_cfd *g, gs_error *err) {
           const double cfl = fabs(g->u[a][gs_cfd_face_index(g, a, i, j, k)]) * g->prm.dt / g->h[a];
           if (cfl > 1)
             return gs_error_set(err, GS_ENUMERIC,
-                                "gas step %ld (t = %g s): the gas crosses %.3g cells per step at the %c "
+                                "gas step %ld (t = %g s): the gas crosses %.4g cells per step at the %c "
                                 "face (%d, %d, %d) (u = %g m/s): above the limit 1; reduce gas.time_step "
                                 "or use larger cells", g->steps, g->t, cfl, "xyz"[a], i, j, k,
                                 g->u[a][gs_cfd_face_index(g, a, i, j, k)]);

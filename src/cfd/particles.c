@@ -292,5 +292,5 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
     g->ex_part[a] = exp_[a];
   }
   g->steps++;
-  return GS_OK;
+  return gs_cfd_write_outputs(g, err);
 }

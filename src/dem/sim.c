@@ -351,6 +351,7 @@ void gs_dem_get_view(const gs_dem *d, gs_dem_view *v) {
 
 double gs_dem_time(const gs_dem *d) { return d->t; }
 double gs_dem_dt(const gs_dem *d) { return d->prm.dt; }
+void gs_dem_get_params(const gs_dem *d, gs_dem_params *p) { *p = d->prm; }
 long gs_dem_step_count(const gs_dem *d) { return d->step; }
 int gs_dem_type_class(const gs_dem *d, int type) { return d->types[type].cls; }
 size_t gs_dem_ntypes(const gs_dem *d) { return d->ntypes; }
