@@ -38,7 +38,7 @@ typedef struct {
 } gs_cfd_drag_in;
 typedef struct {
   const char *name;
-  const char *doc; /* one line for `gransim list` and the docs */
+  const char *summary; /* one line for `gransim list` */
   double (*beta)(const gs_cfd_drag_in *in);
 } gs_cfd_drag_type;
 /* NULL-terminated registry: di_felice, gidaspow (src/cfd/drag.c). */
@@ -94,6 +94,9 @@ int gs_cfd_set_output(gs_cfd *g, const char *dir, double every, double vtk_every
  * (NULL: none, for --check).  NULL with err set on bad input. */
 gs_cfd *gs_cfd_case_create(gs_dem_case *c, const char *out_dir, gs_error *err);
 
+/* Change the inlet's superficial velocity from the next gas step on. */
+void gs_cfd_set_inlet_velocity(gs_cfd *g, double u);
+
 /* ---- results (valid until the next step) -------------------------------- */
 void gs_cfd_dims(const gs_cfd *g, int n[3], double h[3]);
 long gs_cfd_steps(const gs_cfd *g);
@@ -136,6 +139,15 @@ int gs_cfd_check_terminal(const char *drag, gs_cfd_check *out, gs_error *err);
  * pressure drop at superficial velocity u against Ergun (1952) with the
  * bed's void fraction, 5 %. */
 int gs_cfd_check_ergun(const char *drag, double u, gs_cfd_check *out, gs_error *err);
+
+/* A bed of 600 spheres (d = 2 mm, 1030 kg/m3) poured into a 10 mm x 10 mm
+ * column, the gas raised in steps: the minimum fluidisation velocity where
+ * the packed-bed branch of the pressure drop (a U + b U^2 through the points
+ * below 85 % of the bed weight) reaches the weight, against Wen & Yu (1966),
+ * 10 %.  out[0] that; out[1..3] the bed heights at 1.5, 2 and 2.5 U_mf (Wen
+ * & Yu) against the packed height (want: the previous height; each must be
+ * higher). */
+int gs_cfd_check_fluidisation(gs_cfd_check out[4], gs_error *err);
 
 #ifdef __cplusplus
 }

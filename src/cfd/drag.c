@@ -37,12 +37,12 @@ static double gidaspow(const gs_cfd_drag_in *in) {
 
 static const gs_cfd_drag_type di_felice_type = {
     .name = "di_felice",
-    .doc = "Di Felice (1994): Dallavalle drag of one sphere times eps^(2-chi)",
+    .summary = "Di Felice (1994): Dallavalle drag of one sphere times eps^(2-chi)",
     .beta = di_felice,
 };
 static const gs_cfd_drag_type gidaspow_type = {
     .name = "gidaspow",
-    .doc = "Gidaspow (1994): Ergun (1952) below eps = 0.8, Wen & Yu (1966) above",
+    .summary = "Gidaspow (1994): Ergun (1952) below eps = 0.8, Wen & Yu (1966) above",
     .beta = gidaspow,
 };
 

@@ -207,6 +207,8 @@ int gs_cfd_gas_step(gs_cfd *g, gs_error *err) {
   return check_cfl(g, err);
 }
 
+void gs_cfd_set_inlet_velocity(gs_cfd *g, double u) { g->prm.u_inlet = u; }
+
 /* ---- results ------------------------------------------------------------ */
 void gs_cfd_dims(const gs_cfd *g, int n[3], double h[3]) {
   for (int a = 0; a < 3; a++) {
