@@ -66,6 +66,8 @@ typedef struct {
 typedef struct gs_cfd gs_cfd;
 
 gs_cfd *gs_cfd_create(const gs_cfd_params *p, gs_error *err);
+/* Frees g and removes its hooks from the DEM it is attached to, so free g
+ * before that DEM. */
 void gs_cfd_free(gs_cfd *g);
 
 /* Couple g to the DEM d (installs d's hooks; d's time step must divide the
