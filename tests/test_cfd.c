@@ -54,8 +54,8 @@ static void test_validation(void) {
   gs_cfd_check c;
   gs_error err = {0};
   const char *drags[] = {"di_felice", "gidaspow"};
-  for (int k = 0; k < 2; k++) {
-    int rc = gs_cfd_check_terminal(drags[k], &c, &err);
+  for (int k = 0; k < 3; k++) {
+    int rc = gs_cfd_check_terminal(drags[k % 2], k < 2 ? GS_CFD_ONE_WAY : GS_CFD_TWO_WAY, &c, &err);
     if (rc) fprintf(stderr, "%s\n", err.msg);
     CHECK(rc == GS_OK);
     report(&c);

@@ -132,11 +132,11 @@ typedef struct {
   char unit[16];
   char detail[200]; /* the set-up in a few words */
 } gs_cfd_check;
-/* A glass sphere (d = 0.3 mm) falling from rest in still air (one-way):
- * its speed after 1.5 s against the terminal velocity of the closure's
- * single-sphere drag coefficient (Dallavalle for di_felice, Schiller-Naumann
- * for gidaspow), 2 %. */
-int gs_cfd_check_terminal(const char *drag, gs_cfd_check *out, gs_error *err);
+/* A glass sphere (d = 0.3 mm) falling from rest in still air (coupling
+ * GS_CFD_ONE_WAY or GS_CFD_TWO_WAY): its speed after 1.5 s against the
+ * terminal velocity of the closure's single-sphere drag coefficient
+ * (Dallavalle for di_felice, Schiller-Naumann for gidaspow), 2 %. */
+int gs_cfd_check_terminal(const char *drag, int coupling, gs_cfd_check *out, gs_error *err);
 /* A packed bed of 480 spheres (d = 2 mm, simple cubic) in a column: the
  * pressure drop at superficial velocity u against Ergun (1952) with the
  * bed's void fraction, 5 %. */

@@ -59,7 +59,7 @@ static double terminal_speed(const fall *f) {
 
 static const gs_dem_material glass = {.E = 5e6, .nu = 0.25, .e = 0.5, .mu_s = 0.3, .mu_r = 0, .density = 2500};
 
-int gs_cfd_check_terminal(const char *drag, gs_cfd_check *out, gs_error *err) {
+int gs_cfd_check_terminal(const char *drag, int coupling, gs_cfd_check *out, gs_error *err) {
   const gs_cfd_drag_type *dt = find_drag(drag, err);
   if (!dt) return err->code;
   const double d = 3e-4, H = 3.0;
@@ -77,9 +77,10 @@ int gs_cfd_check_terminal(const char *drag, gs_cfd_check *out, gs_error *err) {
   const int type = gs_dem_add_type(dem, &soft, 0, err);
   const double x0[3] = {0.001, 0.001, H - 0.05};
   if (type < 0 || gs_dem_add_particle(dem, type, d / 2, x0, NULL, NULL, err) < 0) rc = err->code;
-  gs_cfd_params gp = {.lo = {0, 0, 0}, .hi = {0.002, 0.002, H}, .n = {1, 1, 30}, .rho = RHO_AIR,
-                      .mu = MU_AIR, .u_inlet = 0, .dt = 1e-3, .gravity = {0, 0, -G}, .drag = dt,
-                      .coupling = GS_CFD_ONE_WAY};
+  /* two-way: cells of 15 mm (50 diameters, the most allowed) */
+  gs_cfd_params gp = {.lo = {0, 0, 0}, .hi = {0.002, 0.002, H}, .n = {1, 1, coupling == GS_CFD_ONE_WAY ? 30 : 200},
+                      .rho = RHO_AIR, .mu = MU_AIR, .u_inlet = 0, .dt = 1e-3, .gravity = {0, 0, -G}, .drag = dt,
+                      .coupling = coupling};
   if (!rc && !(g = gs_cfd_create(&gp, err))) rc = err->code;
   if (!rc) rc = gs_cfd_attach(g, dem, err);
   if (!rc) rc = gs_dem_run(dem, 15000, err);
@@ -88,11 +89,13 @@ int gs_cfd_check_terminal(const char *drag, gs_cfd_check *out, gs_error *err) {
     gs_dem_get_view(dem, &v);
     const fall f = {.schiller = !strcmp(drag, "gidaspow"), .d = d, .rho_p = glass.density};
     *out = (gs_cfd_check){.got = -v.vz[0], .want = terminal_speed(&f), .tol = 0.02};
-    snprintf(out->name, sizeof out->name, "terminal velocity, %s", drag);
+    snprintf(out->name, sizeof out->name, "terminal velocity, %s, %s", drag,
+             coupling == GS_CFD_ONE_WAY ? "one-way" : "two-way");
     snprintf(out->unit, sizeof out->unit, "m/s");
     snprintf(out->detail, sizeof out->detail,
-             "glass sphere d = 0.3 mm, 2500 kg/m3, in air, after 1.5 s of fall from rest (%s C_D)",
-             f.schiller ? "Schiller-Naumann" : "Dallavalle");
+             "glass sphere d = 0.3 mm, 2500 kg/m3, in air, after 1.5 s of fall from rest (%s C_D); "
+             "a 2 x 2 mm column of %s cells",
+             f.schiller ? "Schiller-Naumann" : "Dallavalle", coupling == GS_CFD_ONE_WAY ? "100 mm" : "15 mm");
   }
   gs_cfd_free(g);
   gs_dem_free(dem);

@@ -41,11 +41,12 @@ int gs_cmd_validate_cfd(int argc, char **argv) {
       return 2;
     }
   }
-  gs_cfd_check c[8];
+  gs_cfd_check c[9];
   int nc = 0, rc = 0;
   gs_error err = {0};
   const char *drags[] = {"di_felice", "gidaspow"};
-  for (int k = 0; k < 2 && !rc; k++) rc = gs_cfd_check_terminal(drags[k], &c[nc++], &err);
+  for (int k = 0; k < 2 && !rc; k++) rc = gs_cfd_check_terminal(drags[k], GS_CFD_ONE_WAY, &c[nc++], &err);
+  if (!rc) rc = gs_cfd_check_terminal("di_felice", GS_CFD_TWO_WAY, &c[nc++], &err);
   const double us[] = {0.3, 0.8};
   for (int k = 0; k < 2 && !rc; k++) rc = gs_cfd_check_ergun("gidaspow", us[k], &c[nc++], &err);
   if (!rc && longer) {
@@ -74,10 +75,10 @@ int gs_cmd_validate_cfd(int argc, char **argv) {
           longer ? " --long" : "");
   for (int k = 0; k < nc; k++) row(fp, &c[k], &failed);
   fprintf(fp,
-          "\n- **Terminal velocity**: a sphere falling from rest in still air, one-way coupled (a\n"
-          "  single particle in a two-way run drags its cell's gas along; unresolved CFD-DEM\n"
-          "  needs cells far larger than the particle for that to vanish); the reference solves\n"
+          "\n- **Terminal velocity**: a sphere falling from rest in still air; the reference solves\n"
           "  weight − buoyancy = ½ C_D ρ A U² with the closure's single-sphere C_D (GSL Brent).\n"
+          "  Two-way, the sphere pushes its cell's gas down, which unresolved CFD-DEM only keeps\n"
+          "  small with cells far larger than the particle: here 50 diameters, the most allowed.\n"
           "- **Packed bed**: a simple-cubic bed resting on the distributor, the Gidaspow (Ergun)\n"
           "  drag, the pressure at the distributor less the gas column's weight, averaged over\n"
           "  0.1 s (the column rings after it settles); the reference is Ergun (1952) with the\n"
