@@ -11,7 +11,7 @@ _gransim() {
     words=("${COMP_WORDS[@]}")
     cword=$COMP_CWORD
   fi
-  local commands="run check list validate sweep fit sensitivity optimise dem dem-reduce couple"
+  local commands="run check list validate validate-cfd sweep fit sensitivity optimise dem dem-reduce couple"
   if [ "$cword" -eq 1 ]; then
     COMPREPLY=($(compgen -W "$commands --help --version" -- "$cur"))
     return
@@ -22,6 +22,7 @@ _gransim() {
     check) opts="--help" ;;
     list) opts="" ;;
     validate) opts="--out --quick --only --threads --max-loss --help" ;;
+    validate-cfd) opts="--out --long --help" ;;
     sweep) opts="--set --design --range --seed --out --outputs --resume --threads --quiet --progress --help" ;;
     fit) opts="--data --params --help" ;;
     sensitivity) opts="--range --outputs --method --levels --bootstrap --conf --seed --out --resume --threads --quiet --progress --help" ;;
@@ -38,7 +39,7 @@ _gransim() {
   fi
   case $prev in
     --out)
-      if [ "${words[1]}" = validate ] || [ "${words[1]}" = dem-reduce ]; then
+      if [ "${words[1]}" = validate ] || [ "${words[1]}" = validate-cfd ] || [ "${words[1]}" = dem-reduce ]; then
         COMPREPLY=($(compgen -f -- "$cur"))
       else
         COMPREPLY=($(compgen -d -- "$cur"))

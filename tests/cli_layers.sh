@@ -20,6 +20,7 @@ run run
 swa swa
 demdata dem_data
 dem dem
+cfd cfd
 liggghts liggghts
 study study
 couple couple

@@ -173,7 +173,25 @@ typedef struct {
   const double *vs, *vl; /* solid and liquid volume [m^3] (liquid from spray droplets) */
 } gs_dem_view;
 void gs_dem_get_view(const gs_dem *d, gs_dem_view *v);
+
+/* Hooks for a code coupled to the DEM (a gas phase, src/cfd): `forces` is
+ * called at every step once the contact forces are computed and before they
+ * move the particles, with the particles as they are now (in the engine's
+ * current order, which changes at list rebuilds: key per-particle data by
+ * view->id) and their force arrays, to which it adds external forces [N].
+ * `after_step` is called after every completed step; a non-zero return
+ * (with err set) stops gs_dem_run with that status.  Either may be NULL; a
+ * simulation has one set of hooks (NULL removes them). */
+typedef struct {
+  void (*forces)(const gs_dem_view *v, double *fx, double *fy, double *fz, void *user);
+  int (*after_step)(gs_dem *d, void *user, gs_error *err);
+  void *user;
+} gs_dem_hooks;
+void gs_dem_set_hooks(gs_dem *d, const gs_dem_hooks *h);
+
 double gs_dem_time(const gs_dem *d);
+double gs_dem_dt(const gs_dem *d); /* the time step [s] */
+void gs_dem_get_params(const gs_dem *d, gs_dem_params *p);
 long gs_dem_step_count(const gs_dem *d);
 int gs_dem_type_class(const gs_dem *d, int type);
 size_t gs_dem_ntypes(const gs_dem *d);
@@ -236,6 +254,11 @@ void gs_dem_case_describe(const gs_dem_case *c, char *buf, size_t n);
 /* Run it, writing the tables, time series and VTK files into out_dir. */
 int gs_dem_case_run(gs_dem_case *c, const char *out_dir, int progress, gs_error *err);
 void gs_dem_case_free(gs_dem_case *c);
+/* The simulation the case runs (for gs_dem_set_hooks), its duration [s], and
+ * its `gas` section (NULL if none; read by src/cfd, gs_cfd_case_create). */
+gs_dem *gs_dem_case_sim(gs_dem_case *c);
+double gs_dem_case_duration(const gs_dem_case *c);
+struct gs_cfg_node *gs_dem_case_gas(gs_dem_case *c);
 /* The engine the case asks for (dem.engine): 0 embedded, 1 LIGGGHTS
  * (include/gransim/liggghts.h runs those). */
 int gs_dem_case_engine(const gs_dem_case *c);

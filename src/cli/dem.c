@@ -1,11 +1,14 @@
 /* `gransim dem`: run a DEM case file (docs/case-files.md, "DEM cases"). */
+#include <errno.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "cli/commands.h"
 #include "cli/options.h"
+#include "gransim/cfd.h"
 #include "gransim/dem.h"
 #include "gransim/liggghts.h"
 
@@ -29,6 +32,8 @@ static void dem_usage(FILE *fp) {
           "  granulation*.csv     with `granulation:`: solid x liquid class populations, collisions\n"
           "                       and aggregations per update, the run's kernel table (measure: volume)\n"
           "  vtk/                 particles and moving meshes for ParaView (output.vtk_every)\n"
+          "  gas.csv, gas.pvd     with a `gas` section: the gas phase over time, and its fields\n"
+          "                       (vtk/gas_*.vtr: void fraction, pressure, velocity)\n"
           "--check validates CASE (reads meshes) without running it.  --threads sets the OpenMP\n"
           "threads (default: OMP_NUM_THREADS or all).\n"
           "With `engine: liggghts` in the dem section the case runs in LIGGGHTS instead: gransim\n"
@@ -85,6 +90,30 @@ int gs_cmd_dem(int argc, char **argv) {
   int rc = 0;
   const int liggghts = gs_dem_case_engine(c) == 1;
   lig.progress = progress;
+  /* a `gas` section: the gas phase steps inside the DEM run (src/cfd) */
+  gs_cfd *gas = NULL;
+  if (gs_dem_case_gas(c)) {
+    if (liggghts) {
+      fprintf(stderr, "gransim: %s: a gas section needs the embedded DEM (engine: embedded)\n", path);
+      gs_dem_case_free(c);
+      return 1;
+    }
+    if (out && !check && mkdir(out, 0777) && errno != EEXIST) {
+      fprintf(stderr, "gransim: %s: %s\n", out, strerror(errno));
+      gs_dem_case_free(c);
+      return 1;
+    }
+    if (!(gas = gs_cfd_case_create(c, check ? NULL : out, &err))) {
+      fprintf(stderr, "gransim: %s\n", err.msg);
+      gs_dem_case_free(c);
+      return 1;
+    }
+    int n[3];
+    double h[3];
+    gs_cfd_dims(gas, n, h);
+    size_t len = strlen(desc);
+    snprintf(desc + len, sizeof desc - len, "; gas on %d x %d x %d cells", n[0], n[1], n[2]);
+  }
   if (liggghts && (rc = gs_lig_check(c, &err))) fprintf(stderr, "gransim: %s: %s\n", path, err.msg);
   else if (check) printf("%s: valid%s. %s\n", path, liggghts ? " (engine liggghts)" : "", desc);
   else {
@@ -93,6 +122,7 @@ int gs_cmd_dem(int argc, char **argv) {
     if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
     else if (progress) fprintf(stderr, "gransim dem: results in %s\n", out);
   }
+  gs_cfd_free(gas);
   gs_dem_case_free(c);
   return rc ? 1 : 0;
 }

@@ -1,4 +1,4 @@
-/* The gransim command: subcommands run, check, list, validate, sweep, fit, sensitivity, optimise, dem, dem-reduce. */
+/* The gransim command: subcommands run, check, list, validate, validate-cfd, sweep, fit, sensitivity, optimise, dem, dem-reduce. */
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,6 +17,7 @@
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "gransim/api.h"
+#include "gransim/cfd.h"
 #include "gransim/case.h"
 #include "gransim/distribution.h"
 #include "gransim/run.h"
@@ -47,7 +48,11 @@ static void usage(FILE *fp) {
           "                         global sensitivity: Sobol' indices or Morris screening\n"
           "  optimise CASE --target FILE --controls KEY=LO:HI ... [--method nelder-mead|bounded]\n"
           "                         choose controls so that outputs come closest to a target\n"
-          "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM)\n"
+          "  validate-cfd [--long] [--out FILE]\n"
+          "                         the gas phase against Ergun, terminal velocities, Wen & Yu;\n"
+          "                         a markdown report (docs/validation-cfd.md)\n"
+          "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM);\n"
+          "                         with a `gas` section, a CFD-DEM run of a fluid bed\n"
           "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n"
           "  couple CASE --out DIR  run a coupled PBM-DEM case (coupling: {mode: one_way}): the DEM\n"
           "                         with classes from the PBM grid, then the PBM with its tables\n\n"
@@ -200,6 +205,8 @@ static int cmd_list(void) {
   for (const gs_integrator_type *const *t = gs_integrator_types(); *t; t++) printf("  %-16s %s\n", (*t)->name, (*t)->summary);
   printf("swa solver processes (the mechanisms of cases with solver.method: swa):\n");
   for (const gs_swa_process_type *const *t = gs_swa_process_types(); *t; t++) printf("  %-20s %s\n", (*t)->name, (*t)->summary);
+  printf("drag laws (gas.drag of a DEM case's gas phase):\n");
+  for (const gs_cfd_drag_type *const *t = gs_cfd_drags; *t; t++) printf("  %-16s %s\n", (*t)->name, (*t)->summary);
   return 0;
 }
 
@@ -286,6 +293,7 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "check")) return cmd_check(argc - 1, argv + 1);
   if (!strcmp(argv[1], "list")) return cmd_list();
   if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "validate-cfd")) return gs_cmd_validate_cfd(argc - 1, argv + 1);
   if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 1, argv + 1);
   if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 1, argv + 1);
   if (!strcmp(argv[1], "sweep")) { /* under mpirun the ranks share the runs */

@@ -438,6 +438,9 @@ static int load(gs_dem_case *c, gs_error *err) {
       rc = gs_cfg_check_unused(out, err);
   }
   if (!rc) rc = gs_dem_wet_read(c, root, rmin_all, err);
+  /* sections read by the layers above when they run the case: `gas` (the
+   * gas phase, src/cfd, through gs_dem_case_section) */
+  if (!rc) c->gas = gs_cfg_get(root, "gas");
   if (!rc) rc = gs_cfg_check_unused(root, err);
   /* the time step against the Rayleigh time of the smallest particle */
   if (!rc) {
@@ -485,6 +488,9 @@ void gs_dem_case_describe(const gs_dem_case *c, char *buf, size_t n) {
 }
 
 int gs_dem_case_engine(const gs_dem_case *c) { return c->engine; }
+gs_dem *gs_dem_case_sim(gs_dem_case *c) { return c->dem; }
+gs_cfg_node *gs_dem_case_gas(gs_dem_case *c) { return c->gas; }
+double gs_dem_case_duration(const gs_dem_case *c) { return c->duration; }
 
 void gs_dem_case_free(gs_dem_case *c) {
   if (!c) return;

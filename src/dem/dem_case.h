@@ -49,6 +49,7 @@ typedef struct {
 
 struct gs_dem_case_s {
   gs_cfg *cfg;
+  gs_cfg_node *gas; /* the `gas` section, for src/cfd (NULL: none) */
   char path[1024];
   gs_dem *dem;
   gs_dem_params prm;

@@ -148,6 +148,7 @@ struct gs_dem {
   struct gs_dem_pair_log *plog;
   /* solid and liquid volume of the particles removed (outlets, box) */
   double vs_removed, vl_removed;
+  gs_dem_hooks hooks; /* external forces and after-step calls (gs_dem_set_hooks) */
   /* removal predicate */
   int (*remove_pred)(const double x[3], void *ctx);
   void *remove_ctx;

@@ -246,6 +246,11 @@ int gs_dem_prepare(gs_dem *d, gs_error *err) {
 static int compute_forces(gs_dem *d, gs_error *err) {
   gs_dem_pair_forces(d);
   gs_dem_wall_forces(d);
+  if (d->hooks.forces) {
+    gs_dem_view v;
+    gs_dem_get_view(d, &v);
+    d->hooks.forces(&v, d->p.fx, d->p.fy, d->p.fz, d->hooks.user);
+  }
   if (d->oom) return gs_error_set(err, GS_ENOMEM, "DEM: out of memory for the contact counters");
   return GS_OK;
 }
@@ -326,8 +331,16 @@ int gs_dem_run(gs_dem *d, long nsteps, gs_error *err) {
       return gs_error_set(err, GS_ENUMERIC,
                           "DEM: non-finite velocity at t = %g s (step %ld); the time step is "
                           "probably too large for the stiffness", d->t, d->step);
+    if (d->hooks.after_step && (rc = d->hooks.after_step(d, d->hooks.user, err))) return rc;
   }
   return GS_OK;
+}
+
+void gs_dem_set_hooks(gs_dem *d, const gs_dem_hooks *h) {
+  if (h)
+    d->hooks = *h;
+  else
+    memset(&d->hooks, 0, sizeof d->hooks);
 }
 
 void gs_dem_get_view(const gs_dem *d, gs_dem_view *v) {
@@ -341,6 +354,8 @@ void gs_dem_get_view(const gs_dem *d, gs_dem_view *v) {
 }
 
 double gs_dem_time(const gs_dem *d) { return d->t; }
+double gs_dem_dt(const gs_dem *d) { return d->prm.dt; }
+void gs_dem_get_params(const gs_dem *d, gs_dem_params *p) { *p = d->prm; }
 long gs_dem_step_count(const gs_dem *d) { return d->step; }
 int gs_dem_type_class(const gs_dem *d, int type) { return d->types[type].cls; }
 size_t gs_dem_ntypes(const gs_dem *d) { return d->ntypes; }

@@ -1,0 +1,228 @@
+/* The gas phase and its coupling to the DEM (src/cfd): drag closures against
+ * their formulas, a falling sphere's terminal velocity, a packed bed's
+ * pressure drop against Ergun, the momentum exchanged by drag conserved to
+ * round-off, the particle volume kept by the void fraction, and the refusals
+ * of bad set-ups and numerical failures. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "check.h"
+#include "gransim/cfd.h"
+#include "gransim/cfg.h"
+
+static void report(const gs_cfd_check *c) {
+  fprintf(stderr, "%s: got %.6g %s, want %.6g (%.2f %%)\n", c->name, c->got, c->unit, c->want,
+          100 * (c->got / c->want - 1));
+}
+
+static const gs_cfd_drag_type *drag(const char *name) {
+  return gs_registry_find((const void *const *)gs_cfd_drags, name);
+}
+
+/* The closures against their published forms at a few states. */
+static void test_closures(void) {
+  const double rho = 1.2, mu = 1.8e-5, d = 1e-3;
+  const double vp = M_PI / 6 * d * d * d;
+  for (double e = 0.4; e < 1.0001; e += 0.15)
+    for (double slip = 0.01; slip < 20; slip *= 7) {
+      const gs_cfd_drag_in in = {.eps = e, .d = d, .slip = slip, .rho = rho, .mu = mu};
+      /* Di Felice: 1/2 Cd rho A eps^2 |u-v| eps^-chi */
+      const double re = e * rho * d * slip / mu, cd = pow(0.63 + 4.8 / sqrt(re), 2);
+      const double chi = 3.7 - 0.65 * exp(-pow(1.5 - log10(re), 2) / 2);
+      CHECK_REL(drag("di_felice")->beta(&in), 0.5 * cd * rho * M_PI * d * d / 4 * e * e * pow(e, -chi) * slip, 1e-12);
+      /* Gidaspow: the bed's exchange coefficient times Vp / (1 - eps) */
+      double bv;
+      if (e < 0.8)
+        bv = 150 * (1 - e) * (1 - e) * mu / (e * d * d) + 1.75 * (1 - e) * rho * slip / d;
+      else {
+        const double cdw = re < 1000 ? 24 / re * (1 + 0.15 * pow(re, 0.687)) : 0.44;
+        bv = 0.75 * cdw * e * (1 - e) * rho * slip / d * pow(e, -2.65);
+      }
+      if (e < 0.9999) CHECK_REL(drag("gidaspow")->beta(&in), bv * vp / (1 - e), 1e-12);
+    }
+  /* the Stokes limits are the limits */
+  for (int k = 0; k < 2; k++) {
+    const gs_cfd_drag_type *t = drag(k ? "gidaspow" : "di_felice");
+    gs_cfd_drag_in a = {.eps = 0.9, .d = d, .slip = 0, .rho = rho, .mu = mu}, b = a;
+    b.slip = 1e-9;
+    CHECK_REL(t->beta(&a), t->beta(&b), 1e-3);
+  }
+}
+
+static void test_validation(void) {
+  gs_cfd_check c;
+  gs_error err = {0};
+  const char *drags[] = {"di_felice", "gidaspow"};
+  for (int k = 0; k < 3; k++) {
+    int rc = gs_cfd_check_terminal(drags[k % 2], k < 2 ? GS_CFD_ONE_WAY : GS_CFD_TWO_WAY, &c, &err);
+    if (rc) fprintf(stderr, "%s\n", err.msg);
+    CHECK(rc == GS_OK);
+    report(&c);
+    CHECK_REL(c.got, c.want, c.tol);
+  }
+  const double us[] = {0.3, 0.8};
+  for (int k = 0; k < 2; k++) {
+    int rc = gs_cfd_check_ergun("gidaspow", us[k], &c, &err);
+    if (rc) fprintf(stderr, "%s\n", err.msg);
+    CHECK(rc == GS_OK);
+    report(&c);
+    CHECK_REL(c.got, c.want, c.tol);
+  }
+}
+
+/* ---- a small bed to break ------------------------------------------------ */
+static const gs_dem_material mat = {.E = 5e6, .nu = 0.25, .e = 0.5, .mu_s = 0.3, .mu_r = 0, .density = 2500};
+
+typedef struct {
+  gs_dem *dem;
+  gs_cfd *gas;
+} rig;
+
+/* n particles of diameter d in a 3x3 grid of columns, jittered, moving,
+ * in a box 12 mm x 12 mm x 48 mm; gas cells as given. */
+static int rig_make(rig *r, int n, double d, const int cells[3], double dt_gas, double u_in,
+                    double dt_dem, gs_cfd_params *override, gs_error *err) {
+  memset(r, 0, sizeof *r);
+  gs_dem_params p = {.dt = dt_dem, .gravity = {0, 0, -9.81}, .skin = 2e-4, .lo = {-0.01, -0.01, -0.01},
+                     .hi = {0.022, 0.022, 0.1}, .nclass = 1};
+  if (!(r->dem = gs_dem_alloc(&p, err))) return err->code;
+  const int t = gs_dem_add_type(r->dem, &mat, 0, err);
+  const double o[3] = {0, 0, 0}, nz[3] = {0, 0, 1};
+  gs_dem_add_plane(r->dem, "floor", o, nz, &mat, err);
+  for (int i = 0; i < n; i++) {
+    const double x[3] = {2e-3 + 4e-3 * (i % 3) + 1e-4 * ((i * 7) % 5), 2e-3 + 4e-3 * (i / 3 % 3),
+                         1.5e-3 + 3e-3 * (i / 9) + 1e-4 * ((i * 3) % 4)};
+    const double v[3] = {0.01 * ((i * 13) % 7 - 3), 0.02 * ((i * 5) % 3 - 1), 0.05 * ((i * 11) % 5 - 2)};
+    if (gs_dem_add_particle(r->dem, t, d / 2, x, v, NULL, err) < 0) return err->code;
+  }
+  gs_cfd_params gp = {.lo = {0, 0, 0}, .hi = {0.012, 0.012, 0.048}, .n = {cells[0], cells[1], cells[2]},
+                      .rho = 1.2, .mu = 1.8e-5, .u_inlet = u_in, .dt = dt_gas, .gravity = {0, 0, -9.81},
+                      .drag = drag("di_felice"), .coupling = GS_CFD_TWO_WAY};
+  if (override) {
+    gp.tol = override->tol;
+    gp.max_iter = override->max_iter;
+  }
+  if (!(r->gas = gs_cfd_create(&gp, err))) return err->code;
+  return gs_cfd_attach(r->gas, r->dem, err);
+}
+
+static void rig_free(rig *r) {
+  gs_cfd_free(r->gas);
+  gs_dem_free(r->dem);
+}
+
+/* The drag the particles receive is what the gas loses, to round-off, at
+ * every step of a moving bed; the void fraction holds the particles' volume. */
+static void test_conservation(void) {
+  rig r;
+  gs_error err = {0};
+  const int cells[3] = {3, 3, 12};
+  CHECK(rig_make(&r, 90, 2e-3, cells, 5e-4, 1.5, 2.5e-5, NULL, &err) == GS_OK);
+  double worst = 0, scale = 0;
+  for (int s = 0; s < 40; s++) {
+    int rc = gs_dem_run(r.dem, 20, &err); /* one gas step */
+    if (rc) fprintf(stderr, "%s\n", err.msg);
+    CHECK(rc == GS_OK);
+    double fp[3], fg[3];
+    gs_cfd_exchange(r.gas, fp, fg);
+    for (int a = 0; a < 3; a++) {
+      worst = fmax(worst, fabs(fp[a] - fg[a]));
+      scale = fmax(scale, fabs(fp[a]));
+    }
+  }
+  fprintf(stderr, "drag exchange: largest |particles - gas| %.3g N of %.3g N\n", worst, scale);
+  CHECK(scale > 1e-4);             /* there is drag to exchange */
+  CHECK(worst <= 1e-12 * scale);   /* and it is exchanged exactly */
+  gs_dem_view v;
+  gs_dem_get_view(r.dem, &v);
+  double vs = 0, held = 0, h[3];
+  int n[3];
+  for (size_t i = 0; i < v.n; i++) vs += 4.0 / 3.0 * M_PI * v.r[i] * v.r[i] * v.r[i];
+  gs_cfd_dims(r.gas, n, h);
+  const double *e = gs_cfd_void_fraction(r.gas);
+  for (int c = 0; c < n[0] * n[1] * n[2]; c++) {
+    held += (1 - e[c]) * h[0] * h[1] * h[2];
+    CHECK(e[c] > 0 && e[c] <= 1);
+  }
+  CHECK_REL(held, vs, 1e-12);
+  /* the bed has been lifted: the gas pushes up on the particles */
+  double f[3];
+  gs_cfd_particle_force(r.gas, 0, f);
+  CHECK(f[2] > 0);
+  rig_free(&r);
+}
+
+/* A set-up that must be refused, with words expected in the message. */
+static void expect_fail(const char *what, int n, double d, const int cells[3], double dt_gas, double u_in,
+                        double dt_dem, gs_cfd_params *ov, long steps, const char *w1, const char *w2) {
+  rig r;
+  gs_error err = {0};
+  int rc = rig_make(&r, n, d, cells, dt_gas, u_in, dt_dem, ov, &err);
+  if (!rc) rc = gs_dem_run(r.dem, steps, &err);
+  fprintf(stderr, "%s: %s\n", what, err.msg);
+  CHECK(rc != GS_OK);
+  CHECK(strstr(err.msg, w1) != NULL);
+  CHECK(strstr(err.msg, w2) != NULL);
+  rig_free(&r);
+}
+
+static void test_refusals(void) {
+  const int ok[3] = {3, 3, 12}, fine[3] = {6, 6, 24}, coarse[3] = {1, 1, 1};
+  /* cells of 2 mm for 2 mm particles */
+  expect_fail("cells too fine", 9, 2e-3, fine, 5e-4, 0.5, 2.5e-5, NULL, 40, "diameters of particle", "gas.cells");
+  /* one 48 mm x 12 mm cell for 0.2 mm particles */
+  expect_fail("cells too coarse", 9, 2e-4, coarse, 5e-4, 0.5, 2.5e-6, NULL, 400, "more than 50", "particle");
+  /* the gas crossing 3 cells per step */
+  expect_fail("gas CFL", 9, 2e-3, ok, 5e-3, 3, 2.5e-5, NULL, 400, "cells per step", "gas step");
+  /* gas step not a whole number of DEM steps */
+  expect_fail("step ratio", 9, 2e-3, ok, 5e-4, 0.5, 3e-5, NULL, 40, "whole number", "DEM time steps");
+  /* DEM step above the contact limit */
+  expect_fail("Rayleigh", 9, 2e-3, ok, 5e-4, 0.5, 1e-4, NULL, 40, "Rayleigh time", "dem.time_step");
+  /* a pressure solve held to an impossible tolerance in one iteration */
+  gs_cfd_params ov = {.tol = 1e-30, .max_iter = 1};
+  expect_fail("pressure solve", 9, 2e-3, ok, 5e-4, 0.5, 2.5e-5, &ov, 40, "did not converge", "residual");
+}
+
+/* 20 spheres of 2 mm at the centre of a 4 mm cell are more than it holds. */
+static void test_overfill(void) {
+  rig r;
+  gs_error err = {0};
+  const int cells[3] = {3, 3, 12};
+  CHECK(rig_make(&r, 9, 2e-3, cells, 5e-4, 0.5, 2.5e-5, NULL, &err) == GS_OK);
+  for (int k = 0; k < 20; k++) { /* a little apart: the DEM needs a direction between centres */
+    const double x[3] = {0.006 + 1e-5 * (k % 3), 0.006 + 1e-5 * (k / 3 % 3), 0.03 + 1e-5 * (k / 9)};
+    gs_dem_add_particle(r.dem, 0, 1e-3, x, NULL, NULL, &err);
+  }
+  int rc = gs_dem_run(r.dem, 40, &err);
+  fprintf(stderr, "overfill: %s\n", err.msg);
+  CHECK(rc != GS_OK);
+  CHECK(strstr(err.msg, "void fraction -0.30") != NULL);
+  CHECK(strstr(err.msg, "gas cell (1, 1, 7)") != NULL);
+  rig_free(&r);
+}
+
+/* A particle thrown out of the gas box stops the run, named. */
+static void test_leaving(void) {
+  rig r;
+  gs_error err = {0};
+  const int cells[3] = {3, 3, 12};
+  CHECK(rig_make(&r, 9, 2e-3, cells, 5e-4, 0.5, 2.5e-5, NULL, &err) == GS_OK);
+  const double x[3] = {0.006, 0.006, 0.04}, v[3] = {0, 0, 30};
+  gs_dem_add_particle(r.dem, 0, 1e-3, x, v, NULL, &err);
+  int rc = gs_dem_run(r.dem, 400, &err);
+  fprintf(stderr, "leaving: %s\n", err.msg);
+  CHECK(rc != GS_OK);
+  CHECK(strstr(err.msg, "particle 9 left the gas domain") != NULL);
+  rig_free(&r);
+}
+
+int main(void) {
+  test_closures();
+  test_conservation();
+  test_refusals();
+  test_leaving();
+  test_overfill();
+  test_validation();
+  TEST_EXIT();
+}
