@@ -370,6 +370,21 @@ static void gs_cvode_stats(const void *vself, gs_integrator_stats *stats) {
   gs_cvode_counters(vself, stats);
 }
 
+/* CVODE's history (Nordsieck array, order, step, error weights) cannot be
+ * handed to another CVODE, so every output time restarts it (CVodeReInit at
+ * the next advance), exactly as a resumed run starts (docs/performance.md:
+ * what the restarts cost). */
+static void gs_cvode_mark(void *vself, double *state) {
+  gs_cvode *self = vself;
+  self->needs_reinit = 1;
+  for (int i = 0; i < GS_INTEGRATOR_MARK; i++) state[i] = 0;
+}
+
+static void gs_cvode_resume(void *vself, const double *state) {
+  (void)state;
+  ((gs_cvode *)vself)->needs_reinit = 1;
+}
+
 const gs_integrator_type gs_integrator_cvode = {
     .name = "cvode",
     .summary = "SUNDIALS CVODE BDF for stiff cases, linear_solver dense | gmres | auto",
@@ -378,4 +393,6 @@ const gs_integrator_type gs_integrator_cvode = {
     .advance = gs_cvode_advance,
     .get_stats = gs_cvode_stats,
     .free = gs_cvode_free,
+    .mark = gs_cvode_mark,
+    .resume = gs_cvode_resume,
 };
