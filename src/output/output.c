@@ -1,23 +1,21 @@
 /* Result files: DIR/result.h5 and DIR/summary.csv (see include/gransim/output.h).
  *
  * Crash safety.  Everything is written under the partial names and renamed
- * only by gs_output_finish(ok = 1).  Three rules keep a killed run resumable:
+ * only by gs_output_finish(ok = 1); the skeleton (grid, case, empty datasets)
+ * is built under DIR/.result.h5.new and renamed to .result.h5.partial once
+ * complete.  What a resume trusts is not the HDF5 file: HDF5 without SWMR
+ * rewrites its metadata in place and in no particular order, and a kill in
+ * the middle of a flush can leave committed rows unreadable.  Every output
+ * time also goes to the journal DIR/.result.journal (journal.h: append-only,
+ * checksummed records, a commit record per commit), and gs_output_resume
+ * builds fresh partial files from the journal's committed rows, written
+ * again through the ordinary path.  The journal is removed only after both
+ * final renames, so a kill while publishing leaves it, and a resume
+ * publishes again.
  *
- * 1. Two-phase commit.  Without SWMR, HDF5 writes dirty metadata and chunks in
- *    no particular order, so no dataset's length can mark what is complete (a
- *    killed run was seen to leave /time longer than /ledger, or rows whose data
- *    never reached the disk).  gs_output_write writes every dataset, flushes,
- *    and only then raises the root attribute "ntimes" and flushes again.
- * 2. A killed file is never modified.  Its uncommitted rows may point at file
- *    space beyond the end recorded in the superblock; freeing or rewriting them
- *    fails ("addr overflow").  Resume therefore opens the old partial read-only,
- *    copies the committed rows into a fresh file and renames that over it.
- * 3. The skeleton (grid, case, empty datasets) is built under DIR/.result.h5.new
- *    and renamed to .result.h5.partial only once complete, so a run killed
- *    while opening leaves nothing that looks resumable.
- * The CSV's rows are formatted as output times come and flushed at each
- * commit; a killed run's partial CSV may hold more rows than were committed,
- * so resume regenerates it from /summary, and it then agrees with result.h5.
+ * Commits still write every dataset, flush, raise the root attribute
+ * "ntimes" and flush again, so that the partial file can be read while the
+ * run goes on; then the journal's commit record is appended.
  *
  * Checkpoints.  Output times are committed together (two flushes for several
  * rows) once `checkpoint` seconds of
@@ -30,12 +28,9 @@
  * rows each); the large ones (/number, /carried), chunked by up to 64 KiB of
  * output times (a row a chunk when larger), are written chunk by chunk as
  * each fills (partly filled at a commit) and become part of the file only
- * when "ntimes" covers them.  A chunk goes to new file space when first
- * written; one written partly filled at a commit is rewritten in place as
- * it fills, with the same bytes for its committed rows, so a kill in the
- * middle leaves those rows as they were.  The metadata cache does not evict
- * (h5_open), so the chunk index and extents reach the disk only at the
- * flushes of a commit, as in rule 1. */
+ * when "ntimes" covers them.  The metadata cache does not evict (h5_create),
+ * so the chunk index and extents reach the disk only at the flushes of a
+ * commit. */
 #include "gransim/output.h"
 
 #include <errno.h>
@@ -69,7 +64,6 @@
 #define NSERIES_MAX (4 + NCOL_MAX)             /* /time, /number, /ledger, /summary/<col>, /carried */
 #define RANK_MAX (3 + GS_MAX_DIM)              /* /carried: time, comp, quantity, axes */
 #define CHUNK_ROWS 64                          /* time rows per chunk of the small series */
-#define BLOCK_VALUES 65536                     /* doubles per read when copying or rebuilding */
 #define PENDING_BYTES ((size_t)64 << 20)       /* output times held before a commit, at most */
 #define PENDING_FIRST_BYTES ((size_t)64 << 10) /* the pending block's first size */
 #define DEFLATE_LEVEL 1                        /* zlib level of the large series */
@@ -542,15 +536,16 @@ static void output_discard(gs_output *o) {
 
 /* HDF5 1.8 object formats: readable by every current tool, and they let the
  * case text attribute exceed 64 KiB (dense attribute storage). */
-static hid_t h5_open(const char *path, int create) {
+static hid_t h5_create(const char *path) {
   hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), f = H5I_INVALID_HID;
   herr_t st = fapl >= 0 ? H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18) : -1;
-  if (st >= 0 && create) {
+  if (st >= 0) {
     /* Dirty metadata reaches the disk only at flushes: with evictions the
      * cache may write a chunk index node between two commits (the large
-     * series are written row by row), and a kill there could break rows
-     * already committed.  The cache then grows with the metadata until the
-     * next flush, a few bytes per chunk. */
+     * series are written row by row), and someone reading the partial file
+     * while the run goes on could meet a half-updated index.  (A resume
+     * reads the journal, never this file.)  The cache then grows with the
+     * metadata until the next flush, a few bytes per chunk. */
     H5AC_cache_config_t mdc;
     mdc.version = H5AC__CURR_CACHE_CONFIG_VERSION;
     st = H5Pget_mdc_config(fapl, &mdc);
@@ -562,9 +557,7 @@ static hid_t h5_open(const char *path, int create) {
       st = H5Pset_mdc_config(fapl, &mdc);
     }
   }
-  if (st >= 0)
-    f = create ? H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)
-               : H5Fopen(path, H5F_ACC_RDONLY, fapl);
+  if (st >= 0) f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   if (fapl >= 0) H5Pclose(fapl);
   return f;
 }
@@ -578,7 +571,7 @@ static int flush_h5(gs_output *o, gs_error *err) {
 static int build_skeleton(gs_output *o, const gs_model *m, const char *text, const char *name,
                           gs_error *err) {
   o->h5_path = o->h5_new;
-  o->file = h5_open(o->h5_new, 1);
+  o->file = h5_create(o->h5_new);
   if (o->file < 0) return h5_error(err, o->h5_path, "create the file");
   int rc = write_grid(o, &m->grid, err);
   if (!rc) rc = write_case(o, text, name, err);
