@@ -171,7 +171,7 @@ csv_rows_close() {
 # no_result_files DIR: DIR holds neither results nor partial files.
 no_result_files() {
   local f
-  for f in result.h5 summary.csv .result.h5.partial .summary.csv.partial .result.h5.new; do
+  for f in result.h5 summary.csv .result.h5.partial .summary.csv.partial .result.h5.new .result.journal; do
     [ ! -e "$1/$f" ] || fail "$1/$f exists but should not"
   done
 }
