@@ -6,7 +6,7 @@
 # CoriMix example on more compartments with shared steps (cli_resume_exact.sh
 # in one process).
 #
-# Default: 8 compartments to t = 30, 2 kills each; GRANSIM_TEST_LONG=1
+# Default: 8 compartments to t = 30, 1 kill each; GRANSIM_TEST_LONG=1
 # (mpi_resume_exact_long, ctest -L long): 32 compartments to t = 85, 10 kills.
 # ctest-long
 #
@@ -18,7 +18,7 @@ MPI=("$@")
 export OMPI_MCA_mpi_yield_when_idle=1 OMP_WAIT_POLICY=passive
 command -v h5diff >/dev/null || fail "h5diff (hdf5-tools) is needed"
 
-ncomp=8 end=30 trials=2
+ncomp=8 end=30 trials=1
 if [ "${GRANSIM_TEST_LONG:-0}" = 1 ]; then ncomp=32 end=85 trials=10; fi
 ln -s "$(cd "$SRC" && pwd)/examples/data" "$WORK/data"
 length=$(awk -v n="$ncomp" 'BEGIN { printf "%.6g", 0.38 / n }')
