@@ -589,6 +589,35 @@ static void test_uncommitted(void) {
   gs_model_free(&m);
 }
 
+/* A committed row whose bytes changed (a torn write that the commit record
+ * after it survived, or a disk error) fails its checksum: the resume rolls
+ * back to the commit before it. */
+static void test_corrupt_row(void) {
+  char dir[256], p[512];
+  snprintf(dir, sizeof dir, "%s/corrupt", base);
+  gs_model m;
+  make_model(&m, 1, 1, 4);
+  killed_run(dir, &m);
+  snprintf(p, sizeof p, "%s/.result.journal", dir);
+  struct stat st;
+  CHECK(stat(p, &st) == 0);
+  FILE *f = fopen(p, "r+b");
+  CHECK(f != NULL);
+  if (f) { /* a byte of the last row's values, just before its commit record */
+    CHECK(fseek(f, st.st_size - 16 - 3, SEEK_SET) == 0);
+    int c = fgetc(f);
+    CHECK(fseek(f, st.st_size - 16 - 3, SEEK_SET) == 0);
+    fputc(c ^ 0x10, f);
+    fclose(f);
+  }
+  double y[4], led[2], res[NRES], t = -1;
+  gs_error err;
+  gs_output *o = gs_output_resume(dir, &m, NRES, &t, y, led, res, &err);
+  CHECK(o != NULL && t == time_of(0));
+  if (o) CHECK(gs_output_finish(o, 0, &err) == GS_OK);
+  gs_model_free(&m);
+}
+
 static void test_nothing_to_resume(void) {
   char dir[256], want[512];
   snprintf(dir, sizeof dir, "%s/empty", base);
@@ -644,6 +673,7 @@ int main(void) {
   test_abort();
   test_resume();
   test_uncommitted();
+  test_corrupt_row();
   test_nothing_to_resume();
   test_bad_dir();
   if (!check_failures && !getenv("GS_TEST_KEEP")) {
