@@ -17,6 +17,7 @@ command -v h5diff >/dev/null || fail "h5diff (hdf5-tools) is needed"
 
 ln -s "$(cd "$SRC" && pwd)/examples/data" "$WORK/data"
 # the example's granulator cut into ncomp compartments of the same total length
+at="" # output times committed at each kill
 length=$(awk -v n="$ncomp" 'BEGIN { printf "%.6g", 0.38 / n }')
 base_case() {
   sed -e "s/compartments: 4/compartments: $ncomp/" -e "s/length: 0.095/length: $length/" \
@@ -40,18 +41,29 @@ for solver in "rk, rtol: 1.0e-6, atol: 1.0, steps: shared" \
   c=$WORK/case$n.yaml
   base_case "$solver" >"$c"
   grep -q "compartments: $ncomp" "$c" && grep -q "method: ${solver%%,*}" "$c" || fail "could not build the case ($solver)"
+  start=$(date +%s.%N)
   run_rc 0 "$BIN" run "$c" --out "$WORK/ref$n" --threads 1 --quiet
+  seconds=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { print b - a }')
   for trial in $(seq "$trials"); do
     d=$WORK/run$n-$trial
-    "$BIN" run "$c" --out "$d" --threads 1 --quiet 2>"$WORK/killed.err" &
-    pid=$!
-    BG_PIDS+=("$pid")
-    kill_part_way "$pid" "$d/.summary.csv.partial" "$WORK/killed.err"
-    wait "$pid" 2>/dev/null || true
-    [ ! -e "$d/result.h5" ] || fail "the run ($solver) ended before it was killed"
+    fraction=$(random_fraction)
+    # killed at a random moment of the run (earlier if the run was quicker)
+    for try in 1 2 3 4 5 6; do
+      rm -rf "$d"
+      "$BIN" run "$c" --out "$d" --threads 1 --quiet 2>"$WORK/killed.err" &
+      pid=$!
+      BG_PIDS+=("$pid")
+      killed=0
+      kill_at_random "$pid" "$d/.summary.csv.partial" "$seconds" "$fraction" && killed=1
+      wait "$pid" 2>/dev/null || true
+      [ "$killed" = 1 ] && [ ! -e "$d/result.h5" ] && break
+      [ "$try" -lt 6 ] || fail "the run ($solver) always ended before it was killed: $(cat "$WORK/killed.err")"
+      fraction=$(awk -v f="$fraction" 'BEGIN { print f / 2 }')
+    done
+    at="$at $((($(wc -l <"$d/.summary.csv.partial") - 1) / ncomp))"
     run_rc 0 "$BIN" run "$c" --out "$d" --resume --threads 1 --quiet
     exact "$WORK/ref$n" "$d" "$solver, kill $trial"
     rm -rf "$d"
   done
 done
-echo "cli_resume_exact: ok ($trials kills each of 4 integrators and strategies, $ncomp compartments)"
+echo "cli_resume_exact: ok ($trials kills each of 4 integrators and strategies, $ncomp compartments; output times committed at the kills:$at of $((end + 1)))"

@@ -21,6 +21,7 @@ command -v h5diff >/dev/null || fail "h5diff (hdf5-tools) is needed"
 ncomp=8 end=30 trials=1
 if [ "${GRANSIM_TEST_LONG:-0}" = 1 ]; then ncomp=32 end=85 trials=10; fi
 ln -s "$(cd "$SRC" && pwd)/examples/data" "$WORK/data"
+at="" # output times committed at each kill
 length=$(awk -v n="$ncomp" 'BEGIN { printf "%.6g", 0.38 / n }')
 
 n=0
@@ -33,15 +34,25 @@ for solver in "rk, rtol: 1.0e-6, atol: 1.0, steps: shared" "euler, steps: shared
       -e "s/^solver: .*/solver: {method: $solver}/" "$SRC/examples/corimix-continuous.yaml" >"$c"
     grep -q "compartments: $ncomp" "$c" || fail "could not build the case"
     mpi=("${MPI[@]}" -np 2 -x GRANSIM_TEST_MOVE_COMPARTMENTS=$move)
+    start=$(date +%s.%N)
     run_rc 0 "${mpi[@]}" "$BIN" run "$c" --out "$WORK/ref$n" --threads 1 --quiet
+    seconds=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { print b - a }')
     for trial in $(seq "$trials"); do
       d=$WORK/run$n-$trial
-      "${mpi[@]}" "$BIN" run "$c" --out "$d" --threads 1 --quiet >/dev/null 2>"$WORK/killed.err" &
-      pid=$!
-      BG_PIDS+=("$pid")
-      kill_part_way "$pid" "$d/.summary.csv.partial" "$WORK/killed.err" --match "run $c --out $d"
-      wait "$pid" 2>/dev/null || true
-      [ ! -e "$d/result.h5" ] || fail "the 2-rank run ($solver) ended before it was killed"
+      fraction=$(random_fraction)
+      for try in 1 2 3 4 5 6; do
+        rm -rf "$d"
+        "${mpi[@]}" "$BIN" run "$c" --out "$d" --threads 1 --quiet >/dev/null 2>"$WORK/killed.err" &
+        pid=$!
+        BG_PIDS+=("$pid")
+        killed=0
+        kill_at_random "$pid" "$d/.summary.csv.partial" "$seconds" "$fraction" --match "run $c --out $d" && killed=1
+        wait "$pid" 2>/dev/null || true
+        [ "$killed" = 1 ] && [ ! -e "$d/result.h5" ] && break
+        [ "$try" -lt 6 ] || fail "the 2-rank run ($solver) always ended before it was killed: $(cat "$WORK/killed.err")"
+        fraction=$(awk -v f="$fraction" 'BEGIN { print f / 2 }')
+      done
+      at="$at $((($(wc -l <"$d/.summary.csv.partial") - 1) / ncomp))"
       run_rc 0 "${mpi[@]}" "$BIN" run "$c" --out "$d" --resume --threads 1 --quiet
       what="$solver, moves $move, kill $trial"
       h5diff "$WORK/ref$n/result.h5" "$d/result.h5" >"$WORK/h5diff" 2>&1 ||
@@ -51,4 +62,4 @@ for solver in "rk, rtol: 1.0e-6, atol: 1.0, steps: shared" "euler, steps: shared
     done
   done
 done
-echo "mpi_resume_exact: ok ($trials kills each of rk and euler, with and without moves, on 2 ranks)"
+echo "mpi_resume_exact: ok ($trials kills each of rk and euler, with and without moves, on 2 ranks; output times committed at the kills:$at of $((end + 1)))"
