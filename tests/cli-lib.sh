@@ -171,7 +171,7 @@ csv_rows_close() {
 # no_result_files DIR: DIR holds neither results nor partial files.
 no_result_files() {
   local f
-  for f in result.h5 summary.csv .result.h5.partial .summary.csv.partial .result.h5.new; do
+  for f in result.h5 summary.csv .result.h5.partial .summary.csv.partial .result.h5.new .result.journal; do
     [ ! -e "$1/$f" ] || fail "$1/$f exists but should not"
   done
 }
@@ -203,3 +203,28 @@ kill_part_way() {
   [ "${#victims[@]}" -gt 0 ] && kill -9 "${victims[@]}" 2>/dev/null ||
     fail "the run ended before it could be killed"
 }
+
+# kill_at_random PID PARTIAL_CSV SECONDS FRACTION [--match PATTERN]: once the
+# partial summary PARTIAL_CSV holds a row (it is flushed after a commit, so
+# the start time is committed and there is something to resume), sleeps
+# FRACTION (0 to 1) of SECONDS (an uninterrupted run's wall time) and then
+# SIGKILLs PID, or with `--match PATTERN` every process whose command line
+# matches PATTERN (the ranks of an mpirun PID).  Returns 1 when the run ended
+# before the kill (the caller tries an earlier moment).
+kill_at_random() {
+  local pid=$1 partial=$2 seconds=$3 fraction=$4 pattern=
+  [ "${5:-}" = --match ] && pattern=$6
+  local deadline=$((SECONDS + 120))
+  until [ -f "$partial" ] && [ "$(wc -l <"$partial")" -ge 2 ]; do
+    kill -0 "$pid" 2>/dev/null || return 1
+    [ "$SECONDS" -lt "$deadline" ] || fail "no output written by the run within 120 s"
+    sleep 0.005
+  done
+  sleep "$(awk -v s="$seconds" -v f="$fraction" 'BEGIN { printf "%.3f", s * f }')"
+  local victims=("$pid")
+  [ -n "$pattern" ] && mapfile -t victims < <(pgrep -f -- "$pattern")
+  [ "${#victims[@]}" -gt 0 ] && kill -9 "${victims[@]}" 2>/dev/null
+}
+
+# random_fraction: a number in [0.05, 0.85)
+random_fraction() { awk -v r="$RANDOM" 'BEGIN { printf "%.3f", 0.05 + 0.8 * r / 32768 }'; }

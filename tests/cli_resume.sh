@@ -38,13 +38,13 @@ awk '!done && sub(/cells: 45/, "cells: 44") { done = 1 } 1' "$c" >"$other"
 grep -q "cells: 44" "$other" || fail "could not build the case with a different grid"
 run_rc 1 "$BIN" run "$other" --out "$res" --resume --threads 1 --quiet
 stderr_has "cannot resume" "different grid" "axis 'solid' has 45 cells, case has 44"
-[ -f "$res/.result.h5.partial" ] || fail "a refused resume removed .result.h5.partial"
+[ -f "$res/.result.journal" ] || fail "a refused resume removed .result.journal"
 
 # resume and compare with the uninterrupted run
 run_rc 0 "$BIN" run "$c" --out "$res" --resume --threads 1 --quiet
 stderr_has "done to t = 1"
 [ -f "$res/result.h5" ] && [ -f "$res/summary.csv" ] || fail "the resumed run wrote no result files"
-for f in .result.h5.partial .summary.csv.partial .result.h5.new; do
+for f in .result.h5.partial .summary.csv.partial .result.h5.new .result.journal; do
   [ ! -e "$res/$f" ] || fail "partial file $res/$f left after the resumed run"
 done
 [ "$(wc -l <"$res/summary.csv")" -eq $((ntimes + 1)) ] ||

@@ -22,7 +22,7 @@ run_rc 0 "$BIN" run "$ok" --out "$out" --threads 1
 stderr_has "done to t = 2" "$out/result.h5" "$out/summary.csv"
 [ -f "$out/result.h5" ] || fail "no $out/result.h5"
 [ -f "$out/summary.csv" ] || fail "no $out/summary.csv"
-for f in .result.h5.partial .summary.csv.partial .result.h5.new; do
+for f in .result.h5.partial .summary.csv.partial .result.h5.new .result.journal; do
   [ ! -e "$out/$f" ] || fail "partial file $out/$f left after a successful run"
 done
 

@@ -44,12 +44,20 @@ static void fill(const gs_model *m, int k, double *y, double *ledger) {
 
 static double time_of(int k) { return 0.5 * k; }
 
+/* integrator state kept with each output time (in the journal only) */
+#define NRES 3
+static void fill_resume(int k, double *res) {
+  for (int i = 0; i < NRES; i++) res[i] = k + 0.25 * i;
+}
+
 static void write_times(gs_output *o, const gs_model *m, int from, int to) {
   gs_error err;
   double *y = malloc(m->nstate * sizeof *y), *led = malloc(m->nledger * sizeof *led);
   for (int k = from; k < to; k++) {
+    double res[NRES];
     fill(m, k, y, led);
-    int rc = gs_output_write(o, m, time_of(k), y, led, &err);
+    fill_resume(k, res);
+    int rc = gs_output_write(o, m, time_of(k), y, led, res, &err);
     CHECK(rc == GS_OK);
     if (rc) fprintf(stderr, "%s\n", err.msg);
   }
@@ -231,19 +239,21 @@ static void test_roundtrip(int dim) {
   char *text = malloc(nbig + 1);
   memset(text, 'x', nbig);
   text[nbig] = '\0';
-  gs_output *o = gs_output_open(dir, &m, text, "case.yaml", &err);
+  gs_output *o = gs_output_open(dir, &m, text, "case.yaml", NRES, &err);
   CHECK(o != NULL);
   if (!o) {
     fprintf(stderr, "%s\n", err.msg);
     return;
   }
   CHECK(exists(dir, ".result.h5.partial") && exists(dir, ".summary.csv.partial"));
+  CHECK(exists(dir, ".result.journal") && !exists(dir, ".result.journal.new"));
   write_times(o, &m, 0, 3);
   CHECK(!exists(dir, "result.h5") && !exists(dir, "summary.csv"));
   check_csv(dir, ".summary.csv.partial", &m, 3); /* flushed after every write */
   CHECK(gs_output_finish(o, 1, &err) == GS_OK);
   CHECK(exists(dir, "result.h5") && exists(dir, "summary.csv"));
   CHECK(!exists(dir, ".result.h5.partial") && !exists(dir, ".summary.csv.partial"));
+  CHECK(!exists(dir, ".result.journal"));
   check_result(dir, &m, 3);
   check_csv(dir, "summary.csv", &m, 3);
 
@@ -268,7 +278,7 @@ static gs_output *open_in(const char *name, char *dir, gs_model *m, int dim, siz
   snprintf(dir, 256, "%s/%s", base, name);
   make_model(m, dim, ncomp, nsolid);
   gs_error err;
-  gs_output *o = gs_output_open(dir, m, "", "case.yaml", &err);
+  gs_output *o = gs_output_open(dir, m, "", "case.yaml", NRES, &err);
   CHECK(o != NULL);
   if (!o) fprintf(stderr, "%s\n", err.msg);
   return o;
@@ -386,7 +396,7 @@ static void test_deferred(size_t nsolid, double checkpoint) {
    * row (3 x 4096 values: 3 pieces), the first write of each small series
    * (/time, /ledger and 10 summary columns), the pending rows */
   CHECK(gs_output_parts(od) == 3 + (nsolid == 4096 ? 3 : 1) + 12 + 1);
-  gs_deferred_output *q = gs_deferred_output_create(od, &m2, depth, &err);
+  gs_deferred_output *q = gs_deferred_output_create(od, &m2, NRES, depth, &err);
   CHECK(q != NULL);
   if (!q) return;
   CHECK(!gs_deferred_output_pending(q));
@@ -395,7 +405,9 @@ static void test_deferred(size_t nsolid, double checkpoint) {
   int pieces = 0;
   for (int k = 0; k < ntimes; k++) {
     fill(&m2, k, y, y + m2.nstate);
-    CHECK(gs_deferred_output_push(q, time_of(k), y, &err) == GS_OK);
+    double res[NRES];
+    fill_resume(k, res);
+    CHECK(gs_deferred_output_push(q, time_of(k), y, res, &err) == GS_OK);
     /* the copy is what gets written, not the caller's buffer */
     memset(y, 0xff, (m2.nstate + m2.nledger) * sizeof *y);
     CHECK(gs_deferred_output_pending(q));
@@ -425,9 +437,9 @@ static void test_parts_misused(void) {
   if (!o) return;
   write_times(o, &m, 0, 2);
   double *y = calloc(m.nstate + m.nledger, sizeof *y);
-  CHECK(gs_output_write_part(o, &m, 5.0, y, y + m.nstate, 1, &err) == GS_EINPUT);
+  CHECK(gs_output_write_part(o, &m, 5.0, y, y + m.nstate, y, 1, &err) == GS_EINPUT);
   CHECK(strstr(err.msg, "part 1") && strstr(err.msg, "part 0 was due"));
-  CHECK(gs_output_write_part(o, &m, 5.0, y, y + m.nstate, 0, &err) == GS_OK);
+  CHECK(gs_output_write_part(o, &m, 5.0, y, y + m.nstate, y, 0, &err) == GS_OK);
   CHECK(gs_output_finish(o, 1, &err) != GS_OK);
   CHECK(strstr(err.msg, "only partly written") != NULL);
   CHECK(!exists(dir, "result.h5") && exists(dir, ".result.h5.partial"));
@@ -456,7 +468,7 @@ static void killed_run(const char *dir, const gs_model *m) {
   pid_t pid = fork();
   if (pid == 0) {
     gs_error err;
-    gs_output *o = gs_output_open(dir, m, "case", "case.yaml", &err);
+    gs_output *o = gs_output_open(dir, m, "case", "case.yaml", NRES, &err);
     if (!o) _exit(2);
     write_times(o, m, 0, 2);
     char p[512];
@@ -471,32 +483,39 @@ static void killed_run(const char *dir, const gs_model *m) {
   CHECK(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
 }
 
-/* Simulates a kill inside gs_output_write after /number was extended. */
-static void tear_number(const char *dir) {
+/* What a kill in the middle of an HDF5 flush may leave: a file HDF5 cannot
+ * read any more.  The resume never reads it. */
+static void tear_h5(const char *dir) {
   char p[512];
   snprintf(p, sizeof p, "%s/.result.h5.partial", dir);
-  hid_t f = H5Fopen(p, H5F_ACC_RDWR, H5P_DEFAULT);
-  CHECK(f >= 0);
-  hid_t d = H5Dopen2(f, "/number", H5P_DEFAULT), s = H5Dget_space(d);
-  hsize_t dims[8];
-  H5Sget_simple_extent_dims(s, dims, NULL);
-  dims[0]++;
-  CHECK(H5Dset_extent(d, dims) >= 0);
-  H5Sclose(s), H5Dclose(d);
-  CHECK(H5Fclose(f) >= 0);
+  CHECK(truncate(p, 1000) == 0);
 }
 
-static void check_refused(const char *dir, int dim, size_t ncomp, size_t nsolid, const char *want) {
+/* A kill while a row was being appended to the journal: half a record. */
+static void tear_journal(const char *dir, size_t bytes) {
+  char p[512];
+  snprintf(p, sizeof p, "%s/.result.journal", dir);
+  FILE *f = fopen(p, "ab");
+  CHECK(f != NULL);
+  if (!f) return;
+  static const unsigned char junk[64] = {0x52, 0x4f, 0x57, 0, 1, 2, 3, 4, 2};
+  CHECK(fwrite(junk, 1, bytes, f) == bytes);
+  fclose(f);
+}
+
+static void check_refused(const char *dir, int dim, size_t ncomp, size_t nsolid, size_t nres,
+                          const char *want) {
   gs_model m;
   make_model(&m, dim, ncomp, nsolid);
   double *y = calloc(m.nstate, sizeof *y), *led = calloc(m.nledger, sizeof *led), t = -1;
+  double res[NRES + 1];
   gs_error err = {0, ""};
-  gs_output *o = gs_output_resume(dir, &m, &t, y, led, &err);
+  gs_output *o = gs_output_resume(dir, &m, nres, &t, y, led, res, &err);
   CHECK(o == NULL);
   if (o) gs_output_finish(o, 0, &err);
   CHECK(strstr(err.msg, want) != NULL);
   if (!strstr(err.msg, want)) fprintf(stderr, "got: %s\nwant: %s\n", err.msg, want);
-  CHECK(exists(dir, ".result.h5.partial")); /* a refused resume keeps the run's data */
+  CHECK(exists(dir, ".result.journal")); /* a refused resume keeps the run's data */
   free(y);
   free(led);
   gs_model_free(&m);
@@ -508,39 +527,94 @@ static void test_resume(void) {
   gs_model m;
   make_model(&m, 2, 2, 20);
   killed_run(dir, &m);
-  CHECK(exists(dir, ".result.h5.partial") && !exists(dir, "result.h5"));
-  tear_number(dir);
+  CHECK(exists(dir, ".result.journal") && !exists(dir, "result.h5"));
+  tear_h5(dir);
+  tear_journal(dir, 9);
 
   snprintf(want, sizeof want,
-           "cannot resume: %s/.result.h5.partial was written for a different grid (axis 'solid' "
+           "cannot resume: %s/.result.journal was written for a different grid (axis 'solid' "
            "has 20 cells, case has 30)",
            dir);
-  check_refused(dir, 2, 2, 30, want);
-  check_refused(dir, 2, 3, 20, "(2 compartments, case has 3)");
-  check_refused(dir, 3, 2, 20, "(2 axes, case has 3)");
+  check_refused(dir, 2, 2, 30, NRES, want);
+  check_refused(dir, 2, 3, 20, NRES, "(2 compartments, case has 3)");
+  check_refused(dir, 3, 2, 20, NRES, "(2 axes, case has 3)");
+  check_refused(dir, 2, 2, 20, NRES + 1, "keeping 3 integrator values per output time, this case keeps 4");
 
   gs_error err;
   double *y = calloc(m.nstate, sizeof *y), *led = calloc(m.nledger, sizeof *led), t = -1;
   double *wy = malloc(m.nstate * sizeof *wy), *wl = malloc(m.nledger * sizeof *wl);
-  gs_output *o = gs_output_resume(dir, &m, &t, y, led, &err);
+  double res[NRES], wres[NRES];
+  gs_output *o = gs_output_resume(dir, &m, NRES, &t, y, led, res, &err);
   CHECK(o != NULL);
   if (!o) {
     fprintf(stderr, "%s\n", err.msg);
     return;
   }
   fill(&m, 1, wy, wl);
+  fill_resume(1, wres);
   CHECK(t == time_of(1));
   CHECK(!memcmp(y, wy, m.nstate * sizeof *y));
   CHECK(!memcmp(led, wl, m.nledger * sizeof *led));
+  CHECK(!memcmp(res, wres, sizeof res));
   check_csv(dir, ".summary.csv.partial", &m, 2); /* stray rows gone */
-  /* on past the end of the first chunk of /number (51 times), which the
-   * resume refilled from the file */
+  /* on past the end of the first chunk of /number (51 times) */
   write_times(o, &m, 2, 60);
   CHECK(gs_output_finish(o, 1, &err) == GS_OK);
-  check_result(dir, &m, 60); /* the torn /number row was dropped */
+  check_result(dir, &m, 60);
   check_csv(dir, "summary.csv", &m, 60);
-  CHECK(!exists(dir, ".result.h5.partial"));
+  CHECK(!exists(dir, ".result.h5.partial") && !exists(dir, ".result.journal"));
   free(y), free(led), free(wy), free(wl);
+  gs_model_free(&m);
+}
+
+/* Rows appended but never committed are not resumed: a journal whose first
+ * commit record was torn holds nothing to resume. */
+static void test_uncommitted(void) {
+  char dir[256], p[512];
+  snprintf(dir, sizeof dir, "%s/uncommitted", base);
+  gs_model m;
+  make_model(&m, 1, 1, 4);
+  killed_run(dir, &m);
+  snprintf(p, sizeof p, "%s/.result.journal", dir);
+  struct stat st;
+  CHECK(stat(p, &st) == 0);
+  /* cut the last commit record (16 bytes) in half: only the first output
+   * time stays committed */
+  CHECK(truncate(p, st.st_size - 8) == 0);
+  double y[4], led[2], res[NRES], t = -1;
+  gs_error err;
+  gs_output *o = gs_output_resume(dir, &m, NRES, &t, y, led, res, &err);
+  CHECK(o != NULL && t == time_of(0));
+  if (o) CHECK(gs_output_finish(o, 0, &err) == GS_OK);
+  gs_model_free(&m);
+}
+
+/* A committed row whose bytes changed (a torn write that the commit record
+ * after it survived, or a disk error) fails its checksum: the resume rolls
+ * back to the commit before it. */
+static void test_corrupt_row(void) {
+  char dir[256], p[512];
+  snprintf(dir, sizeof dir, "%s/corrupt", base);
+  gs_model m;
+  make_model(&m, 1, 1, 4);
+  killed_run(dir, &m);
+  snprintf(p, sizeof p, "%s/.result.journal", dir);
+  struct stat st;
+  CHECK(stat(p, &st) == 0);
+  FILE *f = fopen(p, "r+b");
+  CHECK(f != NULL);
+  if (f) { /* a byte of the last row's values, just before its commit record */
+    CHECK(fseek(f, st.st_size - 16 - 3, SEEK_SET) == 0);
+    int c = fgetc(f);
+    CHECK(fseek(f, st.st_size - 16 - 3, SEEK_SET) == 0);
+    fputc(c ^ 0x10, f);
+    fclose(f);
+  }
+  double y[4], led[2], res[NRES], t = -1;
+  gs_error err;
+  gs_output *o = gs_output_resume(dir, &m, NRES, &t, y, led, res, &err);
+  CHECK(o != NULL && t == time_of(0));
+  if (o) CHECK(gs_output_finish(o, 0, &err) == GS_OK);
   gs_model_free(&m);
 }
 
@@ -550,12 +624,18 @@ static void test_nothing_to_resume(void) {
   CHECK(mkdir(dir, 0777) == 0);
   gs_model m;
   make_model(&m, 1, 1, 4);
-  double y[4], led[2], t;
+  double y[4], led[2], res[NRES], t;
   gs_error err = {0, ""};
-  CHECK(gs_output_resume(dir, &m, &t, y, led, &err) == NULL);
+  CHECK(gs_output_resume(dir, &m, NRES, &t, y, led, res, &err) == NULL);
   CHECK(err.code == GS_EIO);
-  snprintf(want, sizeof want, "nothing to resume in %s (no .result.h5.partial)", dir);
-  CHECK(!strcmp(err.msg, want));
+  snprintf(want, sizeof want, "nothing to resume in %s (no .result.journal", dir);
+  CHECK(!strncmp(err.msg, want, strlen(want)));
+  /* opened, nothing written yet */
+  gs_output *o = gs_output_open(dir, &m, "", "c", NRES, &err);
+  CHECK(o != NULL);
+  CHECK(gs_output_resume(dir, &m, NRES, &t, y, led, res, &err) == NULL);
+  CHECK(strstr(err.msg, "holds no committed output time yet") != NULL);
+  if (o) gs_output_finish(o, 0, &err);
   gs_model_free(&m);
 }
 
@@ -569,7 +649,7 @@ static void test_bad_dir(void) {
   gs_model m;
   make_model(&m, 1, 1, 4);
   gs_error err = {0, ""};
-  CHECK(gs_output_open(dir, &m, "", "c", &err) == NULL);
+  CHECK(gs_output_open(dir, &m, "", "c", NRES, &err) == NULL);
   CHECK(err.code == GS_EIO && strstr(err.msg, dir) != NULL);
   gs_model_free(&m);
 }
@@ -592,6 +672,8 @@ int main(void) {
   test_parts_misused();
   test_abort();
   test_resume();
+  test_uncommitted();
+  test_corrupt_row();
   test_nothing_to_resume();
   test_bad_dir();
   if (!check_failures && !getenv("GS_TEST_KEEP")) {

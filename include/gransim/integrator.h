@@ -78,6 +78,9 @@ typedef struct gs_integrator_stats {
   double last_step;
 } gs_integrator_stats;
 
+/* Values an integrator's mark (below) writes. */
+#define GS_INTEGRATOR_MARK 4
+
 typedef struct gs_integrator_type {
   const char *name;
   const char *summary;
@@ -104,6 +107,18 @@ typedef struct gs_integrator_type {
    * replaced, keeping what carry reads, so that its successor can reuse
    * that memory.  After it only carry and free may be called. */
   void (*release)(void *self);
+  /* Exact resume.  mark is called at every output time, after the advance
+   * that reached it: the integrator drops what it keeps beyond a few numbers
+   * (GSL's end-of-step derivative; CVODE's whole history, restarted at the
+   * next advance) and writes those numbers (its step size, its controller's
+   * state; GS_INTEGRATOR_MARK values, 0 where unused) into state.  resume
+   * gives them to an integrator created afresh, which then takes exactly the
+   * steps the marked one takes from there (all zeros: a fresh integrator's,
+   * as at the start time).  The result files keep them with every output
+   * time, so a run killed and resumed gives the uninterrupted run's results
+   * bit for bit.  Both required. */
+  void (*mark)(void *self, double *state);
+  void (*resume)(void *self, const double *state);
   /* Capabilities, which the run driver and the case reader consult instead
    * of names: */
   int ranks;            /* 1: integrates a state spread over MPI ranks (gs_ode.reduce_max) */

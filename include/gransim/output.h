@@ -36,10 +36,12 @@ typedef struct gs_output gs_output;
 /* Create DIR if needed and open the partial files.  case_text/case_name are
  * stored as the case echo. */
 gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_text,
-                          const char *case_name, gs_error *err);
-/* Append one output time: state y (nstate) and ledger (nledger). */
+                          const char *case_name, size_t nresume, gs_error *err);
+/* Append one output time: state y (nstate), ledger (nledger) and the
+ * integrators' state (nresume values, as given to gs_output_open; NULL when
+ * 0), which only the journal keeps, for a resume. */
 int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
-                    const double *ledger, gs_error *err);
+                    const double *ledger, const double *resume, gs_error *err);
 /* The same in gs_output_parts(o) pieces, for a caller that fills idle
  * moments (an MPI rank waiting for the others): a compartment's summary and
  * CSV row, one large series' row (the largest piece: deflating it takes the
@@ -50,7 +52,7 @@ int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
  * publish an output time that is only partly written. */
 int gs_output_parts(const gs_output *o);
 int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double *y,
-                         const double *ledger, int part, gs_error *err);
+                         const double *ledger, const double *resume, int part, gs_error *err);
 /* Commit buffered output times once `seconds` of wall time have passed since
  * the last commit (and when 64 MiB are buffered, and at the end); 0 (the
  * default) commits every output time.  A killed run keeps what was committed. */
@@ -59,14 +61,17 @@ void gs_output_set_checkpoint(gs_output *o, double seconds);
  * held back by the caller should be written now, so that a killed run loses
  * no more than the checkpoint promises. */
 int gs_output_commit_due(const gs_output *o);
-/* Checkpoint/restart: reopen the partial files left in DIR by an interrupted
- * run of the same case (same grid; checked), read back the last written time,
- * state and ledger into *t, y, ledger, and continue appending after it.
- * Fails with a clear message if there is nothing to resume or the grid differs. */
-gs_output *gs_output_resume(const char *dir, const gs_model *m, double *t, double *y,
-                            double *ledger, gs_error *err);
-/* ok = 1: close and rename into place; ok = 0: close and delete the partial files.
- * Frees o in both cases. */
+/* Checkpoint/restart: read the journal (DIR/.result.journal) left by an
+ * interrupted run of the same case (same grid and nresume; checked) up to its
+ * last commit, rebuild the partial files from it, read back the last
+ * committed time, state, ledger and integrator state into *t, y, ledger,
+ * resume, and continue appending after it.  Fails with a clear message if
+ * there is nothing to resume or the grid differs. */
+gs_output *gs_output_resume(const char *dir, const gs_model *m, size_t nresume, double *t,
+                            double *y, double *ledger, double *resume, gs_error *err);
+/* ok = 1: close and rename into place, then delete the journal (a kill
+ * before that leaves it, and --resume publishes again); ok = 0: close and
+ * delete the partial files and the journal.  Frees o in both cases. */
 int gs_output_finish(gs_output *o, int ok, gs_error *err);
 
 #ifdef __cplusplus

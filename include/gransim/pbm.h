@@ -167,6 +167,11 @@ struct gs_eval {
    * discrete choices once per time value, so that the Newton iterations of
    * an implicit step (same t, several y) see one smooth function. */
   int in_integrator;
+  /* Counts the output times passed: a choice is kept only within one era,
+   * so that the first evaluation after an output time chooses from the
+   * state there, as a run resumed from that time does (a Runge-Kutta stage
+   * evaluated at the output time with another y may have chosen before). */
+  unsigned long era;
 };
 
 /* The context of an evaluation of the whole model in the full layout,

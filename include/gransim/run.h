@@ -28,6 +28,11 @@ typedef struct gs_run_view {
   double wall_seconds; /* since the run started */
   long steps;          /* steps taken so far (summed over compartments with per-compartment steps) */
   int resumed;         /* the run continues an interrupted one (opt->resume) */
+  /* At an output time: the integrators' state (nresume values) that a run
+   * resumed from this time needs besides Y to take the same steps; the
+   * output observer keeps it in the journal of the result files. */
+  const double *resume;
+  size_t nresume;
 } gs_run_view;
 
 /* An observer of a run: registered type, called on the process that holds the

@@ -373,9 +373,10 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
     rc = gs_error_set(err, GS_EINPUT, "%s: no %s (coupling.impacts.wall names no wall of the DEM case?)", dem, impname);
   gs_case c;
   memset(&c, 0, sizeof c);
-  /* the PBM resumes from its partial files; a finished one on tables that were
+  /* the PBM resumes from its journal (a kill even while publishing leaves it:
+   * docs/design-notes.md); a finished one on tables that were
    * not rerun is complete; otherwise (new tables) it starts again */
-  int pbm_resume = opt->resume && exists(out, ".result.h5.partial");
+  int pbm_resume = opt->resume && exists(out, ".result.journal");
   if (!rc && have && opt->resume && !pbm_resume && exists(out, "result.h5")) {
     if (opt->progress) fprintf(stderr, "gransim couple: --resume: PBM stage complete in %s, nothing to do\n", out);
     couple_free(&k);

@@ -289,6 +289,7 @@ static void gs_cvode_counters(const gs_cvode *self, gs_integrator_stats *s) {
 static int gs_cvode_reinit(gs_cvode *self, double t, const double *y, gs_error *err) {
   gs_cvode_counters(self, &self->base);
   memcpy(N_VGetArrayPointer(self->y), y, self->n * sizeof *y);
+  self->base.rhs_evals -= self->jtimes_evals; /* counted once, in gs_cvode_counters */
   int rc = gs_cvode_flag(self, CVodeReInit(self->mem, t, self->y), "CVodeReInit", err);
   if (!rc) self->needs_reinit = 0;
   return rc;
@@ -370,6 +371,23 @@ static void gs_cvode_stats(const void *vself, gs_integrator_stats *stats) {
   gs_cvode_counters(vself, stats);
 }
 
+/* CVODE's history (Nordsieck array, order, step, error weights) cannot be
+ * handed to another CVODE, so every output time restarts it (CVodeReInit at
+ * the next advance, its own first-step estimate), exactly as a resumed run
+ * starts (docs/performance.md: what the restarts cost; starting from the
+ * step it would have tried next failed the error test more often and cost
+ * more). */
+static void gs_cvode_mark(void *vself, double *state) {
+  gs_cvode *self = vself;
+  self->needs_reinit = 1;
+  for (int i = 0; i < GS_INTEGRATOR_MARK; i++) state[i] = 0;
+}
+
+static void gs_cvode_resume(void *vself, const double *state) {
+  (void)state;
+  ((gs_cvode *)vself)->needs_reinit = 1;
+}
+
 const gs_integrator_type gs_integrator_cvode = {
     .name = "cvode",
     .summary = "SUNDIALS CVODE BDF for stiff cases, linear_solver dense | gmres | auto",
@@ -378,4 +396,6 @@ const gs_integrator_type gs_integrator_cvode = {
     .advance = gs_cvode_advance,
     .get_stats = gs_cvode_stats,
     .free = gs_cvode_free,
+    .mark = gs_cvode_mark,
+    .resume = gs_cvode_resume,
 };

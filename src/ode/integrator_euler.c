@@ -203,6 +203,22 @@ static void gs_euler_carry(void *vto, const void *vfrom) {
   to->interval_h_max = from->interval_h_max;
 }
 
+/* At an output time: the step and its lower bound (set from the first
+ * output interval) are all the steps after it depend on. */
+static void gs_euler_mark(void *vself, double *state) {
+  const gs_euler *self = vself;
+  state[0] = self->dt;
+  state[1] = self->dt_min;
+  state[2] = state[3] = 0;
+}
+
+static void gs_euler_resume(void *vself, const double *state) {
+  gs_euler *self = vself;
+  if (!(state[0] > 0)) return; /* the start time: a fresh integrator's */
+  self->dt = state[0];
+  self->dt_min = state[1];
+}
+
 const gs_integrator_type gs_integrator_euler = {
     .name = "euler",
     .summary = "adaptive explicit Euler of Sampat et al. (2018), dt kept below safety / max(-f_i / y_i)",
@@ -213,6 +229,8 @@ const gs_integrator_type gs_integrator_euler = {
     .free = gs_euler_free,
     .carry = gs_euler_carry,
     .release = gs_euler_release,
+    .mark = gs_euler_mark,
+    .resume = gs_euler_resume,
     .ranks = 1,
     .exact_invariants = 1,
 };

@@ -484,6 +484,27 @@ static void gs_rk_carry(void *vto, const void *vfrom) {
   to->interval = from->interval;
 }
 
+/* At an output time: the step size and the controller's memory of a
+ * rejection stay; GSL's end-of-step derivative goes (the first step after a
+ * resume evaluates f at (t, y) again, and so does this one now: at the end
+ * of a step that derivative was taken at t0 + h, which may differ from the
+ * output time by an ulp). */
+static void gs_rk_mark(void *vself, double *state) {
+  gs_rk *self = vself;
+  gsl_odeiv2_evolve_reset(self->evolve);
+  state[0] = self->h;
+  state[1] = self->rejected_h;
+  state[2] = self->rejected_error;
+  state[3] = 0;
+}
+
+static void gs_rk_resume(void *vself, const double *state) {
+  gs_rk *self = vself;
+  if (state[0] > 0) self->h = state[0]; /* 0: the start time, a fresh integrator's */
+  self->rejected_h = state[1];
+  self->rejected_error = state[2];
+}
+
 const gs_integrator_type gs_integrator_rk = {
     .name = "rk",
     .summary = "adaptive embedded Runge-Kutta from GSL, variant rkf45 | rkck | rk8pd",
@@ -494,6 +515,8 @@ const gs_integrator_type gs_integrator_rk = {
     .free = gs_rk_free,
     .carry = gs_rk_carry,
     .release = gs_rk_release,
+    .mark = gs_rk_mark,
+    .resume = gs_rk_resume,
     .ranks = 1,
     .per_compartment = 1,
     .exact_invariants = 1,

@@ -8,7 +8,8 @@
 struct gs_deferred_output {
   gs_output *out;
   const gs_model *m;
-  size_t n;        /* values per held state: m->nstate + m->nledger */
+  size_t n;        /* values per held state: m->nstate + m->nledger + nresume */
+  size_t nresume;  /* integrator state values, after the ledger */
   int depth;       /* slots */
   int first, held; /* oldest slot, slots in use */
   int part;        /* next piece of the oldest */
@@ -23,13 +24,14 @@ static double wall_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-gs_deferred_output *gs_deferred_output_create(gs_output *o, const gs_model *m, int depth,
-                                              gs_error *err) {
+gs_deferred_output *gs_deferred_output_create(gs_output *o, const gs_model *m, size_t nresume,
+                                              int depth, gs_error *err) {
   gs_deferred_output *q = gs_calloc(1, sizeof *q, err);
   if (!q) return NULL;
   q->out = o;
   q->m = m;
-  q->n = m->nstate + m->nledger;
+  q->nresume = nresume;
+  q->n = m->nstate + m->nledger + nresume;
   q->depth = depth > 0 ? depth : 1;
   q->t = gs_malloc((size_t)q->depth * sizeof *q->t, err);
   q->y = gs_malloc((size_t)q->depth * q->n * sizeof *q->y, err);
@@ -50,7 +52,8 @@ int gs_deferred_output_work(gs_deferred_output *q, gs_error *err) {
   if (!gs_deferred_output_pending(q)) return GS_OK;
   const double start = wall_seconds();
   const double *y = q->y + (size_t)q->first * q->n;
-  int rc = gs_output_write_part(q->out, q->m, q->t[q->first], y, y + q->m->nstate, q->part, err);
+  const double *ledger = y + q->m->nstate, *resume = ledger + q->m->nledger;
+  int rc = gs_output_write_part(q->out, q->m, q->t[q->first], y, ledger, resume, q->part, err);
   q->seconds += wall_seconds() - start;
   if (rc) {
     q->failed = 1;
@@ -72,7 +75,8 @@ static int finish_oldest(gs_deferred_output *q, gs_error *err) {
   return rc;
 }
 
-int gs_deferred_output_push(gs_deferred_output *q, double t, const double *y, gs_error *err) {
+int gs_deferred_output_push(gs_deferred_output *q, double t, const double *y,
+                            const double *resume, gs_error *err) {
   if (q->failed) return gs_error_set(err, GS_EIO, "result files: an earlier write failed");
   if (q->held == q->depth) {
     int rc = finish_oldest(q, err);
@@ -80,7 +84,9 @@ int gs_deferred_output_push(gs_deferred_output *q, double t, const double *y, gs
   }
   const int slot = (q->first + q->held) % q->depth;
   q->t[slot] = t;
-  memcpy(q->y + (size_t)slot * q->n, y, q->n * sizeof *y);
+  const size_t nstate = q->n - q->nresume;
+  memcpy(q->y + (size_t)slot * q->n, y, nstate * sizeof *y);
+  if (q->nresume) memcpy(q->y + (size_t)slot * q->n + nstate, resume, q->nresume * sizeof *y);
   q->held++;
   return GS_OK;
 }

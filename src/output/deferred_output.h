@@ -16,12 +16,14 @@
 typedef struct gs_deferred_output gs_deferred_output;
 
 /* Up to `depth` output times held for o (which stays the caller's), each a
- * full state and ledger of m (m->nstate + m->nledger values). */
-gs_deferred_output *gs_deferred_output_create(gs_output *o, const gs_model *m, int depth,
-                                              gs_error *err);
-/* Hold output time t with state y (ledger after it); when every slot is
- * taken, the oldest is written to the end first. */
-int gs_deferred_output_push(gs_deferred_output *q, double t, const double *y, gs_error *err);
+ * full state and ledger of m (m->nstate + m->nledger values) and nresume
+ * values of integrator state (gs_output_write). */
+gs_deferred_output *gs_deferred_output_create(gs_output *o, const gs_model *m, size_t nresume,
+                                              int depth, gs_error *err);
+/* Hold output time t with state y (ledger after it) and integrator state
+ * resume; when every slot is taken, the oldest is written to the end first. */
+int gs_deferred_output_push(gs_deferred_output *q, double t, const double *y,
+                            const double *resume, gs_error *err);
 /* 1 while output times wait to be written (and nothing has failed). */
 int gs_deferred_output_pending(const gs_deferred_output *q);
 /* Write the next piece of the oldest held output time. */

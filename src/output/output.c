@@ -1,23 +1,21 @@
 /* Result files: DIR/result.h5 and DIR/summary.csv (see include/gransim/output.h).
  *
  * Crash safety.  Everything is written under the partial names and renamed
- * only by gs_output_finish(ok = 1).  Three rules keep a killed run resumable:
+ * only by gs_output_finish(ok = 1); the skeleton (grid, case, empty datasets)
+ * is built under DIR/.result.h5.new and renamed to .result.h5.partial once
+ * complete.  What a resume trusts is not the HDF5 file: HDF5 without SWMR
+ * rewrites its metadata in place and in no particular order, and a kill in
+ * the middle of a flush can leave committed rows unreadable.  Every output
+ * time also goes to the journal DIR/.result.journal (journal.h: append-only,
+ * checksummed records, a commit record per commit), and gs_output_resume
+ * builds fresh partial files from the journal's committed rows, written
+ * again through the ordinary path.  The journal is removed only after both
+ * final renames, so a kill while publishing leaves it, and a resume
+ * publishes again.
  *
- * 1. Two-phase commit.  Without SWMR, HDF5 writes dirty metadata and chunks in
- *    no particular order, so no dataset's length can mark what is complete (a
- *    killed run was seen to leave /time longer than /ledger, or rows whose data
- *    never reached the disk).  gs_output_write writes every dataset, flushes,
- *    and only then raises the root attribute "ntimes" and flushes again.
- * 2. A killed file is never modified.  Its uncommitted rows may point at file
- *    space beyond the end recorded in the superblock; freeing or rewriting them
- *    fails ("addr overflow").  Resume therefore opens the old partial read-only,
- *    copies the committed rows into a fresh file and renames that over it.
- * 3. The skeleton (grid, case, empty datasets) is built under DIR/.result.h5.new
- *    and renamed to .result.h5.partial only once complete, so a run killed
- *    while opening leaves nothing that looks resumable.
- * The CSV's rows are formatted as output times come and flushed at each
- * commit; a killed run's partial CSV may hold more rows than were committed,
- * so resume regenerates it from /summary, and it then agrees with result.h5.
+ * Commits still write every dataset, flush, raise the root attribute
+ * "ntimes" and flush again, so that the partial file can be read while the
+ * run goes on; then the journal's commit record is appended.
  *
  * Checkpoints.  Output times are committed together (two flushes for several
  * rows) once `checkpoint` seconds of
@@ -30,13 +28,9 @@
  * rows each); the large ones (/number, /carried), chunked by up to 64 KiB of
  * output times (a row a chunk when larger), are written chunk by chunk as
  * each fills (partly filled at a commit) and become part of the file only
- * when "ntimes" covers them.  A chunk goes to new file space when first
- * written; one written partly filled at a commit is rewritten in place as
- * it fills, with the same bytes for its committed rows, so a kill in the
- * middle leaves those rows as they were.  The metadata cache does not evict
- * (h5_open), so the chunk index and extents reach the disk only at the
- * flushes of a commit, as in rule 1. */
-#include "gransim/distribution.h"
+ * when "ntimes" covers them.  The metadata cache does not evict (h5_create),
+ * so the chunk index and extents reach the disk only at the flushes of a
+ * commit. */
 #include "gransim/output.h"
 
 #include <errno.h>
@@ -50,21 +44,25 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "gransim/distribution.h"
+#include "gransim/version.h"
 #include "output/chunk_writer.h"
 #include "output/csv_number.h"
 #include "output/h5_setup.h"
-#include "gransim/version.h"
+#include "output/journal.h"
+#include "output/journal_header.h"
 
 
 #define H5_PARTIAL ".result.h5.partial"
 #define H5_NEW ".result.h5.new"
 #define CSV_PARTIAL ".summary.csv.partial"
+#define JOURNAL ".result.journal"
+#define JOURNAL_NEW ".result.journal.new"
 #define NCOL_FIXED 8                           /* time .. d90 */
 #define NCOL_MAX (NCOL_FIXED + 2 * GS_MAX_VOL) /* + mean_<coordinate>, total_<coordinate> */
 #define NSERIES_MAX (4 + NCOL_MAX)             /* /time, /number, /ledger, /summary/<col>, /carried */
 #define RANK_MAX (3 + GS_MAX_DIM)              /* /carried: time, comp, quantity, axes */
 #define CHUNK_ROWS 64                          /* time rows per chunk of the small series */
-#define BLOCK_VALUES 65536                     /* doubles per read when copying or rebuilding */
 #define PENDING_BYTES ((size_t)64 << 20)       /* output times held before a commit, at most */
 #define PENDING_FIRST_BYTES ((size_t)64 << 10) /* the pending block's first size */
 #define DEFLATE_LEVEL 1                        /* zlib level of the large series */
@@ -72,7 +70,9 @@
 enum { S_TIME, S_NUMBER, S_LEDGER, S_SUMMARY };
 
 struct gs_output {
-  char *dir, *h5_new, *h5_tmp, *h5_final, *csv_tmp, *csv_final;
+  char *dir, *h5_new, *h5_tmp, *h5_final, *csv_tmp, *csv_final, *journal_path, *journal_new;
+  gs_journal *journal; /* every output time, what a resume reads (journal.h) */
+  size_t nresume;      /* integrator state values per output time, in the journal only */
   const char *h5_path; /* the name the open HDF5 file has now, for messages */
   int published;       /* the open file is .result.h5.partial (no longer .new) */
   hid_t file;
@@ -171,24 +171,6 @@ static herr_t set_str_attr(hid_t loc, const char *name, const char *value) {
   return st;
 }
 
-/* Reads a fixed-length string attribute into a new string (free it). */
-static char *get_str_attr(hid_t loc, const char *name) {
-  hid_t attr = H5Aopen(loc, name, H5P_DEFAULT);
-  if (attr < 0) return NULL;
-  hid_t type = H5Aget_type(attr);
-  size_t size = type >= 0 && H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) == 0
-                    ? H5Tget_size(type)
-                    : 0;
-  char *s = size ? calloc(size + 1, 1) : NULL;
-  if (s && H5Aread(attr, type, s) < 0) {
-    free(s);
-    s = NULL;
-  }
-  if (type >= 0) H5Tclose(type);
-  H5Aclose(attr);
-  return s;
-}
-
 static herr_t set_i64_attr(hid_t loc, const char *name, long long value) {
   hid_t space = H5Screate(H5S_SCALAR);
   if (space < 0) return -1;
@@ -205,14 +187,6 @@ static herr_t put_i64_attr(hid_t loc, const char *name, long long value) {
   hid_t attr = H5Aopen(loc, name, H5P_DEFAULT);
   if (attr < 0) return -1;
   herr_t st = H5Awrite(attr, H5T_NATIVE_LLONG, &value);
-  if (H5Aclose(attr) < 0) st = -1;
-  return st;
-}
-
-static herr_t get_i64_attr(hid_t loc, const char *name, long long *value) {
-  hid_t attr = H5Aopen(loc, name, H5P_DEFAULT);
-  if (attr < 0) return -1;
-  herr_t st = H5Aread(attr, H5T_NATIVE_LLONG, value);
   if (H5Aclose(attr) < 0) st = -1;
   return st;
 }
@@ -484,15 +458,6 @@ static int write_rows(gs_output *o, int i, hsize_t start, hsize_t count, const d
   return st < 0 ? h5_error(err, o->h5_path, "write dataset %s", o->sname[i]) : GS_OK;
 }
 
-static int read_rows(gs_output *o, int i, hsize_t start, hsize_t count, double *buf,
-                     gs_error *err) {
-  hid_t fs = H5I_INVALID_HID, ms = H5I_INVALID_HID;
-  herr_t st = select_rows(o->ds[i], start, count, &fs, &ms);
-  if (st >= 0) st = H5Dread(o->ds[i], H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, buf);
-  close_spaces(fs, ms);
-  return st < 0 ? h5_error(err, o->h5_path, "read dataset %s", o->sname[i]) : GS_OK;
-}
-
 /* ---- summary.csv ------------------------------------------------------------ */
 
 static int csv_error(gs_output *o, gs_error *err) {
@@ -515,13 +480,6 @@ static int csv_row(gs_output *o, const double *sbuf, size_t stride, size_t first
   }
   *p++ = '\n';
   return fwrite(line, 1, (size_t)(p - line), o->csv) == (size_t)(p - line) ? GS_OK : csv_error(o, err);
-}
-
-/* One row per compartment. */
-static int csv_rows(gs_output *o, const double *sbuf, size_t stride, size_t first, gs_error *err) {
-  int rc = GS_OK;
-  for (size_t j = 0; j < o->ncomp && !rc; j++) rc = csv_row(o, sbuf, stride, first, j, err);
-  return rc;
 }
 
 static int csv_flush(gs_output *o, gs_error *err) {
@@ -548,6 +506,9 @@ static void output_free(gs_output *o) {
   free(o->h5_final);
   free(o->csv_tmp);
   free(o->csv_final);
+  free(o->journal_path);
+  free(o->journal_new);
+  gs_journal_close(o->journal, NULL);
   free(o->sbuf);
   free(o->pending_block);
   for (int i = 0; i < NSERIES_MAX; i++) free(o->held[i]);
@@ -555,7 +516,7 @@ static void output_free(gs_output *o) {
   free(o);
 }
 
-static gs_output *output_alloc(const char *dir, const gs_model *m, gs_error *err) {
+static gs_output *output_alloc(const char *dir, const gs_model *m, size_t nresume, gs_error *err) {
   const gs_grid *g = &m->grid;
   if (check_axis_names(g, err)) return NULL;
   for (int q = 0; q < m->ncarried; q++)
@@ -575,10 +536,13 @@ static gs_output *output_alloc(const char *dir, const gs_model *m, gs_error *err
   o->h5_final = path_join(dir, "result.h5", err);
   o->csv_tmp = path_join(dir, CSV_PARTIAL, err);
   o->csv_final = path_join(dir, "summary.csv", err);
+  o->journal_path = path_join(dir, JOURNAL, err);
+  o->journal_new = path_join(dir, JOURNAL_NEW, err);
+  o->nresume = nresume;
   o->sbuf = gs_malloc((size_t)o->ncol * g->ncomp * sizeof(double), err);
   o->chunks = gs_chunk_writer_new(); /* without it, H5Dwrite does the same job slower */
   if (!o->dir || !o->h5_new || !o->h5_tmp || !o->h5_final || !o->csv_tmp || !o->csv_final ||
-      !o->sbuf) {
+      !o->journal_path || !o->journal_new || !o->sbuf) {
     output_free(o);
     return NULL;
   }
@@ -612,15 +576,16 @@ static void output_discard(gs_output *o) {
 
 /* HDF5 1.8 object formats: readable by every current tool, and they let the
  * case text attribute exceed 64 KiB (dense attribute storage). */
-static hid_t h5_open(const char *path, int create) {
+static hid_t h5_create(const char *path) {
   hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), f = H5I_INVALID_HID;
   herr_t st = fapl >= 0 ? H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18) : -1;
-  if (st >= 0 && create) {
+  if (st >= 0) {
     /* Dirty metadata reaches the disk only at flushes: with evictions the
      * cache may write a chunk index node between two commits (the large
-     * series are written row by row), and a kill there could break rows
-     * already committed.  The cache then grows with the metadata until the
-     * next flush, a few bytes per chunk. */
+     * series are written row by row), and someone reading the partial file
+     * while the run goes on could meet a half-updated index.  (A resume
+     * reads the journal, never this file.)  The cache then grows with the
+     * metadata until the next flush, a few bytes per chunk. */
     H5AC_cache_config_t mdc;
     mdc.version = H5AC__CURR_CACHE_CONFIG_VERSION;
     st = H5Pget_mdc_config(fapl, &mdc);
@@ -632,9 +597,7 @@ static hid_t h5_open(const char *path, int create) {
       st = H5Pset_mdc_config(fapl, &mdc);
     }
   }
-  if (st >= 0)
-    f = create ? H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)
-               : H5Fopen(path, H5F_ACC_RDONLY, fapl);
+  if (st >= 0) f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   if (fapl >= 0) H5Pclose(fapl);
   return f;
 }
@@ -648,7 +611,7 @@ static int flush_h5(gs_output *o, gs_error *err) {
 static int build_skeleton(gs_output *o, const gs_model *m, const char *text, const char *name,
                           gs_error *err) {
   o->h5_path = o->h5_new;
-  o->file = h5_open(o->h5_new, 1);
+  o->file = h5_create(o->h5_new);
   if (o->file < 0) return h5_error(err, o->h5_path, "create the file");
   int rc = write_grid(o, &m->grid, err);
   if (!rc) rc = write_case(o, text, name, err);
@@ -672,14 +635,32 @@ static int publish(gs_output *o, gs_error *err) {
 
 /* ---- public API: open, write, finish ------------------------------------------ */
 
+/* A journal row: time, state, ledger, integrator state. */
+static size_t journal_row_values(const gs_output *o) {
+  return 1 + o->nstate + o->rowlen[S_LEDGER] + o->nresume;
+}
+
+/* The journal a resume reads, with the grid and the case echo in its header. */
+static int journal_create(gs_output *o, const gs_model *m, const char *text, const char *name,
+                          gs_error *err) {
+  void *head;
+  size_t nhead;
+  int rc = gs_journal_header_encode(m, o->nresume, text, name, &head, &nhead, err);
+  if (rc) return rc;
+  o->journal = gs_journal_create(o->journal_new, o->journal_path, head, nhead, journal_row_values(o), err);
+  free(head);
+  return o->journal ? GS_OK : err->code;
+}
+
 gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_text,
-                          const char *case_name, gs_error *err) {
+                          const char *case_name, size_t nresume, gs_error *err) {
   gs_h5_setup();
   if (mkdir_p(dir, err)) return NULL;
-  gs_output *o = output_alloc(dir, m, err);
+  gs_output *o = output_alloc(dir, m, nresume, err);
   if (!o) return NULL;
   int rc = build_skeleton(o, m, case_text, case_name, err);
   if (!rc) rc = csv_create(o, err);
+  if (!rc) rc = journal_create(o, m, case_text, case_name, err);
   if (!rc) rc = publish(o, err);
   if (rc) {
     output_discard(o);
@@ -769,17 +750,6 @@ static int hold_row(gs_output *o, int i, hsize_t index, const double *row, gs_er
   return index % k == k - 1 ? write_held(o, i, index + 1, err) : GS_OK;
 }
 
-/* After a resume: the committed rows of each large series' last, partly
- * filled chunk back into its held buffer, for the writes that complete it. */
-static int reload_held(gs_output *o, gs_error *err) {
-  int rc = GS_OK;
-  for (int i = 0; i < o->nseries && !rc; i++) {
-    const hsize_t have = o->ntimes % chunk_rows(o, i);
-    if (o->held[i] && have) rc = read_rows(o, i, o->ntimes - have, have, o->held[i], err);
-  }
-  return rc;
-}
-
 static int commit(gs_output *o, int last, gs_error *err) {
   int rc = GS_OK;
   const hsize_t n = o->npending;
@@ -792,6 +762,9 @@ static int commit(gs_output *o, int last, gs_error *err) {
   if (!rc && put_i64_attr(o->file, "ntimes", (long long)(o->ntimes + n)) < 0)
     rc = h5_error(err, o->h5_path, "write the attribute ntimes of /");
   if (!rc && !last) rc = flush_h5(o, err);
+  /* what a resume trusts: the journal's commit record (journal.h); the
+   * attribute ntimes only describes the file */
+  if (!rc && o->journal) rc = gs_journal_commit(o->journal, err);
   if (rc) return rc;
   o->ntimes += n;
   rc = csv_flush(o, err);
@@ -866,7 +839,7 @@ static const double *series_row(const gs_output *o, int i, const double *t, cons
 }
 
 int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double *y,
-                         const double *ledger, int part, gs_error *err) {
+                         const double *ledger, const double *resume, int part, gs_error *err) {
   if (m->nstate != o->nstate || m->grid.ncomp != o->ncomp)
     return gs_error_set(err, GS_EINPUT, "output to %s: the model does not match the result file",
                         o->dir);
@@ -898,16 +871,22 @@ int gs_output_write_part(gs_output *o, const gs_model *m, double t, const double
   for (int i = 0; i < o->nseries; i++)
     if (!o->direct[i])
       memcpy(o->pending[i] + r * o->rowlen[i], series_row(o, i, &t, y, ledger), o->rowlen[i] * sizeof(double));
+  if (o->journal) {
+    const double *pieces[4] = {&t, y, ledger, resume};
+    const size_t lens[4] = {1, o->nstate, o->rowlen[S_LEDGER], o->nresume};
+    int rc = gs_journal_append(o->journal, pieces, lens, o->nresume ? 4 : 3, err);
+    if (rc) return rc;
+  }
   o->npending++;
   if (o->npending < o->cap_max && wall_seconds() - o->last_commit < o->checkpoint) return GS_OK;
   return commit(o, 0, err);
 }
 
 int gs_output_write(gs_output *o, const gs_model *m, double t, const double *y,
-                    const double *ledger, gs_error *err) {
+                    const double *ledger, const double *resume, gs_error *err) {
   int rc = GS_OK;
   for (int part = 0; part < gs_output_parts(o) && !rc; part++)
-    rc = gs_output_write_part(o, m, t, y, ledger, part, err);
+    rc = gs_output_write_part(o, m, t, y, ledger, resume, part, err);
   return rc;
 }
 
@@ -937,231 +916,91 @@ int gs_output_finish(gs_output *o, int ok, gs_error *err) {
     rc = h5_error(err, o->h5_path, "write the attribute status of /");
   int crc = output_close(o, rc ? NULL : err);
   if (!rc) rc = crc;
+  int jrc = gs_journal_close(o->journal, rc ? NULL : err);
+  o->journal = NULL;
+  if (!rc) rc = jrc;
   if (ok) {
+    /* the journal goes last: a kill between the renames leaves it, and a
+     * resume rebuilds both files from it and renames them again */
     if (!rc) rc = rename_final(o->h5_tmp, o->h5_final, err);
     if (!rc) rc = rename_final(o->csv_tmp, o->csv_final, err);
+    if (!rc) rc = remove_partial(o->journal_path, err);
     /* keep the partial files then: the data may still be recoverable */
     if (rc) gs_error_prefix(err, "result files left under their partial names in %s: ", o->dir);
   } else {
     rc = remove_partial(o->h5_tmp, err);
     int rc2 = remove_partial(o->csv_tmp, rc ? NULL : err);
     if (!rc) rc = rc2;
+    rc2 = remove_partial(o->journal_path, rc ? NULL : err);
+    if (!rc) rc = rc2;
   }
   output_free(o);
   return rc;
 }
 
-/* ---- resume: checking the old partial ------------------------------------------ */
+/* ---- resume: the journal ----------------------------------------------------- */
 
-static int grid_mismatch(gs_output *o, gs_error *err, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static int grid_mismatch(gs_output *o, gs_error *err, const char *fmt, ...) {
-  char why[512];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(why, sizeof why, fmt, ap);
-  va_end(ap);
-  return gs_error_set(err, GS_EINPUT, "cannot resume: %s was written for a different grid (%s)",
-                      o->h5_tmp, why);
-}
-
-/* Edges are computed the same way on every run, so they agree to round-off;
- * the tolerance only absorbs libm differences between builds. */
-static int same_value(double a, double b) {
-  return fabs(a - b) <= 1e-12 * fmax(fabs(a), fabs(b));
-}
-
-/* Number of elements of dataset loc/name, -1 if unreadable. */
-static hssize_t dataset_size(hid_t loc, const char *name) {
-  hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
-  hid_t fs = d >= 0 ? H5Dget_space(d) : H5I_INVALID_HID;
-  hssize_t n = fs >= 0 ? H5Sget_simple_extent_npoints(fs) : -1;
-  if (fs >= 0) H5Sclose(fs);
-  if (d >= 0) H5Dclose(d);
-  return n;
-}
-
-static herr_t read_vector(hid_t loc, const char *name, double *v) {
-  hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
-  if (d < 0) return -1;
-  herr_t st = H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v);
-  if (H5Dclose(d) < 0) st = -1;
-  return st;
-}
-
-static int check_axis(gs_output *o, hid_t grid, const gs_axis *ax, gs_error *err) {
-  char dname[GS_NAME_LEN + 8];
-  snprintf(dname, sizeof dname, "%s/edges", ax->name);
-  if (H5Lexists(grid, ax->name, H5P_DEFAULT) <= 0)
-    return grid_mismatch(o, err, "no axis '%s' in the file", ax->name);
-  hssize_t ne = dataset_size(grid, dname);
-  if (ne < 2) return h5_error(err, o->h5_path, "read dataset /grid/%s", dname);
-  if ((size_t)ne - 1 != ax->n)
-    return grid_mismatch(o, err, "axis '%s' has %lld cells, case has %zu", ax->name,
-                         (long long)ne - 1, ax->n);
-  double *e = gs_malloc((size_t)ne * sizeof(double), err);
-  if (!e) return GS_ENOMEM;
-  int rc = read_vector(grid, dname, e) < 0
-               ? h5_error(err, o->h5_path, "read dataset /grid/%s", dname)
-               : GS_OK;
-  for (size_t i = 0; i <= ax->n && !rc; i++)
-    if (!same_value(e[i], ax->edges[i]))
-      rc = grid_mismatch(o, err, "axis '%s' edge %zu is %.10g, case has %.10g", ax->name, i, e[i],
-                         ax->edges[i]);
-  free(e);
-  return rc;
-}
-
-static int check_grid_attrs(gs_output *o, hid_t grid, const gs_grid *g, gs_error *err) {
-  long long dim, ncomp, ncells;
-  if (get_i64_attr(grid, "dim", &dim) < 0 || get_i64_attr(grid, "ncomp", &ncomp) < 0 ||
-      get_i64_attr(grid, "ncells", &ncells) < 0)
-    return h5_error(err, o->h5_path, "read the attributes of /grid");
-  if (dim != g->dim) return grid_mismatch(o, err, "%lld axes, case has %d", dim, g->dim);
-  char *names = get_str_attr(grid, "axis_names"), want[GS_MAX_DIM * GS_NAME_LEN + 8];
-  if (!names) return h5_error(err, o->h5_path, "read the attribute axis_names of /grid");
-  join_axis_names(g, want, sizeof want);
-  int rc = strcmp(names, want) ? grid_mismatch(o, err, "axes '%s', case has '%s'", names, want)
-                               : GS_OK;
-  free(names);
-  if (!rc && ncomp != (long long)g->ncomp)
-    rc = grid_mismatch(o, err, "%lld compartments, case has %zu", ncomp, g->ncomp);
-  for (int k = 0; k < g->dim && !rc; k++) rc = check_axis(o, grid, &g->axis[k], err);
-  if (!rc && ncells != (long long)g->ncells) /* implied by the axes: a damaged file */
-    rc = grid_mismatch(o, err, "%lld cells, case has %zu", ncells, g->ncells);
-  return rc;
-}
-
-static int check_grid(gs_output *o, const gs_grid *g, gs_error *err) {
-  hid_t grid = H5Gopen2(o->file, "grid", H5P_DEFAULT);
-  if (grid < 0) return h5_error(err, o->h5_path, "open group /grid");
-  int rc = check_grid_attrs(o, grid, g, err);
-  H5Gclose(grid);
-  return rc;
-}
-
-/* Opens series i of the old file and checks its shape (so a damaged file
- * cannot overrun a buffer) and that it holds every committed row. */
-static int open_series(gs_output *o, int i, gs_error *err) {
-  hsize_t dims[RANK_MAX];
-  o->ds[i] = H5Dopen2(o->file, o->sname[i], H5P_DEFAULT);
-  hid_t fs = o->ds[i] >= 0 ? H5Dget_space(o->ds[i]) : H5I_INVALID_HID;
-  int ok = fs >= 0 && H5Sget_simple_extent_ndims(fs) == o->rank[i] &&
-           H5Sget_simple_extent_dims(fs, dims, NULL) >= 0;
-  for (int r = 1; ok && r < o->rank[i]; r++) ok = dims[r] == o->rest[i][r - 1];
-  if (fs >= 0) H5Sclose(fs);
-  if (!ok) return h5_error(err, o->h5_path, "open dataset %s with the expected shape", o->sname[i]);
-  if (dims[0] < o->ntimes)
-    return gs_error_set(err, GS_EIO, "cannot resume from %s: %s has %llu rows, %llu committed",
-                        o->h5_path, o->sname[i], (unsigned long long)dims[0],
-                        (unsigned long long)o->ntimes);
-  return GS_OK;
-}
-
-/* Opens the interrupted run's partial read-only and validates it. */
-static int open_old(gs_output *old, const gs_model *m, gs_error *err) {
-  if (access(old->h5_tmp, F_OK))
-    return gs_error_set(err, GS_EIO, "nothing to resume in %s (no %s)", old->dir, H5_PARTIAL);
-  old->file = h5_open(old->h5_tmp, 0);
-  if (old->file < 0) return h5_error(err, old->h5_path, "open the file for resuming");
-  long long n;
-  if (get_i64_attr(old->file, "ntimes", &n) < 0 || n < 0)
-    return h5_error(err, old->h5_path, "read the attribute ntimes of /");
-  if (n == 0)
-    return gs_error_set(err, GS_EIO, "nothing to resume in %s (%s holds no output time yet)",
-                        old->dir, H5_PARTIAL);
-  old->ntimes = (hsize_t)n;
-  int rc = check_grid(old, &m->grid, err);
-  for (int i = 0; i < old->nseries && !rc; i++) rc = open_series(old, i, err);
-  return rc;
-}
-
-/* ---- resume: rebuilding ------------------------------------------------------- */
-
-/* Copies the committed rows of every series, in blocks of whole rows. */
-static int copy_rows(gs_output *old, gs_output *o, gs_error *err) {
+/* Writes the journal's committed rows into o's fresh files through the
+ * ordinary path (one commit at the end, none in between), and leaves the
+ * last one in *t, y, ledger, resume. */
+static int replay(gs_output *o, gs_journal *j, const gs_model *m, double *t, double *y,
+                  double *ledger, double *resume, gs_error *err) {
+  const uint64_t n = gs_journal_committed(j);
+  double *row = gs_malloc(journal_row_values(o) * sizeof(double), err);
+  if (!row) return GS_ENOMEM;
+  const double *ry = row + 1, *rl = ry + o->nstate, *rr = rl + o->rowlen[S_LEDGER];
+  o->checkpoint = HUGE_VAL; /* commits only when the buffer is full */
   int rc = GS_OK;
-  for (int i = 0; i < o->nseries && !rc; i++) {
-    hsize_t block = BLOCK_VALUES / o->rowlen[i] ? BLOCK_VALUES / o->rowlen[i] : 1;
-    /* whole chunks per block: each then goes straight to the file */
-    const hsize_t k = chunk_rows(o, i);
-    if (block > k) block -= block % k;
-    if (block > old->ntimes) block = old->ntimes;
-    double *buf = gs_malloc((size_t)block * o->rowlen[i] * sizeof(double), err);
-    if (!buf) return GS_ENOMEM;
-    for (hsize_t r0 = 0; r0 < old->ntimes && !rc; r0 += block) {
-      hsize_t n = old->ntimes - r0 < block ? old->ntimes - r0 : block;
-      rc = read_rows(old, i, r0, n, buf, err);
-      if (!rc) rc = write_rows(o, i, r0, n, buf, err);
-    }
-    free(buf);
+  for (uint64_t r = 0; r < n && !rc; r++) {
+    rc = gs_journal_read(j, r, row, err);
+    if (!rc) rc = gs_output_write(o, m, row[0], ry, rl, rr, err);
   }
-  o->ntimes = old->ntimes;
-  if (!rc && put_i64_attr(o->file, "ntimes", (long long)o->ntimes) < 0)
-    rc = h5_error(err, o->h5_path, "write the attribute ntimes of /");
-  return rc;
-}
-
-/* New skeleton with the old case echo, then the committed rows. */
-static int rebuild_h5(gs_output *old, gs_output *o, const gs_model *m, gs_error *err) {
-  hid_t c = H5Gopen2(old->file, "case", H5P_DEFAULT);
-  char *text = c >= 0 ? get_str_attr(c, "text") : NULL;
-  char *name = c >= 0 ? get_str_attr(c, "file") : NULL;
-  if (c >= 0) H5Gclose(c);
-  int rc = text && name ? GS_OK : h5_error(err, old->h5_path, "read the attributes of /case");
-  if (!rc) rc = build_skeleton(o, m, text, name, err);
-  free(text);
-  free(name);
-  if (!rc) rc = copy_rows(old, o, err);
-  return rc;
-}
-
-/* Rewrites the CSV from /summary: whatever the kill left in it (missing or
- * extra rows, a half line), it then matches result.h5 exactly. */
-static int rebuild_csv(gs_output *o, gs_error *err) {
-  int rc = csv_create(o, err);
-  hsize_t block = BLOCK_VALUES / o->ncomp ? BLOCK_VALUES / o->ncomp : 1;
-  double *buf = rc ? NULL : gs_malloc((size_t)o->ncol * block * o->ncomp * sizeof(double), err);
-  if (!rc && !buf) rc = GS_ENOMEM;
-  for (hsize_t r0 = 0; r0 < o->ntimes && !rc; r0 += block) {
-    hsize_t n = o->ntimes - r0 < block ? o->ntimes - r0 : block;
-    size_t stride = (size_t)n * o->ncomp;
-    for (int c = 0; c < o->ncol && !rc; c++)
-      rc = read_rows(o, S_SUMMARY + c, r0, n, buf + (size_t)c * stride, err);
-    for (hsize_t r = 0; r < n && !rc; r++) rc = csv_rows(o, buf, stride, (size_t)r * o->ncomp, err);
+  if (!rc) rc = commit(o, 0, err);
+  if (!rc) {
+    *t = row[0];
+    memcpy(y, ry, o->nstate * sizeof *y);
+    memcpy(ledger, rl, o->rowlen[S_LEDGER] * sizeof *ledger);
+    if (o->nresume) memcpy(resume, rr, o->nresume * sizeof *resume);
   }
-  free(buf);
-  return rc ? rc : csv_flush(o, err);
-}
-
-static int read_last(gs_output *o, double *t, double *y, double *ledger, gs_error *err) {
-  hsize_t last = o->ntimes - 1;
-  int rc = read_rows(o, S_TIME, last, 1, t, err);
-  if (!rc) rc = read_rows(o, S_NUMBER, last, 1, y, err);
-  if (!rc && o->s_carried >= 0) rc = read_rows(o, o->s_carried, last, 1, y + o->nnum, err);
-  if (!rc) rc = read_rows(o, S_LEDGER, last, 1, ledger, err);
+  free(row);
+  o->checkpoint = 0;
   return rc;
 }
 
-gs_output *gs_output_resume(const char *dir, const gs_model *m, double *t, double *y,
-                            double *ledger, gs_error *err) {
+gs_output *gs_output_resume(const char *dir, const gs_model *m, size_t nresume, double *t,
+                            double *y, double *ledger, double *resume, gs_error *err) {
   gs_h5_setup();
-  gs_output *old = output_alloc(dir, m, err);
-  if (!old) return NULL;
-  gs_output *o = output_alloc(dir, m, err);
-  int rc = o ? open_old(old, m, err) : GS_ENOMEM;
-  if (!rc) rc = rebuild_h5(old, o, m, err);
-  if (!rc) rc = reload_held(o, err);
-  if (!rc) rc = flush_h5(o, err);
-  int crc = output_close(old, rc ? NULL : err); /* before its name is reused */
-  if (!rc) rc = crc;
-  output_free(old);
-  if (!rc) rc = publish(o, err);
-  if (!rc) rc = read_last(o, t, y, ledger, err);
-  if (!rc) rc = rebuild_csv(o, err);
-  if (rc && o) {
-    output_discard(o);
-    o = NULL;
+  gs_output *o = output_alloc(dir, m, nresume, err);
+  if (!o) return NULL;
+  if (access(o->journal_path, F_OK)) {
+    gs_error_set(err, GS_EIO, "nothing to resume in %s (no %s: the run finished, or was killed before it wrote anything)", dir, JOURNAL);
+    output_free(o);
+    return NULL;
   }
+  void *head = NULL;
+  size_t nhead = 0, row_values = 0;
+  const char *text = NULL, *name = NULL;
+  gs_journal *j = gs_journal_reopen(o->journal_path, &head, &nhead, &row_values, err);
+  int rc = j ? gs_journal_header_check(head, nhead, m, nresume, o->journal_path, &text, &name, err)
+             : err->code;
+  if (!rc && row_values != journal_row_values(o))
+    rc = gs_error_set(err, GS_EIO, "cannot resume: %s has rows of %zu values, %zu expected", o->journal_path,
+                      row_values, journal_row_values(o));
+  if (!rc && gs_journal_committed(j) == 0)
+    rc = gs_error_set(err, GS_EIO, "nothing to resume in %s (%s holds no committed output time yet)",
+                      dir, JOURNAL);
+  /* fresh files, never the killed ones (HDF5 may have been torn mid-flush) */
+  if (!rc) rc = build_skeleton(o, m, text, name, err);
+  if (!rc) rc = csv_create(o, err);
+  if (!rc) rc = replay(o, j, m, t, y, ledger, resume, err);
+  if (!rc) rc = publish(o, err);
+  free(head);
+  if (rc) {
+    gs_journal_close(j, NULL);
+    output_discard(o);
+    return NULL;
+  }
+  o->journal = j;
+  o->last_commit = wall_seconds();
   return o;
 }

@@ -54,6 +54,7 @@ typedef struct {
   double wet_t;               /* time of the wetness choice (NAN: none yet) */
   size_t prange[2];           /* [lo, hi) of the cells in the spans */
   int span_valid;             /* spans computed at least once */
+  unsigned long span_era, wet_era; /* gs_eval.era of those choices */
 } comp_choice;
 
 /* Per slot, the cells of its summed arrays its last use wrote (a page
@@ -270,7 +271,7 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     A->cs = gs_calloc_apart(A->ncomp * sizeof(comp_choice), err);
     if (!A->pcar || !A->wet_ok || !A->cs || !A->masked) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
     for (size_t c = 0; !rc && c < A->ncomp; c++)
-      A->cs[c] = (comp_choice){0.0, NAN, {0, 0}, 0}; /* nothing chosen yet */
+      A->cs[c] = (comp_choice){0.0, NAN, {0, 0}, 0, 0, 0}; /* nothing chosen yet */
     /* loads are computed only where pairs read them (carried_loads): a read
      * elsewhere would show as NaN, not as a load of another compartment */
     for (size_t i = 0; !rc && i < nslot * A->pcar_len; i++) A->pcar[i] = NAN;
@@ -575,10 +576,12 @@ static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
  * difference quotients, whose perturbed state has tolerance-sized noise in
  * every cell), so that Newton iterations see one smooth right-hand side. */
 static void choose_cells(agg_t *A, size_t comp, double t, const double *N, const gs_eval *ev) {
-  int keep = A->cs[comp].span_valid && (ev->hold || (ev->in_integrator && t == A->cs[comp].span_t));
+  int keep = A->cs[comp].span_valid &&
+             (ev->hold || (ev->in_integrator && t == A->cs[comp].span_t && ev->era == A->cs[comp].span_era));
   if (!keep) {
     find_spans(A, comp, N, A->negligible > 0 ? ev->noise_floor : 0.0);
     A->cs[comp].span_t = t;
+    A->cs[comp].span_era = ev->era;
   }
 }
 
@@ -690,7 +693,7 @@ static void carried_loads(const agg_t *A, const gs_model *m, const gs_eval *ev, 
 static const double *wet_cells(agg_t *A, const gs_model *m, const gs_eval *ev, size_t comp,
                                double t, const double *y) {
   double *psi = A->wet_ok + comp * A->wet_len;
-  if (ev->hold || (ev->in_integrator && t == A->cs[comp].wet_t)) return psi;
+  if (ev->hold || (ev->in_integrator && t == A->cs[comp].wet_t && ev->era == A->cs[comp].wet_era)) return psi;
   const double *N = gs_eval_numbers_c(m, ev, y, comp), *L = gs_eval_carried_c(m, ev, y, comp, A->wet_liquid);
   const double lo = A->wet_min * (1 - 0.5 * A->wet_ramp), hi = A->wet_min * (1 + 0.5 * A->wet_ramp);
   for (size_t c = 0; c < A->ncells; c++) {
@@ -698,6 +701,7 @@ static const double *wet_cells(agg_t *A, const gs_model *m, const gs_eval *ev, s
     psi[c] = content >= hi ? 1.0 : content < lo ? 0.0 : (content - lo) / (hi - lo);
   }
   A->cs[comp].wet_t = t;
+  A->cs[comp].wet_era = ev->era;
   return psi;
 }
 

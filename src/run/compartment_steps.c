@@ -131,6 +131,9 @@ struct gs_comp_steps {
   const gs_stretch *st;
   size_t nst;
   double *ring[RING];
+  /* per ring slot, each compartment's integrator mark at the end of a
+   * stretch that ends at an output time (gs_comp_steps_marks) */
+  double *marks[RING];
   size_t depth; /* of the rings in use, 2 to RING */
   gs_stretch_done_fn done_fn;
   void *done_ctx;
@@ -573,7 +576,9 @@ int gs_comp_steps_create(gs_case *c, gs_comp_steps **out, gs_error *err) {
     return GS_ENOMEM;
   for (int r = 0; r <= s->nworkers; r++) s->home[r] = s->ncomp * (size_t)r / (size_t)s->nworkers;
   for (int r = 0; r < RING; r++)
-    if (!(s->ring[r] = gs_calloc(c->ode.n, sizeof(double), err))) return GS_ENOMEM;
+    if (!(s->ring[r] = gs_calloc(c->ode.n, sizeof(double), err)) ||
+        !(s->marks[r] = gs_calloc(s->ncomp * GS_INTEGRATOR_MARK, sizeof(double), err)))
+      return GS_ENOMEM;
   omp_init_lock(&s->lock);
   omp_init_lock(&s->out_lock);
   s->locks = 1;
@@ -647,6 +652,7 @@ static void view_one(worker_t *w, size_t comp, const gs_stretch *st) {
   *ev = w->s->base;
   ev->switch_lo = st->t0; /* windows decide once for the stretch (gs_window_on) */
   ev->switch_hi = st->t1;
+  ev->era = st->era;
   ev->comp_lo = comp;
   ev->comp_hi = comp + 1;
   ev->view_lo = comp;
@@ -754,9 +760,12 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
     if (!aborted) fail(s, k, comp, rc, err, w);
   } else {
     unpack(s, comp, cp->y, s->ring[k % s->depth]);
+    /* at an output time, what a run resumed there keeps: the integrator's
+     * mark, not the rates at the stretch's end (end_f) */
+    if (st->mark) cp->it.type->mark(cp->it.self, s->marks[k % s->depth] + comp * GS_INTEGRATOR_MARK);
     if (cp->has_next) {
       memcpy(cp->end_f, node_at(L, L->count - 1) + 1 + 2 * s->nflow, s->nflow * sizeof(double));
-      cp->end_f_valid = 1;
+      cp->end_f_valid = !st->mark;
       double *sent = cp->sent[k % s->depth];
       volumes_of(s, cp->y + s->off_z, sent);
       for (int a = 0; a < s->nvol; a++) sent[a] *= s->k[comp];
@@ -989,10 +998,21 @@ int gs_comp_steps_run(gs_comp_steps *s, const gs_stretch *st, size_t nst, double
 int gs_comp_steps_advance(gs_comp_steps *s, double *t, double stop, double *Y, int jumped,
                           gs_error *err) {
   if (!(stop > *t)) return GS_OK;
-  const gs_stretch one = {*t, stop, jumped};
+  const gs_stretch one = {*t, stop, jumped, 0, 0};
   int rc = gs_comp_steps_run(s, &one, 1, Y, NULL, NULL, err);
   if (!rc) *t = stop;
   return rc;
+}
+
+const double *gs_comp_steps_marks(const gs_comp_steps *s, size_t k) {
+  return s->marks[k % s->depth];
+}
+
+void gs_comp_steps_resume(gs_comp_steps *s, const double *marks) {
+  for (size_t comp = 0; comp < s->ncomp; comp++) {
+    comp_t *cp = &s->comp[comp];
+    cp->it.type->resume(cp->it.self, marks + comp * GS_INTEGRATOR_MARK);
+  }
 }
 
 void gs_comp_steps_comp_stats(const gs_comp_steps *s, size_t comp, gs_integrator_stats *st) {
@@ -1053,7 +1073,10 @@ void gs_comp_steps_free(gs_comp_steps *s) {
     for (size_t j = 0; j < sizeof bufs / sizeof *bufs; j++) free(bufs[j]);
   }
   free(s->workers);
-  for (int r = 0; r < RING; r++) free(s->ring[r]);
+  for (int r = 0; r < RING; r++) {
+    free(s->ring[r]);
+    free(s->marks[r]);
+  }
   free(s->next_k);
   free(s->running);
   free(s->home);

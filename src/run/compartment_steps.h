@@ -52,6 +52,11 @@ int gs_comp_steps_create(gs_case *c, gs_comp_steps **out, gs_error *err);
 typedef struct {
   double t0, t1;
   int jumped;
+  /* 1: it ends at an output time, where each compartment's integrator is
+   * marked (gs_integrator_type.mark; gs_comp_steps_marks) and starts the
+   * next stretch as a resumed run would */
+  int mark;
+  unsigned long era; /* gs_eval.era of its evaluations: output times before it */
 } gs_stretch;
 /* Called once per stretch k, in order, when every compartment is done with
  * it: t = st[k].t1, Y the full state then (read only).  Non-zero (with err
@@ -69,6 +74,11 @@ int gs_comp_steps_run(gs_comp_steps *s, const gs_stretch *st, size_t nst, double
  * (gs_ode.jumped).  On success *t = stop. */
 int gs_comp_steps_advance(gs_comp_steps *s, double *t, double stop, double *Y, int jumped,
                           gs_error *err);
+/* During done(k) for a stretch with mark set: the compartments' marks at
+ * its end (ncomp * GS_INTEGRATOR_MARK values). */
+const double *gs_comp_steps_marks(const gs_comp_steps *s, size_t k);
+/* A resumed run: every compartment's integrator takes its mark. */
+void gs_comp_steps_resume(gs_comp_steps *s, const double *marks);
 /* Steps and evaluations summed over the compartments (each evaluation is
  * one compartment's rates); last_step: the last compartment's. */
 void gs_comp_steps_stats(const gs_comp_steps *s, gs_integrator_stats *st);

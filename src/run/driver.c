@@ -62,6 +62,15 @@ void gs_run_stats(const gs_run *run, gs_integrator_stats *st) {
   if (run->strategy_self) run->strategy->stats(run->strategy_self, st);
 }
 
+size_t gs_run_resume_size(const gs_case *c) {
+  return (c->per_compartment ? c->model.grid.ncomp : 1) * (size_t)GS_INTEGRATOR_MARK;
+}
+
+void gs_run_mark(gs_run *run, const gs_integrator *it, size_t offset) {
+  it->type->mark(it->self, run->resume_state + offset);
+  run->ev.era++;
+}
+
 int gs_run_output_time(gs_run *run, double t, const double *Y, gs_error *err) {
   run->view.wall_seconds = gs_run_now() - run->start;
   for (size_t i = 0; i < run->nobs; i++) {
@@ -133,6 +142,7 @@ static int start_observers(gs_run *run, gs_error *err) {
   if (!rc && run->opt->resume && run->dist.size > 1) { /* the state rank 0 read back */
     gs_parallel_broadcast(&run->t, 1);
     gs_parallel_broadcast(run->Y, run->c->ode.n);
+    gs_parallel_broadcast(run->resume_state, run->view.nresume);
   }
   if (!rc && run->dist.rank == 0) rc = gs_run_output_time(run, run->t, run->Y, err);
   rc = gs_run_agree(&run->dist, rc, err);
@@ -177,12 +187,17 @@ int gs_case_run(gs_case *c, const gs_run_options *opt_in, double *yout, gs_run_r
   run.start = gs_run_now();
   run.view = (gs_run_view){.c = c, .t_end = c->times[c->ntimes - 1], .resumed = opt.resume};
   const size_t n = c->ode.n;
-  int rc = (run.Y = gs_malloc(n * sizeof(double), err)) ? GS_OK : GS_ENOMEM;
+  /* zeros: the marks of fresh integrators, the start time's */
+  run.view.nresume = gs_run_resume_size(c);
+  run.resume_state = gs_calloc(run.view.nresume, sizeof(double), err);
+  run.view.resume = run.resume_state;
+  int rc = (run.Y = gs_malloc(n * sizeof(double), err)) && run.resume_state ? GS_OK : GS_ENOMEM;
   if (!rc) memcpy(run.Y, c->y0, n * sizeof(double));
   /* under MPI each rank evaluates its own block of compartments */
   if (!rc) rc = gs_dist_init(&run.dist, &c->model, opt.one_process, err);
   if (rc) {
     free(run.Y);
+    free(run.resume_state);
     return rc;
   }
   rc = gs_run_agree(&run.dist, add_observers(&run, err), err);
@@ -190,6 +205,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt_in, double *yout, gs_run_r
   run.strategy = pick_strategy(&run);
   if (!rc && !run.stop)
     rc = gs_run_agree(&run.dist, run.strategy->create(&run, &run.strategy_self, err), err);
+  if (!rc && !run.stop && opt.resume) run.strategy->resume(run.strategy_self, &run);
   if (!rc && !run.stop) rc = run.strategy->advance(run.strategy_self, &run, err);
   rc = finish_observers(&run, rc, err);
   rc = gs_run_agree(&run.dist, rc, err);
@@ -207,5 +223,6 @@ int gs_case_run(gs_case *c, const gs_run_options *opt_in, double *yout, gs_run_r
   gs_dist_free(&run.dist);
   if (rep_out) *rep_out = rep;
   free(run.Y);
+  free(run.resume_state);
   return rc;
 }

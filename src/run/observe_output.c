@@ -33,15 +33,20 @@ static int output_start(void *self, const gs_run_view *view, double *t, double *
   const gs_case *c = view->c;
   const gs_model *m = &c->model;
   const char *dir = o->run->opt->out_dir;
-  o->out = view->resumed ? gs_output_resume(dir, m, t, Y, Y + m->nstate, err)
-                         : gs_output_open(dir, m, gs_cfg_source(c->cfg), gs_cfg_name(c->cfg), err);
+  /* on resume, the integrators' marks go where the strategy reads them
+   * (gs_strategy_type.resume) */
+  o->out = view->resumed ? gs_output_resume(dir, m, view->nresume, t, Y, Y + m->nstate,
+                                            o->run->resume_state, err)
+                         : gs_output_open(dir, m, gs_cfg_source(c->cfg), gs_cfg_name(c->cfg),
+                                          view->nresume, err);
   if (!o->out) return err->code;
   if (view->resumed) o->resumed_t = *t;
   gs_output_set_checkpoint(o->out, c->checkpoint);
   if (o->run->dist.size > 1) {
-    size_t fit = DEFER_BYTES / ((m->nstate + m->nledger) * sizeof(double));
+    size_t fit = DEFER_BYTES / ((m->nstate + m->nledger + view->nresume) * sizeof(double));
     int depth = fit < 1 ? 1 : fit < DEFER_DEPTH ? (int)fit : DEFER_DEPTH;
-    if (!(o->deferred = gs_deferred_output_create(o->out, m, depth, err))) return GS_ENOMEM;
+    if (!(o->deferred = gs_deferred_output_create(o->out, m, view->nresume, depth, err)))
+      return GS_ENOMEM;
   }
   return GS_OK;
 }
@@ -59,8 +64,8 @@ static int output_output(void *self, const gs_run_view *view, double t, const do
     o->resumed_t = NAN;
     return GS_OK;
   }
-  if (!o->deferred) return gs_output_write(o->out, m, t, Y, Y + m->nstate, err);
-  int rc = gs_deferred_output_push(o->deferred, t, Y, err);
+  if (!o->deferred) return gs_output_write(o->out, m, t, Y, Y + m->nstate, view->resume, err);
+  int rc = gs_deferred_output_push(o->deferred, t, Y, view->resume, err);
   /* held times may not delay a due commit: a killed run loses no more than
    * output.checkpoint promises (0: every output time commits) */
   if (!rc && gs_output_commit_due(o->out)) rc = gs_deferred_output_drain(o->deferred, err);

@@ -24,6 +24,11 @@ typedef struct gs_strategy_type {
    * time, at the first failure, or at the output time an observer stopped
    * the run at (run->stop); run->t and run->Y are then that time's. */
   int (*advance)(void *self, gs_run *run, gs_error *err);
+  /* Exact resume: at every output time the strategy marks its integrators
+   * (gs_integrator_type.mark) into run->resume_state before the observers
+   * see it; resume hands a resumed run's integrators what was read back
+   * (after create, before advance). */
+  void (*resume)(void *self, gs_run *run);
   /* Steps, rejections and evaluations so far. */
   void (*stats)(const void *self, gs_integrator_stats *st);
   /* Optional: its part of --timings (after the phase table). */
@@ -41,6 +46,7 @@ struct gs_run {
   double *Y;       /* the full state (under MPI current in this rank's block, and on rank 0
                     * at output times) */
   double t;        /* the time Y holds */
+  double *resume_state; /* the integrators' marks at the output time observed (gs_run_view.resume) */
   gs_eval ev;      /* the evaluation of this process's compartments */
   double start;    /* wall clock at the start */
   const gs_strategy_type *strategy;
@@ -53,6 +59,13 @@ struct gs_run {
   long faults_start; /* page faults before the run */
 };
 
+/* Values of run->resume_state: one integrator's mark, or one per
+ * compartment under per-compartment steps. */
+size_t gs_run_resume_size(const gs_case *c);
+/* Marks integrator it into run->resume_state + offset and opens a new era
+ * of the evaluation's discrete choices (gs_eval.era): what every strategy
+ * does at an output time. */
+void gs_run_mark(gs_run *run, const gs_integrator *it, size_t offset);
 /* Every observer at output time t (in order); sets run->stop when one asks. */
 int gs_run_output_time(gs_run *run, double t, const double *Y, gs_error *err);
 /* A piece of the observers' idle work; 1 while more is left. */

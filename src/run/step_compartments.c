@@ -46,6 +46,7 @@ static int cut_stretches(comps_t *s, gs_error *err) {
   s->is_output = gs_malloc(cap * sizeof *s->is_output, err);
   if (!s->st || !s->is_output) return GS_ENOMEM;
   double at = s->run->t, switch_reached = NAN;
+  unsigned long era = 0;
   for (size_t i = 0; i < c->ntimes; i++) {
     if (c->times[i] <= at) continue;
     while (at < c->times[i]) {
@@ -59,8 +60,10 @@ static int cut_stretches(comps_t *s, gs_error *err) {
         if (o2) s->is_output = o2;
         if (!o2) return gs_error_set(err, GS_ENOMEM, "out of memory for the run's stretches");
       }
-      s->st[s->nst] = (gs_stretch){at, stop, at == switch_reached};
-      s->is_output[s->nst++] = stop == c->times[i];
+      const int output = stop == c->times[i];
+      s->st[s->nst] = (gs_stretch){at, stop, at == switch_reached, output, era};
+      s->is_output[s->nst++] = output;
+      era += (unsigned long)output;
       if (stop == next_switch) switch_reached = stop;
       at = stop;
     }
@@ -73,6 +76,7 @@ static int stretch_done(void *ctx, size_t k, double t, const double *Y, gs_error
   gs_run *run = s->run;
   if (!s->is_output[k]) return GS_OK;
   const double start = gs_run_now();
+  memcpy(run->resume_state, gs_comp_steps_marks(s->cs, k), run->view.nresume * sizeof(double));
   int rc = gs_run_output_time(run, t, Y, err);
   run->phase[GS_PH_OUTPUTS] += gs_run_now() - start;
   if (!rc && run->stop) { /* the state of this output time is the run's end */
@@ -101,6 +105,11 @@ static int comps_advance(void *self, gs_run *run, gs_error *err) {
     return gs_run_rate_failure(&run->c->model, bad_t, bad_index, err);
   if (!rc) run->t = s->st[s->nst - 1].t1;
   return rc;
+}
+
+static void comps_resume(void *self, gs_run *run) {
+  comps_t *s = self;
+  gs_comp_steps_resume(s->cs, run->resume_state);
 }
 
 static void comps_stats(const void *self, gs_integrator_stats *st) {
@@ -148,6 +157,7 @@ const gs_strategy_type gs_step_compartments = {
     .name = "per_compartment",
     .create = comps_create,
     .advance = comps_advance,
+    .resume = comps_resume,
     .stats = comps_stats,
     .print_timings = comps_print_timings,
     .free = comps_free,

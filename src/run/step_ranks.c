@@ -377,6 +377,10 @@ static int ranks_advance(void *self, gs_run *run, gs_error *err) {
     const double outputs_start = gs_run_now();
     g->t_advance += outputs_start - advance_start;
     if (rc && g->bad) rc = gs_run_rate_failure(m, g->bad_t, g->bad_index, err);
+    /* every rank (the steps are agreed, so the marks are the same); rank 0's
+     * observers see them when they take the held output time, before the
+     * next output time marks again */
+    if (!rc) gs_run_mark(run, &g->own, 0);
     /* the checks and the failure agreement wait for the next step's
      * agreement (post_output_time); integrator failures are agreed already:
      * hold only a good state */
@@ -413,6 +417,11 @@ static int ranks_advance(void *self, gs_run *run, gs_error *err) {
   return rc;
 }
 
+static void ranks_resume(void *self, gs_run *run) {
+  ranks_t *g = self;
+  g->own.type->resume(g->own.self, run->resume_state);
+}
+
 static void ranks_stats(const void *self, gs_integrator_stats *st) {
   const ranks_t *g = self;
   if (g->own.type) g->own.type->get_stats(g->own.self, st); /* not after a failed rebuild */
@@ -437,6 +446,7 @@ const gs_strategy_type gs_step_ranks = {
     .name = "ranks",
     .create = ranks_create,
     .advance = ranks_advance,
+    .resume = ranks_resume,
     .stats = ranks_stats,
     .free = ranks_free,
 };

@@ -98,6 +98,7 @@ static int shared_advance(void *self, gs_run *run, gs_error *err) {
     const double outputs_start = gs_run_now();
     s->t_busy += outputs_start - advance_start;
     if (rc && s->bad) rc = gs_run_rate_failure(m, s->bad_t, s->bad_index, err);
+    if (!rc) gs_run_mark(run, it, 0);
     if (!rc) rc = gs_run_output_time(run, run->t, run->Y, err);
     run->phase[GS_PH_OUTPUTS] += gs_run_now() - outputs_start;
     if (run->stop) break;
@@ -105,6 +106,12 @@ static int shared_advance(void *self, gs_run *run, gs_error *err) {
   run->phase[GS_PH_RHS] = s->t_rhs;
   run->phase[GS_PH_INTEGRATOR] = s->t_busy - s->t_rhs;
   return rc;
+}
+
+static void shared_resume(void *self, gs_run *run) {
+  (void)self;
+  const gs_integrator *it = &run->c->integrator;
+  it->type->resume(it->self, run->resume_state);
 }
 
 static void shared_stats(const void *self, gs_integrator_stats *st) {
@@ -158,6 +165,7 @@ const gs_strategy_type gs_step_shared = {
     .name = "shared",
     .create = shared_create,
     .advance = shared_advance,
+    .resume = shared_resume,
     .stats = shared_stats,
     .print_timings = shared_print_timings,
     .free = shared_free,
