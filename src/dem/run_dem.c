@@ -22,6 +22,14 @@
 /* steps between two looks at the clock for the progress line */
 #define GS_DEM_PROGRESS_STEPS 200
 
+static void dem_progress(gs_progress *line, gs_dem *d, int force) {
+  gs_dem_view v;
+  gs_dem_get_view(d, &v);
+  char extra[96];
+  snprintf(extra, sizeof extra, "%zu particles, %zu contacts", v.n, gs_dem_ncontacts(d));
+  gs_progress_update(line, gs_dem_time(d), extra, force);
+}
+
 static int in_outlet(const double x[3], void *ctx) {
   const gs_dem_case *c = ctx;
   for (size_t k = 0; k < c->noutlets; k++)
@@ -233,15 +241,10 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       const long k = next - step < piece ? next - step : piece;
       rc = gs_dem_run(d, k, err);
       step += k;
-      if (!rc && show) {
-        gs_dem_view v;
-        gs_dem_get_view(d, &v);
-        char extra[96];
-        snprintf(extra, sizeof extra, "%zu particles, %zu contacts", v.n, gs_dem_ncontacts(d));
-        gs_progress_update(&line, gs_dem_time(d), extra, 0);
-      }
+      if (!rc && show) dem_progress(&line, d, 0);
     }
   }
+  if (show && !rc) dem_progress(&line, d, 1); /* the end, whatever the throttle */
   if (show) gs_progress_end(&line);
   if (!rc && progress) {
     double el = wall_seconds() - t0wall;
