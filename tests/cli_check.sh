@@ -54,7 +54,7 @@ stdout_has "valid.yaml: valid" "2 axes" "compartments" "8 mechanisms" "6 output 
 minimal=$(write_case minimal.yaml "$GRID_1D
 output: {end: 1}")
 run_rc 0 "$BIN" check "$minimal"
-stdout_has "11 output times from 0 to 1" "integrator rk"
+stdout_has "11 output times from 0 to 1" "integrator auto"
 
 # ---- invalid cases ------------------------------------------------------------
 # bad NAME EXPECTED_LINE TEXT FRAGMENT...: `gransim check` of TEXT (written to
@@ -201,7 +201,7 @@ mechanisms:
 bad unknown-method.yaml 5 "$GRID_1D
 output: {end: 1}
 solver: {method: rk45}" \
-  "solver.method = 'rk45': unknown integrator method; expected one of: rk"
+  "solver.method = 'rk45': unknown integrator method; expected one of: auto"
 
 # missing keys
 bad missing-beta0.yaml 7 "$GRID_1D

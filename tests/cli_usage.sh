@@ -75,7 +75,7 @@ expect_section "aggregation kernels:" constant sum product madec table brownian
 expect_section "mechanisms:" aggregation breakage growth liquid_addition consolidation feed transfer spray pore_consolidation layering nucleation drying
 expect_section "breakage selection functions:" power shear dem_impact
 expect_section "daughter distributions:" uniform halves power beta
-expect_section "integrators (solver.method):" rk cvode euler
+expect_section "integrators (solver.method):" auto rk cvode euler
 # every kernel in the registry is listed (catches a kernel added without updating this test)
 registered=$(grep -o '&gs_kernel_[a-z_0-9]*' "$SRC/src/kernel/kernel_registry.c" | wc -l)
 listed=$(section_names "aggregation kernels:" | wc -l)

@@ -645,8 +645,8 @@ static void test_registry(void) {
   const gs_integrator_type *const *types = gs_integrator_types();
   int count = 0;
   for (; types[count]; count++) CHECK(gs_integrator_lookup(types[count]->name) == types[count]);
-  CHECK(count == 3);
-  CHECK(gs_integrator_lookup("cvode") && gs_integrator_lookup("euler"));
+  CHECK(count == 4);
+  CHECK(gs_integrator_lookup("cvode") && gs_integrator_lookup("euler") && gs_integrator_lookup("auto"));
   CHECK(gs_integrator_lookup("nope") == NULL);
   /* capabilities the run driver and case reader consult instead of names */
   const gs_integrator_type *rk = gs_integrator_lookup("rk"), *cv = gs_integrator_lookup("cvode"),
@@ -654,7 +654,7 @@ static void test_registry(void) {
   CHECK(rk->ranks && rk->per_compartment && rk->exact_invariants && rk->carry);
   CHECK(eu->ranks && !eu->per_compartment && eu->exact_invariants && eu->carry);
   CHECK(!cv->ranks && !cv->per_compartment && !cv->exact_invariants && !cv->carry);
-  /* No solver map at all: rk with default settings. */
+  /* No solver map at all: auto with default settings. */
   decay_ctx c = {1.0, 0, HUGE_VAL};
   gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL};
   gs_integrator it;
@@ -662,7 +662,7 @@ static void test_registry(void) {
   gs_integrator_setup setup;
   CHECK(gs_integrator_setup_read(NULL, &setup, &err) == GS_OK);
   CHECK(gs_integrator_create(&setup, &ode, &it, &err) == GS_OK);
-  CHECK(it.type == gs_integrator_lookup("rk"));
+  CHECK(it.type == gs_integrator_lookup("auto"));
   double t = 0, y = 1;
   CHECK(advance(&it, &ode, &t, 1.0, &y, &err) == GS_OK);
   CHECK_REL(y, exp(-1.0), 1e-5);

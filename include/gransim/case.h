@@ -34,6 +34,7 @@ typedef struct gs_case {
   gs_ode ode;          /* the ODE system of the model (numbers + ledger), in eval */
   gs_eval eval;        /* the whole model's evaluation context (noise floor: solver.atol) */
   double *abs_scale;   /* error-control scale per component (the ledger at a typical particle's volume) */
+  double atol;         /* solver.atol, or the case's default (docs/models.md, "Default tolerances") */
   gs_integrator_setup integrator_setup; /* solver.method and its keys, for more integrators */
   gs_integrator integrator;            /* of ode */
   gs_checks checks;

@@ -2,7 +2,9 @@
  *
  * An integrator advances y' = f(t, y) from t to t_out.  Integrators are
  * registered types chosen by name in the case file's `solver.method`:
- *   "rk"     adaptive embedded Runge–Kutta from GSL odeiv2 (default; variant
+ *   "auto"   (default) rk while the case is not stiff, cvode while rk's steps
+ *            would be held down by its stability limit (integrator_auto.c)
+ *   "rk"     adaptive embedded Runge–Kutta from GSL odeiv2 (variant
  *            rkf45 | rkck | rk8pd, key `variant`, default rkck)
  *   "cvode"  SUNDIALS CVODE BDF for stiff cases (linear solver dense or gmres)
  *   "euler"  the adaptive explicit Euler of Sampat et al. (2018): dt doubled or halved so
@@ -20,6 +22,10 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* The default of the key atol.  A system whose numbers are far from 1 scales
+ * its abs_scale instead (src/case/case.c: a case without solver.atol). */
+#define GS_INTEGRATOR_ATOL 1e-12
 
 /* The ODE system. */
 typedef struct gs_ode {
@@ -97,6 +103,12 @@ typedef struct gs_integrator_type {
                  gs_error *err);
   void (*get_stats)(const void *self, gs_integrator_stats *stats);
   void (*free)(void *self);
+  /* Optional: frees what read made (NULL: free(), one block). */
+  void (*free_settings)(void *settings);
+  /* Optional: a sentence on what it decided during the run, for the user
+   * (auto: when and why it switched to CVODE); returns 0 when there is
+   * nothing to say. */
+  int (*describe)(const void *self, char *buf, size_t size);
   /* Optional: carry on where `from` (the same type, any n) stopped, with its
    * step size and counters, so that an integrator rebuilt on another part
    * of the state (MPI ranks taking over compartments) takes exactly the
@@ -139,7 +151,7 @@ typedef struct gs_integrator_setup {
   void *settings;
 } gs_integrator_setup;
 
-/* Read `method` (default "rk") then the type's keys from the solver map.
+/* Read `method` (default "auto") then the type's keys from the solver map.
  * Unknown keys are not checked here: the caller reads its own keys of the
  * same map and then calls gs_cfg_check_unused.  solver may be NULL (all
  * defaults). */

@@ -51,6 +51,12 @@ typedef struct gs_observer_type {
    * piece of work left from earlier output times; returns 1 while more is
    * left.  Errors are kept and returned at the next output or finish. */
   int (*idle)(void *self);
+  /* Optional: between output times, at most a few times a wall second, the
+   * time t the integrator has reached (its latest evaluation of the rates,
+   * which may lie a step ahead of the last accepted one; the state is not
+   * whole then, so none is given).  For a progress line through long
+   * intervals. */
+  void (*during)(void *self, const gs_run_view *run, double t);
   /* Optional: at the end, ok = 1 when the run succeeded. */
   int (*finish)(void *self, const gs_run_view *run, int ok, gs_error *err);
   void (*free)(void *self);

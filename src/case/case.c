@@ -325,6 +325,55 @@ static double ledger_scale(const gs_model *m, const double *y0, int k) {
   return count ? exp(logsum / (double)count) : 1.0;
 }
 
+/* The default absolute tolerance of a case without solver.atol, in
+ * particles: rtol times the smallest, over the grid's axes, of the case's
+ * volume of that coordinate divided by the axis' largest pivot, i.e. a cell
+ * at the top of the grid holding atol particles carries rtol of the volume
+ * (docs/models.md, "Default tolerances").  The volume is the initial one
+ * and what the rates at the start would bring in over the run (feeds,
+ * binder sprayed).  A fixed 1e-12 particles had made BDF steps resolve 1e-20 of
+ * a batch's particles and crawl. */
+static double default_atol(gs_case *c, double rtol, gs_error *err) {
+  const gs_model *m = &c->model;
+  const gs_grid *g = &m->grid;
+  const size_t n = m->nstate + m->nledger;
+  double total[GS_MAX_DIM] = {0}, rate[GS_MAX_DIM] = {0};
+  double *f = gs_calloc(n, sizeof(double), err);
+  if (!f) return NAN;
+  c->eval.in_integrator = 1;
+  gs_model_rhs(m, &c->eval, c->t0, c->y0, f, f + m->nstate);
+  c->eval.in_integrator = 0;
+  for (size_t i = 0; i < m->nnum; i++)
+    for (int k = 0; k < g->dim; k++) {
+      const double x = g->x[(i % g->ncells) * (size_t)g->dim + (size_t)k];
+      total[k] += c->y0[i] * x;
+      rate[k] += f[i] * x;
+    }
+  free(f);
+  const double span = c->times[c->ntimes - 1] - c->t0;
+  double atol = HUGE_VAL;
+  for (int k = 0; k < g->dim; k++) {
+    const double v = total[k] + fmax(rate[k], 0.0) * span, top = g->axis[k].pivots[g->axis[k].n - 1];
+    if (v > 0 && top > 0 && isfinite(v)) atol = fmin(atol, rtol * v / top);
+  }
+  return atol < HUGE_VAL && atol > 0 ? atol : GS_INTEGRATOR_ATOL;
+}
+
+/* solver.atol, or the case's default (above), which the integrator gets as a
+ * scale of its own default on every component (abs_scale). */
+static int case_atol(gs_cfg_node *solver, gs_case *c, double *atol, gs_error *err) {
+  gs_cfg_node *an = solver ? gs_cfg_get(solver, "atol") : NULL;
+  if (an) return gs_cfg_node_double(an, atol, err); /* validated again by the integrator */
+  double rtol = 1e-6;
+  gs_cfg_node *rn = gs_cfg_get(solver, "rtol");
+  if (rn && gs_cfg_node_double(rn, &rtol, err)) return GS_EINPUT;
+  *atol = default_atol(c, rtol, err);
+  if (isnan(*atol)) return GS_ENOMEM;
+  const double factor = *atol / GS_INTEGRATOR_ATOL;
+  for (size_t i = 0; i < c->ode.n; i++) c->abs_scale[i] *= factor;
+  return GS_OK;
+}
+
 static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
   gs_model *m = &c->model;
   size_t n = m->nstate + m->nledger;
@@ -362,6 +411,7 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
   else if (rb && (gs_cfg_node_double(rb, &c->rebalance, err) || !(c->rebalance >= 0 && c->rebalance < 1)))
     return gs_cfg_fail(rb, err, "expected a fraction in [0, 1) or 'none'");
   int rc = gs_integrator_setup_read(solver, &c->integrator_setup, err);
+  if (!rc) rc = case_atol(solver, c, &c->atol, err);
   if (!rc && solver) rc = gs_cfg_check_unused(solver, err);
   if (!rc) rc = gs_integrator_create(&c->integrator_setup, &c->ode, &c->integrator, err);
   if (!rc && c->per_compartment && !c->integrator.type->per_compartment)
@@ -391,13 +441,9 @@ static void implicit_mass_tolerance(gs_cfg_node *root, gs_case *c) {
 /* Numbers are controlled to an absolute accuracy atol (in the RMS norm of the
  * integrator), so small negative values of a few atol are integration noise,
  * not a failure. */
-static void negative_floor(gs_cfg_node *root, gs_case *c) {
-  gs_cfg_node *solver = gs_cfg_get(root, "solver");
-  gs_cfg_node *an = solver ? gs_cfg_get(solver, "atol") : NULL;
-  double atol = 1e-12;
-  if (an) gs_cfg_node_double(an, &atol, NULL);
-  c->checks.negative_floor = 100 * atol;
-  c->eval.noise_floor = atol;
+static void negative_floor(gs_case *c) {
+  c->checks.negative_floor = 100 * c->atol;
+  c->eval.noise_floor = c->atol;
 }
 
 int gs_case_read_times(gs_cfg_node *root, double *t0, double **times, size_t *ntimes,
@@ -439,7 +485,7 @@ int gs_case_from_cfg(gs_cfg *cfg, gs_case *c, gs_error *err) {
   if (!rc) rc = read_checks(root, &c->checks, err);
   if (!rc) rc = setup_ode(root, c, err);
   if (!rc) implicit_mass_tolerance(root, c);
-  if (!rc) negative_floor(root, c);
+  if (!rc) negative_floor(c);
   if (!rc) rc = gs_cfg_check_unused(root, err);
   return rc;
 }

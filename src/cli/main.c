@@ -164,6 +164,10 @@ static int cmd_run(int argc, char **argv) {
             "grid boundaries %.2g\n",
             path, rep.t_end, rep.wall_seconds, rep.stats.steps, rep.stats.rhs_evals, moved, out,
             out, rep.max_balance_error, rep.max_loss);
+  char note[512]; /* solver auto: when and why it switched */
+  const gs_integrator_type *it = c.integrator.type;
+  if (!rc && rank == 0 && it->describe && it->describe(c.integrator.self, note, sizeof note))
+    fprintf(stderr, "gransim: %s\n", note);
   gs_case_free(&c);
   return rc ? 1 : 0;
 }

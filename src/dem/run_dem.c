@@ -12,10 +12,23 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
+#include "core/progress.h"
 #include "dem/dem_internal.h"
 #include "dem/dem_stats.h"
 #include "dem/dem_vtk.h"
+
+/* steps between two looks at the clock for the progress line */
+#define GS_DEM_PROGRESS_STEPS 200
+
+static void dem_progress(gs_progress *line, gs_dem *d, int force) {
+  gs_dem_view v;
+  gs_dem_get_view(d, &v);
+  char extra[96];
+  snprintf(extra, sizeof extra, "%zu particles, %zu contacts", v.n, gs_dem_ncontacts(d));
+  gs_progress_update(line, gs_dem_time(d), extra, force);
+}
 
 static int in_outlet(const double x[3], void *ctx) {
   const gs_dem_case *c = ctx;
@@ -112,6 +125,10 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   uint64_t base_events = 0, base_imp[GS_DEM_MAX_WALLS] = {0};
   double psteps = 0;
   long prev_out_step = 0;
+  /* the progress line: on a terminal only (nothing in pipes or CI logs) */
+  const int show = progress && isatty(STDERR_FILENO);
+  gs_progress line;
+  if (show) gs_progress_start(&line, "gransim dem", "s", 0.0, nsteps * dt);
   if (!rc) rc = gs_dem_run(d, 0, err); /* place the fill so that t = 0 is reported */
   if (!rc) rc = gs_dem_wet_start(c, dir, err);
   if (!rc) gs_dem_stats_reset(&st, c, 0);
@@ -193,11 +210,6 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       fprintf(ts, ",%llu,%d,%.6f\n", (unsigned long long)k.lost, steady, wall_seconds() - t0wall);
       prev_out_step = step;
       if (!rc) rc = gs_dem_wet_output(c, err);
-      if (progress) {
-        double el = wall_seconds() - t0wall;
-        fprintf(stderr, "gransim dem: t = %.5f / %.5f s, %zu particles, %zu contacts, %.3g particle-steps/s\n",
-                gs_dem_time(d), c->duration, v.n, gs_dem_ncontacts(d), el > 0 ? psteps / el : 0);
-      }
     }
     if (!rc && vtk_k && step % vtk_k == 0) {
       snprintf(path, sizeof path, "%s/particles_%06ld.vtk", vdir, frame);
@@ -224,9 +236,18 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       gs_dem_get_view(d, &v);
       psteps += (double)v.n * (double)(next - step);
     }
-    rc = gs_dem_wet_advance(c, next - step, err);
-    step = next;
+    /* in pieces while a progress line shows, so that it moves between output
+     * times (a step does the same whatever piece it is in) */
+    const long piece = show ? GS_DEM_PROGRESS_STEPS : next - step;
+    while (!rc && step < next) {
+      const long k = next - step < piece ? next - step : piece;
+      rc = gs_dem_wet_advance(c, k, err);
+      step += k;
+      if (!rc && show) dem_progress(&line, d, 0);
+    }
   }
+  if (show && !rc) dem_progress(&line, d, 1); /* the end, whatever the throttle */
+  if (show) gs_progress_end(&line);
   if (!rc && progress) {
     double el = wall_seconds() - t0wall;
     gs_dem_counters k;

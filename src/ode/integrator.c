@@ -6,7 +6,8 @@
  *
  *   rtol                  relative tolerance, 0 < rtol < 1 (default 1e-6)
  *   atol                  absolute tolerance in the units of the state vector
- *                         (default 1e-12).  Number densities can be tiny
+ *                         (default GS_INTEGRATOR_ATOL, 1e-12; a case scales its
+ *                         default to its own numbers through abs_scale).  Number densities can be tiny
  *                         (1e-12 mol is a typical magnitude), so atol must be
  *                         chosen well below the smallest density that matters;
  *                         a component is resolved to about atol * abs_scale[i].
@@ -24,7 +25,8 @@
 
 #include "gransim/integrator.h"
 
-extern const gs_integrator_type gs_integrator_rk, gs_integrator_cvode, gs_integrator_euler;
+extern const gs_integrator_type gs_integrator_auto, gs_integrator_rk, gs_integrator_cvode,
+    gs_integrator_euler;
 
 /* Defined here, used by the integrator types (declared again in each type's
  * file because this module has no private header). */
@@ -32,8 +34,8 @@ int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
                               double *initial_step, double *min_step, double *max_step,
                               long *max_steps, gs_error *err);
 
-static const gs_integrator_type *const registry[] = {&gs_integrator_rk, &gs_integrator_cvode,
-                                                     &gs_integrator_euler, NULL};
+static const gs_integrator_type *const registry[] = {
+    &gs_integrator_auto, &gs_integrator_rk, &gs_integrator_cvode, &gs_integrator_euler, NULL};
 
 const gs_integrator_type *const *gs_integrator_types(void) { return registry; }
 
@@ -67,7 +69,7 @@ int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
                               double *initial_step, double *min_step, double *max_step,
                               long *max_steps, gs_error *err) {
   int rc = gs_cfg_double_range(solver, "rtol", 0, 1e-6, 0.0, 1, 1.0, 1, rtol, err);
-  if (!rc) rc = gs_cfg_double_range(solver, "atol", 0, 1e-12, 0.0, 1, HUGE_VAL, 0, atol, err);
+  if (!rc) rc = gs_cfg_double_range(solver, "atol", 0, GS_INTEGRATOR_ATOL, 0.0, 1, HUGE_VAL, 0, atol, err);
   if (!rc) rc = gs_step_key(solver, "initial_step", 0, initial_step, err);
   if (!rc) rc = gs_step_key(solver, "min_step", 1, min_step, err);
   if (!rc) rc = gs_step_key(solver, "max_step", 0, max_step, err);
@@ -92,7 +94,7 @@ static void gs_list_methods(char *buf, size_t size) {
 
 static int gs_pick_method(gs_cfg_node *solver, const gs_integrator_type **type, gs_error *err) {
   const char *name = NULL;
-  int rc = gs_cfg_string_opt(solver, "method", "rk", &name, err);
+  int rc = gs_cfg_string_opt(solver, "method", "auto", &name, err);
   if (rc) return rc;
   *type = gs_integrator_lookup(name);
   if (*type) return GS_OK;
@@ -128,7 +130,8 @@ int gs_integrator_setup_read(gs_cfg_node *solver, gs_integrator_setup *out, gs_e
 }
 
 void gs_integrator_setup_free(gs_integrator_setup *setup) {
-  free(setup->settings);
+  if (setup->type && setup->type->free_settings) setup->type->free_settings(setup->settings);
+  else free(setup->settings);
   setup->settings = NULL;
   setup->type = NULL;
 }

@@ -83,6 +83,16 @@ int gs_run_output_time(gs_run *run, double t, const double *Y, gs_error *err) {
   return GS_OK;
 }
 
+void gs_run_during(gs_run *run, double t) {
+  if (!run->has_during) return;
+  const double now = gs_run_now();
+  if (now < run->next_during) return;
+  run->next_during = now + GS_RUN_DURING_EVERY;
+  run->view.wall_seconds = now - run->start;
+  for (size_t i = 0; i < run->nobs; i++)
+    if (run->obs[i].type->during) run->obs[i].type->during(run->obs[i].self, &run->view, t);
+}
+
 int gs_run_idle(gs_run *run) {
   int more = 0;
   for (size_t i = 0; i < run->nobs; i++)
@@ -123,6 +133,8 @@ static int add_observers(gs_run *run, gs_error *err) {
   }
   run->nown = run->nobs;
   for (size_t i = 0; root && i < opt->nobservers; i++) run->obs[run->nobs++] = opt->observers[i];
+  for (size_t i = 0; i < run->nobs; i++)
+    if (run->obs[i].type->during) run->has_during = 1;
   return GS_OK;
 }
 

@@ -57,6 +57,8 @@ struct gs_run {
   int stop;          /* an observer ended the run at the last output time */
   double phase[GS_PH_N];
   long faults_start; /* page faults before the run */
+  int has_during;    /* an observer has a `during` */
+  double next_during; /* wall clock when the next `during` call is due */
 };
 
 /* Values of run->resume_state: one integrator's mark, or one per
@@ -68,6 +70,11 @@ size_t gs_run_resume_size(const gs_case *c);
 void gs_run_mark(gs_run *run, const gs_integrator *it, size_t offset);
 /* Every observer at output time t (in order); sets run->stop when one asks. */
 int gs_run_output_time(gs_run *run, double t, const double *Y, gs_error *err);
+/* From a strategy's rates (on the process and thread of the output times):
+ * the observers' `during` with the time t reached, when one is due (every
+ * GS_RUN_DURING_EVERY wall seconds; otherwise one clock read). */
+#define GS_RUN_DURING_EVERY 0.2
+void gs_run_during(gs_run *run, double t);
 /* A piece of the observers' idle work; 1 while more is left. */
 int gs_run_idle(gs_run *run);
 /* Steps so far, through the strategy. */

@@ -108,6 +108,7 @@ static int local_rhs(void *ctx, double t, const double *yl, double *fl) {
   g->t_exchange += synced - start;
   g->t_rhs += gs_run_now() - synced;
   g->rhs_calls++;
+  gs_run_during(run, t); /* rank 0 holds the observers */
   const size_t i = gs_run_first_nonfinite(fl, d->nlocal);
   if (i == d->nlocal) return 0;
   g->bad = 1;

@@ -32,6 +32,7 @@ static int shared_rhs(void *ctx, double t, const double *y, double *dydt) {
   gs_model_rhs(m, &run->ev, t, y, dydt, dydt + m->nstate);
   run->ev.in_integrator = 0;
   s->t_rhs += gs_run_now() - start;
+  gs_run_during(run, t);
   const size_t n = m->nstate + m->nledger, i = gs_run_first_nonfinite(dydt, n);
   if (i == n) return 0;
   s->bad = 1;

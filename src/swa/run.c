@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/progress.h"
 #include "gransim/parallel.h"
 #include "swa/output.h"
 #include "swa/sim.h"
@@ -61,10 +62,37 @@ static void summary_row(const gs_swa_model *m, const gs_swa_summary *s, double *
   }
 }
 
+/* The progress line of a rank's runs: their simulated seconds added up
+ * (runs x span in all), advanced as each run passes an output time; only
+ * OpenMP's master thread rewrites it (it runs runs too, so it passes output
+ * times often enough). */
+typedef struct {
+  int on;
+  double reached; /* simulated seconds of this rank's runs so far (atomic) */
+  size_t done, mine; /* runs finished, of this rank's */
+  gs_progress line;
+} swa_progress;
+
+static void swa_progress_tick(swa_progress *p, double dt) {
+  if (!p->on) return;
+#pragma omp atomic
+  p->reached += dt;
+  if (omp_get_thread_num() != 0) return;
+  double reached;
+  size_t done;
+#pragma omp atomic read
+  reached = p->reached;
+#pragma omp atomic read
+  done = p->done;
+  char extra[64];
+  snprintf(extra, sizeof extra, "%zu of %zu runs done", done, p->mine);
+  gs_progress_update(&p->line, p->line.t0 + reached, extra, 0);
+}
+
 /* One run: obs [time][comp][col], hist [time][comp][cell], extra [time][comp][2],
  * sieve [time][comp][class]. */
 static int one_run(const gs_swa_case *c, size_t r, double *obs, double *hist, double *extra,
-                   double *sieve, gs_swa_stats *stats, gs_error *err) {
+                   double *sieve, gs_swa_stats *stats, swa_progress *prog, gs_error *err) {
   const gs_swa_model *m = &c->model;
   size_t nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid.ncells;
   gs_swa_sim *s = gs_swa_sim_alloc(m, run_seed(c->seed, r), err);
@@ -73,6 +101,7 @@ static int one_run(const gs_swa_case *c, size_t r, double *obs, double *hist, do
   for (size_t t = 0; !rc && t < c->ntimes; t++) {
     rc = gs_swa_sim_advance(s, c->times[t], err);
     if (rc) break;
+    if (t) swa_progress_tick(prog, c->times[t] - c->times[t - 1]);
     gs_swa_sim_sync(s);
     for (size_t z = 0; z < nz; z++) {
       gs_swa_summary sm;
@@ -154,7 +183,9 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
   size_t mine = runs / (size_t)size + ((size_t)rank < runs % (size_t)size); /* runs r with r % size == rank */
   if (rank) progress = 0;
   double wall0 = omp_get_wtime();
-  size_t done = 0;
+  swa_progress prog = {.on = progress, .mine = mine};
+  const double span = c->times[nt - 1] - c->times[0];
+  if (progress) gs_progress_start(&prog.line, "gransim swa", "run-s", 0.0, span * (double)mine);
   gs_error first = {0};
   if (!rc && mine) {
 #pragma omp parallel for schedule(dynamic, 1)
@@ -166,7 +197,8 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
       failed = first.code;
       if (failed) continue;
       gs_swa_stats s1 = {0};
-      int code = one_run(c, r, obs + r * nobs, hist + r * nhist, extra + r * nextra, sv + r * nsv, &s1, &e);
+      int code = one_run(c, r, obs + r * nobs, hist + r * nhist, extra + r * nextra, sv + r * nsv, &s1,
+                         &prog, &e);
       double *sr = st + 4 * r;
       sr[0] = (double)s1.jumps;
       sr[1] = (double)s1.fictitious;
@@ -175,16 +207,15 @@ int gs_swa_case_run(gs_swa_case *c, const char *out_dir, int progress, double *m
 #pragma omp critical(gs_swa_runs)
       {
         if (code && !first.code) first = e;
-        done++;
-        if (progress) {
-          if (size > 1)
-            fprintf(stderr, "\rgransim: swa run %zu/%zu of rank 0 done (%zu runs on %d ranks, %.1f s)%s", done,
-                    mine, runs, size, omp_get_wtime() - wall0, done == mine ? "\n" : "");
-          else
-            fprintf(stderr, "\rgransim: swa run %zu/%zu done (%.1f s)%s", done, runs, omp_get_wtime() - wall0,
-                    done == runs ? "\n" : "");
-        }
+#pragma omp atomic
+        prog.done++;
       }
+    }
+    if (progress) {
+      char extra[64];
+      snprintf(extra, sizeof extra, "%zu of %zu runs done", prog.done, mine);
+      gs_progress_update(&prog.line, prog.reached, extra, 1);
+      gs_progress_end(&prog.line);
     }
     if (first.code) {
       *err = first;
