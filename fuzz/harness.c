@@ -6,9 +6,13 @@
 #include <string.h>
 #include <unistd.h>
 
+static char path[4096];
+
+static void remove_input(void) { unlink(path); }
+
 const char *fuzz_input_file(const uint8_t *data, size_t size, const char *suffix) {
-  static char path[4096];
   const char *dir = getenv("TMPDIR");
+  if (!path[0]) atexit(remove_input); /* one file per process, gone when it ends */
   snprintf(path, sizeof path, "%s/gransim-fuzz-%ld%s", dir && *dir ? dir : "/tmp", (long)getpid(), suffix);
   FILE *f = fopen(path, "wb");
   if (!f) return NULL;
