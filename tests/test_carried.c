@@ -19,11 +19,18 @@ static const char *grid16 =
     "    - {name: excipient, type: geometric, min: 5.0e-16, ratio: 3, cells: 12}\n"
     "  carried: [liquid, gas]\n";
 
+/* The grid section for ncomp compartments (a static buffer: one at a time). */
+static const char *grid_of(int ncomp) {
+  static char buf[1024];
+  snprintf(buf, sizeof buf, grid16, ncomp);
+  return buf;
+}
+
 /* A random state with loads; aggregation rates; conservation of number
  * (birth/death = 1/2), of each axis and of each carried quantity. */
 static void check_agg(const char *mech, const char *what, tl_rng *r, double wet_share,
                       double *carried_change) {
-  char *yaml = tl_fmt("%smechanisms:\n  - %s\noutput: {end: 1}\n", tl_fmt(grid16, 1), mech);
+  char *yaml = tl_fmt("%smechanisms:\n  - %s\noutput: {end: 1}\n", grid_of(1), mech);
   gs_case c;
   if (tl_case(yaml, &c)) return;
   gs_model *m = &c.model;
@@ -73,7 +80,7 @@ static void check_agg(const char *mech, const char *what, tl_rng *r, double wet_
  * conserved (the parent's load is shared among its fragments). */
 static void test_breakage(void) {
   char *yaml = tl_fmt("%smechanisms:\n  - {type: breakage, selection: {type: power, s0: 1.0e10, exponent: 1},"
-                      " daughters: {type: uniform}}\noutput: {end: 1}\n", tl_fmt(grid16, 1));
+                      " daughters: {type: uniform}}\noutput: {end: 1}\n", grid_of(1));
   gs_case c;
   if (tl_case(yaml, &c)) return;
   gs_model *m = &c.model;
@@ -149,7 +156,7 @@ static void spray_case(int ncomp, const char *extra) {
                       "  - {type: spray, rate: [2.0e-6%s], start: 1, end: 3}\n%s"
                       "solver: {method: rk, rtol: 1.0e-10, atol: 1.0e-3}\n"
                       "output: {end: 4, count: 4}\n",
-                      tl_fmt(grid16, ncomp), ncomp > 1 ? ", 0" : "", extra);
+                      grid_of(ncomp), ncomp > 1 ? ", 0" : "", extra);
   gs_case c;
   gs_run_report rep;
   double *y = tl_build_run(yaml, &c, &rep);
@@ -206,7 +213,7 @@ static void test_switch_rounding(void) {
                       "mechanisms:\n  - {type: spray, rate: [2.0e-6], start: 3.39, end: 6}\n"
                       "solver: {method: rk, rtol: 1.0e-10, atol: 1.0e-3}\n"
                       "output: {times: [1.16, 7]}\n",
-                      tl_fmt(grid16, 1));
+                      grid_of(1));
   gs_case c;
   gs_run_report rep;
   double *y = tl_build_run(yaml, &c, &rep);
@@ -238,7 +245,7 @@ static void test_pore_consolidation(void) {
                       "mechanisms:\n  - {type: pore_consolidation, rate: %g, min_porosity: %g}\n"
                       "solver: {method: rk, variant: rk8pd, rtol: 1.0e-11, atol: 1.0e-6}\n"
                       "output: {end: %g, count: 3}\n",
-                      tl_fmt(grid16, 1), k, e, t_end);
+                      grid_of(1), k, e, t_end);
   gs_case c;
   gs_run_report rep;
   double *y = tl_build_run(yaml, &c, &rep);

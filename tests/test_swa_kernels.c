@@ -116,7 +116,8 @@ static void madec_vs_sectional(void) {
   gs_swa_case_free(&c);
 
   /* beta0 doubled in the stochastic run only: the check must fail */
-  sw_case(sw_fmt("%ssolver: {method: swa, particles: 2048, runs: 16, seed: 5}\n", madec_body(6e-7, 1.6, 30)), &c);
+  const char *body2 = madec_body(6e-7, 1.6, 30);
+  sw_case(sw_fmt("%ssolver: {method: swa, particles: 2048, runs: 16, seed: 5}\n", body2), &c);
   CHECK(sw_run(&c, &r) == 0);
   int caught = !agree("madec, beta0 x2", &c, &r, &s, 0.01, 1);
   fprintf(stderr, "madec with beta0 x2 against the sectional beta0: %s\n", caught ? "caught" : "NOT caught");
@@ -125,6 +126,7 @@ static void madec_vs_sectional(void) {
   gs_swa_case_free(&c);
   free((char *)body);
   free((char *)fbody);
+  free((char *)body2);
 }
 
 static const char *brownian_body(double beta0) {
@@ -229,8 +231,9 @@ static void table_two_classes(void) {
  * the majorant or the thinning shows up here), with any number of threads. */
 static void regression(void) {
   char *path = table_file("reg", "edges, 0, 2.56, 1e9\n4, 2\n2, 1\n");
+  char *body = (char *)madec_body(3e-7, 1.6, 30);
   struct { char *yaml; double m0; unsigned long long jumps, fict; } cases[2] = {
-      {sw_fmt("%ssolver: {method: swa, particles: 256, runs: 2, seed: 42}\n", madec_body(3e-7, 1.6, 30)),
+      {sw_fmt("%ssolver: {method: swa, particles: 256, runs: 2, seed: 42}\n", body),
        REG_MADEC_M0, REG_MADEC_JUMPS, REG_MADEC_FICT},
       {table_case(path, "solver: {method: swa, particles: 256, runs: 2, seed: 42}"), REG_TABLE_M0, REG_TABLE_JUMPS, REG_TABLE_FICT}};
   for (int k = 0; k < 2; k++) {
@@ -254,6 +257,7 @@ static void regression(void) {
   }
   remove(path);
   free(path);
+  free(body);
 }
 
 int main(void) {

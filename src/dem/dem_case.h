@@ -7,6 +7,9 @@
 
 #define GS_DEM_MAX_CLASSES 64
 #define GS_DEM_CASE_MAX_WALLS 32
+/* The largest time step accepted, as a fraction of the Rayleigh time of the
+ * smallest particle (docs/reliability.md, "The DEM refuses nonsense"). */
+#define GS_DEM_MAX_RAYLEIGH_FRACTION 0.5
 
 /* Which engine runs the case (dem.engine): the embedded one, or LIGGGHTS
  * through a deck written from the same keys (src/liggghts). */
@@ -79,6 +82,9 @@ struct gs_dem_case_s {
   double out_every, vtk_every;
   /* spray and granulation (src/dem/dem_wet.h); NULL when the case has neither */
   struct gs_dem_wet *wet;
+  /* dem.max_lost: the largest share of the particles inserted that may leave
+   * the box other than through an outlet before the run stops */
+  double max_lost;
 };
 
 /* case_wet.c, wet_run.c: the `spray:` and `granulation:` sections, and the
@@ -93,6 +99,27 @@ void gs_dem_wet_free(gs_dem_case *c);
 int gs_dem_case_vec3(gs_cfg_node *map, const char *key, int required, const double *def, double out[3],
                      gs_error *err);
 int gs_dem_case_unit_vec(gs_cfg_node *map, const char *key, double out[3], gs_error *err);
+
+/* The run's health (health.c): what the driver checks at t = 0 and after
+ * every stretch of steps between events, so that a run that has gone wrong
+ * stops saying where instead of writing tables from it. */
+typedef struct {
+  long inserted;     /* particles inserted so far (fill and feeds) */
+  uint64_t lost0;    /* the engine's lost count when the run began */
+} gs_dem_health;
+/* Overlap of two particles, as a share of the smaller radius, above which a
+ * run stops (GS_DEM_MAX_START_OVERLAP: at the start, before any step). */
+#define GS_DEM_MAX_OVERLAP 0.5
+#define GS_DEM_MAX_START_OVERLAP 0.1
+void gs_dem_health_init(gs_dem_health *h, const gs_dem_case *c);
+/* GS_ENUMERIC naming the step, time, particle(s) and figure when particles
+ * overlap by more than the limit (start: at t = 0), a position or velocity
+ * is not finite, or more than max_lost of the particles inserted have left
+ * the box. */
+int gs_dem_health_check(gs_dem_health *h, const gs_dem_case *c, int start, gs_error *err);
+/* After the engine failed (rc): adds the first particle with a non-finite
+ * position or velocity to the message, if there is one. */
+int gs_dem_health_explain(const gs_dem_case *c, int rc, gs_error *err);
 
 /* Insert into the case's simulation with inserter in's region, velocity and
  * class fractions (run_dem.c; the LIGGGHTS engine builds its initial bed with

@@ -208,6 +208,11 @@ void gs_dem_wall_point_to_world(const gs_dem_wall *w, const double xb[3], double
 void gs_dem_wall_dir_to_world(const gs_dem_wall *w, const double db[3], double dw[3]);
 void gs_dem_wall_velocity(const gs_dem_wall *w, const double xw[3], double v[3]);
 
+/* mesh_closed.c: the edges of m that belong to one facet only (the borders
+ * of holes) into *nopen, and the first facet (file order) having one, with
+ * that edge (vertex k to k + 1 of the facet), into *tri and *k. */
+int gs_dem_mesh_open_edges(const gs_dem_mesh *m, size_t *nopen, size_t *tri, int *k, gs_error *err);
+
 /* mesh_bins.c */
 int gs_dem_mesh_build_bins(gs_dem_mesh *m, double reach, gs_error *err);
 void gs_dem_mesh_weld(gs_dem_mesh *m);

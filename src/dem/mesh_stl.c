@@ -4,7 +4,9 @@
  * exporters write "solid" at the start of binary files too.  A file is binary
  * when its length is exactly 84 + 50 * (triangle count in bytes 80..83).
  * Facet normals in the file are ignored and recomputed from the vertex order,
- * since exporters disagree on them; degenerate (zero-area) facets are dropped. */
+ * since exporters disagree on them.  A facet with a non-finite vertex or no
+ * area (three vertices on a line) is refused, naming it: dropped silently, it
+ * would leave a hole that particles escape through (docs/reliability.md). */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -14,24 +16,28 @@
 #include "dem/dem_internal.h"
 
 static int finish(gs_dem_mesh *m, const char *path, gs_error *err) {
-  size_t keep = 0;
   m->nrm = malloc((m->ntri ? m->ntri : 1) * 3 * sizeof(double));
   m->vid = malloc((m->ntri ? m->ntri : 1) * 3 * sizeof(int));
   if (!m->nrm || !m->vid) return gs_error_set(err, GS_ENOMEM, "%s: out of memory", path);
+  if (!m->ntri) return gs_error_set(err, GS_EINPUT, "%s: no triangles", path);
   for (size_t t = 0; t < m->ntri; t++) {
     const double *v = m->v + 9 * t;
+    for (int k = 0; k < 9; k++)
+      if (!isfinite(v[k]))
+        return gs_error_set(err, GS_EINPUT, "%s: facet %zu (of %zu, counted from 1): vertex %d has a non-finite "
+                            "coordinate (%g, %g, %g)", path, t + 1, m->ntri, k / 3 + 1, v[k / 3 * 3],
+                            v[k / 3 * 3 + 1], v[k / 3 * 3 + 2]);
     double e1[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]};
     double e2[3] = {v[6] - v[0], v[7] - v[1], v[8] - v[2]};
     double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                    e1[0] * e2[1] - e1[1] * e2[0]};
     double l = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    if (!(l > 0) || !isfinite(l)) continue;
-    memmove(m->v + 9 * keep, v, 9 * sizeof(double));
-    for (int k = 0; k < 3; k++) m->nrm[3 * keep + k] = c[k] / l;
-    keep++;
+    if (!(l > 0) || !isfinite(l))
+      return gs_error_set(err, GS_EINPUT, "%s: facet %zu (of %zu, counted from 1) is degenerate (area %g): vertices "
+                          "(%g, %g, %g), (%g, %g, %g), (%g, %g, %g) lie on a line; remove it or repair the mesh",
+                          path, t + 1, m->ntri, 0.5 * l, v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
+    for (int k = 0; k < 3; k++) m->nrm[3 * t + k] = c[k] / l;
   }
-  m->ntri = keep;
-  if (!keep) return gs_error_set(err, GS_EINPUT, "%s: no usable triangles", path);
   gs_dem_mesh_weld(m);
   return GS_OK;
 }

@@ -80,6 +80,8 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   int rc = GS_OK;
   gs_dem_stats st;
   if ((rc = gs_dem_stats_init(&st, c, err))) return rc;
+  gs_dem_health health;
+  gs_dem_health_init(&health, c);
   long cap = 1024, ns = 0;
   double *ser_m = malloc(cap * sizeof(double)), *ser_c = malloc(cap * sizeof(double));
   if (!ser_m || !ser_c) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
@@ -89,6 +91,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
     long n;
     double m;
     rc = gs_dem_case_insert(c, &c->fill[k], c->fill[k].count, c->fill[k].mass, &rng, &n, &m, err);
+    if (!rc) health.inserted += n;
     if (!rc && n < c->fill[k].count && !isfinite(c->fill[k].mass))
       fprintf(stderr, "gransim: warning: fill[%zu]: region full after %ld of %ld particles\n", k, n,
               c->fill[k].count);
@@ -131,6 +134,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   if (show) gs_progress_start(&line, "gransim dem", "s", 0.0, nsteps * dt);
   if (!rc) rc = gs_dem_run(d, 0, err); /* place the fill so that t = 0 is reported */
   if (!rc) rc = gs_dem_wet_start(c, dir, err);
+  if (!rc) rc = gs_dem_health_check(&health, c, 1, err);
   if (!rc) gs_dem_stats_reset(&st, c, 0);
   while (!rc && step <= nsteps) {
     /* events at this step */
@@ -150,6 +154,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       double m;
       if (f->mass_rate > 0) rc = gs_dem_case_insert(c, f, LONG_MAX, f->mass_rate * span - f->done_m, &rng, &n, &m, err);
       else rc = gs_dem_case_insert(c, f, (long)floor(f->number_rate * span - f->done_n + 0.5), HUGE_VAL, &rng, &n, &m, err);
+      if (!rc) health.inserted += n;
       f->done_n += (double)n;
       f->done_m += m;
       f->next_t += f->every;
@@ -245,6 +250,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       step += k;
       if (!rc && show) dem_progress(&line, d, 0);
     }
+    rc = rc ? gs_dem_health_explain(c, rc, err) : gs_dem_health_check(&health, c, 0, err);
   }
   if (show && !rc) dem_progress(&line, d, 1); /* the end, whatever the throttle */
   if (show) gs_progress_end(&line);
