@@ -283,7 +283,8 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
       for (size_t c = 0; !rc && c < g->ncells; c++) A->x[q][c] = g->x[c * (size_t)g->dim + (size_t)k];
     }
   }
-  if (!rc) rc = build_axis_maps(A, g, err);
+  /* the FFT needs neither (the maps hold n^2 entries per axis) */
+  if (!rc && !A->fft) rc = build_axis_maps(A, g, err);
   if (!rc && !A->fft) rc = build_kernel_table(A, limit_mb, err);
   if (!rc) {
     A->nthreads = m->nslots > 0 ? m->nslots : 1;
