@@ -19,9 +19,10 @@
  * pivot (excess volume to the ledger) inside the last cell, lost beyond
  * the last edge (its volume to the ledger), so number and volume are
  * conserved up to the FFT's round-off (about 1e-16 of the largest birth
- * rate in every cell, including cells no pair reaches). */
+ * rate in every cell of the index sums of the occupied cells' box). */
 #include <fftw3.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -223,19 +224,22 @@ int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, int nslots, gs_agg_f
   return GS_OK;
 }
 
-/* Place the births of the convolution (real, padded layout) on the grid. */
-static void place(const gs_agg_fft *F, const double *B, double *dN, double *lost, double *born) {
-  const size_t K0 = 2 * F->n[0] - 1, K1 = 2 * F->n[1] - 1, K2 = 2 * F->n[2] - 1;
+/* Place the births of the convolution (real, padded layout) on the grid:
+ * the index sums in [klo, khi] per axis, twice the box of the occupied cells
+ * (outside it the convolution is exactly zero and the FFT's values are
+ * round-off, which would give cells no pair reaches births of either sign). */
+static void place(const gs_agg_fft *F, const double *B, const size_t *klo, const size_t *khi,
+                  double *dN, double *lost, double *born) {
   const axis_map *m0 = &F->map[0], *m1 = &F->map[1], *m2 = &F->map[2];
   const size_t s0 = F->stride[0], s1 = F->stride[1], s2 = F->stride[2];
   double placed = 0, lv[3] = {0, 0, 0};
-  for (size_t k0 = 0; k0 < K0; k0++)
-    for (size_t k1 = 0; k1 < K1; k1++) {
+  for (size_t k0 = klo[0]; k0 <= khi[0]; k0++)
+    for (size_t k1 = klo[1]; k1 <= khi[1]; k1++) {
       const double *row = B + (k0 * F->M[1] + k1) * F->M[2];
       const int out01 = m0->state[k0] == OUTSIDE || m1->state[k1] == OUTSIDE;
       const double w0 = m0->w[k0], w1 = m1->w[k1];
       const double f0[2] = {1 - w0, w0}, f1[2] = {1 - w1, w1};
-      for (size_t k2 = 0; k2 < K2; k2++) {
+      for (size_t k2 = klo[2]; k2 <= khi[2]; k2++) {
         const double b = row[k2];
         if (out01 || m2->state[k2] == OUTSIDE) { /* the product lies beyond the grid */
           lv[0] += b * m0->sum[k0];
@@ -293,8 +297,14 @@ void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, dou
   }
   fftw_execute_dft_c2r(F->inv, S->acc, S->real);
   double removed = 0;
+  size_t klo[3] = {SIZE_MAX, SIZE_MAX, SIZE_MAX}, khi[3] = {0, 0, 0};
   for (size_t c = 0; c < F->ncells; c++) {
     if (N[c] == 0.0) continue;
+    const size_t idx[3] = {c / (F->n[1] * F->n[2]), c / F->n[2] % F->n[1], c % F->n[2]};
+    for (int q = 0; q < 3; q++) {
+      if (2 * idx[q] < klo[q]) klo[q] = 2 * idx[q];
+      if (2 * idx[q] > khi[q]) khi[q] = 2 * idx[q];
+    }
     double r = 0;
     for (int t = 0; t < F->nterm; t++) r += F->t[t].c * F->phi[F->t[t].m1][c] * mom[F->t[t].m2];
     r *= coef * N[c];
@@ -302,5 +312,5 @@ void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, dou
     if (dN) dN[c] -= r;
   }
   *dead += removed;
-  place(F, S->real, dN, lost, born);
+  if (klo[0] != SIZE_MAX) place(F, S->real, klo, khi, dN, lost, born); /* else no particles */
 }
