@@ -1,7 +1,7 @@
 /* Aggregation by FFT convolutions (src/pbm/aggregation_fft.c) against the
  * pair scheme (fixed pivot, same grid) and the discrete analytical solution.
  *
- *  - rates: on linear grids in 1-D and 2-D, with populations that fill the
+ *  - rates: on linear grids in 1-D, 2-D and 3-D, with populations that fill the
  *    grid (so products are placed, clamped to the last pivot and lost), the
  *    FFT's number rates, lost volumes and birth/death totals equal the pair
  *    loop's to 1e-12 of the largest rate, for the constant, sum and product
@@ -22,13 +22,15 @@ static const char *kernels[] = {"constant", "sum", "product"};
  * method and kernel; its initial state replaced by fixed-seed random numbers
  * over the whole grid. */
 static int random_case(int dim, int n, const char *method, const char *kernel, gs_case *c) {
-  char *second = dim == 2 ? tl_fmt(", {name: l, type: linear, min: 0.25, max: 1.25, cells: %d}", n) : tl_fmt("%s", "");
+  char *second = dim == 1 ? tl_fmt("%s", "")
+                 : tl_fmt(", {name: l, type: linear, min: 0.25, max: 1.25, cells: %d}%s", n,
+                          dim == 3 ? ", {name: g, type: linear, min: 0, max: 0.5, cells: 8}" : "");
   char *yaml = tl_fmt("grid: {axes: [{name: s, type: linear, min: 0, max: 2, cells: %d}%s]}\n"
                       "initial: {type: cell, number: 1, index: [%s]}\n"
                       "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: %s,"
                       " negligible: 0, kernel: {type: %s, beta0: 1.5}}\n"
                       "output: {end: 1}\n",
-                      n, second, dim == 2 ? "1, 1" : "1", method, kernel);
+                      n, second, dim == 3 ? "1, 1, 1" : dim == 2 ? "1, 1" : "1", method, kernel);
   free(second);
   int rc = tl_case(yaml, c);
   free(yaml);
@@ -39,9 +41,9 @@ static int random_case(int dim, int n, const char *method, const char *kernel, g
 }
 
 static void test_rates_equal(void) {
-  for (int dim = 1; dim <= 2; dim++)
+  for (int dim = 1; dim <= 3; dim++)
     for (int kk = 0; kk < 3; kk++) {
-      const int n = dim == 1 ? 200 : 24;
+      const int n = dim == 1 ? 200 : dim == 2 ? 24 : 8; /* 3-D: 8 x 8 x 8 */
       gs_case c[2];
       double *d[2], *dl[2], birth[2], death[2];
       const char *methods[2] = {"pairs", "fft"};
