@@ -41,10 +41,15 @@
 #include "gransim/kernel.h"
 #include "gransim/pbm.h"
 #include "gransim/threads.h"
+#include "pbm/aggregation_fft.h"
 #include "pbm/lever.h"
 
 enum { CELL_AVERAGE = 0, FIXED_PIVOT = 1 };
 enum { WET_OFF = 0, WET_BOTH = 1, WET_EITHER = 2 };
+enum { METHOD_PAIRS = 0, METHOD_FFT = 1, METHOD_AUTO = 2 };
+/* method auto: the FFT from this many cells per compartment on (the
+ * crossover measured by bench/bench_aggfft.c, docs/performance.md) */
+#define FFT_MIN_CELLS 256
 
 /* Per compartment, the choices made once per time value; a page each
  * (GS_APART), as threads evaluating neighbouring compartments at once write
@@ -97,6 +102,7 @@ typedef struct {
   size_t work_len;
   double *work;          /* per thread: death, B, V[3], fp birth, row  */
   dirty_range *dirty;    /* per thread: [lo, hi) of the cells its summed arrays may hold non-zero */
+  gs_agg_fft *fft;       /* method fft: births and deaths as convolutions (aggregation_fft.c), or NULL */
 } agg_t;
 
 static size_t packed_offset(size_t a, size_t n) { return a * n - a * (a - 1) / 2; }
@@ -104,6 +110,7 @@ static size_t packed_offset(size_t a, size_t n) { return a * n - a * (a - 1) / 2
 static void agg_free(void *self) {
   agg_t *A = self;
   if (!A) return;
+  gs_agg_fft_free(A->fft);
   gs_kernel_free(&A->kernel);
   for (int q = 0; q < 3; q++) {
     free(A->x[q]);
@@ -220,6 +227,27 @@ static int read_wet(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_error *er
   return rc;
 }
 
+/* method: pairs | fft | auto.  The FFT serves fixed pivot on equally spaced
+ * pivots with a kernel of separable form, without wetness or carried
+ * quantities; auto takes it where it serves and the grid is large enough
+ * for it to pay. */
+static int choose_method(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_error *err) {
+  static const char *const methods[] = {"pairs", "fft", "auto", NULL};
+  int method = METHOD_PAIRS;
+  int rc = gs_cfg_enum_opt(node, "method", methods, METHOD_PAIRS, &method, err);
+  if (rc || method == METHOD_PAIRS) return rc;
+  const char *why = A->scheme != FIXED_PIVOT ? "needs redistribution: fixed_pivot"
+                    : A->wet != WET_OFF      ? "does not take wet"
+                    : m->ncarried            ? "does not move carried quantities (grid.carried)"
+                                             : gs_agg_fft_unusable(&m->grid, &A->kernel);
+  if (why && method == METHOD_FFT) {
+    gs_cfg_node *mn = gs_cfg_get(node, "method");
+    return gs_cfg_fail(mn ? mn : node, err, "fft %s; use method: pairs or auto", why);
+  }
+  if (why || (method == METHOD_AUTO && m->grid.ncells < FFT_MIN_CELLS)) return GS_OK;
+  return gs_agg_fft_create(&m->grid, &A->kernel, m->nslots, &A->fft, err);
+}
+
 static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err) {
   static const char *const schemes[] = {"cell_average", "fixed_pivot", NULL};
   const gs_grid *g = &m->grid;
@@ -235,6 +263,7 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     rc = gs_cfg_fail(node, err, "fixed_pivot does not move carried quantities (grid.carried); use cell_average");
   if (!rc) rc = gs_cfg_map_req(node, "kernel", &kn, err);
   if (!rc) rc = gs_kernel_create(kn, g, m->dir, &A->kernel, err);
+  if (!rc) rc = choose_method(node, m, A, err);
   if (!rc) rc = gs_cfg_check_unused(node, err);
   if (rc) {
     agg_free(A);
@@ -255,8 +284,9 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
       for (size_t c = 0; !rc && c < g->ncells; c++) A->x[q][c] = g->x[c * (size_t)g->dim + (size_t)k];
     }
   }
-  if (!rc) rc = build_axis_maps(A, g, err);
-  if (!rc) rc = build_kernel_table(A, limit_mb, err);
+  /* the FFT needs neither (the maps hold n^2 entries per axis) */
+  if (!rc && !A->fft) rc = build_axis_maps(A, g, err);
+  if (!rc && !A->fft) rc = build_kernel_table(A, limit_mb, err);
   if (!rc) {
     A->nthreads = m->nslots > 0 ? m->nslots : 1;
     A->nc = m->ncarried;
@@ -759,7 +789,11 @@ static void compartment_rates(agg_t *A, const gs_model *m, const gs_eval *ev, si
   const evaluator wk = evaluator_for(A, ev->slot);
   const double *N = gs_eval_numbers_c(m, ev, y, comp);
   double born = 0, dead = 0;
-  if (A->wet == WET_OFF) {
+  if (A->fft) {
+    double *lost = dledger ? gs_eval_ledger(m, ev, dledger, comp) + m->nvol : NULL;
+    gs_agg_fft_rates(A->fft, comp, N, ev->slot, dydt ? gs_eval_numbers(m, ev, dydt, comp) : NULL, lost,
+                     &born, &dead);
+  } else if (A->wet == WET_OFF) {
     pass(A, m, ev, comp, t, y, N, 1.0, 1, dydt, dledger, &born, &dead, acc, &wk);
   } else {
     const double *psi = wet_cells(A, m, ev, comp, t, y);

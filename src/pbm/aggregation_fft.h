@@ -1,0 +1,30 @@
+/* Fixed-pivot aggregation on uniform grids as FFT convolutions
+ * (aggregation_fft.c), used by the aggregation mechanism (aggregation.c)
+ * when `method` chooses it. */
+#ifndef GRANSIM_PBM_AGGREGATION_FFT_H
+#define GRANSIM_PBM_AGGREGATION_FFT_H
+
+#include <stddef.h>
+
+#include "gransim/kernel.h"
+
+typedef struct gs_agg_fft gs_agg_fft;
+
+/* NULL if the scheme applies to grid g and kernel k, else why it does not
+ * (a phrase for an error message). */
+const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k);
+
+/* Scratch for nslots evaluators that may run at once.  k must outlive it. */
+int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, int nslots, gs_agg_fft **out,
+                      gs_error *err);
+void gs_agg_fft_free(gs_agg_fft *F);
+
+/* Rates of compartment comp with numbers N, in slot `slot`'s scratch:
+ * deaths and fixed-pivot births added to dN (NULL: totals only), the volume
+ * of products beyond the grid (or clamped to its last pivot) added to
+ * lost[k] per axis (NULL: not wanted); *born and *dead get the number placed
+ * and removed. */
+void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, double *dN,
+                      double *lost, double *born, double *dead);
+
+#endif

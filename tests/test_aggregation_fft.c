@@ -1,0 +1,285 @@
+/* Aggregation by FFT convolutions (src/pbm/aggregation_fft.c) against the
+ * pair scheme (fixed pivot, same grid) and the discrete analytical solution.
+ *
+ *  - rates: on linear grids in 1-D, 2-D and 3-D, with populations that fill the
+ *    grid (so products are placed, clamped to the last pivot and lost), the
+ *    FFT's number rates, lost volumes and birth/death totals equal the pair
+ *    loop's to 1e-12 of the largest rate, for the constant, sum and product
+ *    kernels;
+ *  - conservation: number (births - deaths = sum of rates) and the volume
+ *    of every axis (placed + lost = 0) to 1e-12;
+ *  - T1 discrete (constant kernel, pivots 1..K): the same tolerance as the
+ *    pair scheme's in test_aggregation.c;
+ *  - method: auto takes the FFT on a large grid and the pairs on a small one
+ *    (identical results bit for bit); method: fft refuses what it cannot do. */
+#include <omp.h>
+
+#include "pbm_testlib.h"
+
+static const char *kernels[] = {"constant", "sum", "product"};
+
+/* Case on a linear grid of n cells per axis (dim 1 or 2) with the given
+ * method and kernel; its initial state replaced by fixed-seed random numbers
+ * over the whole grid. */
+static int random_case(int dim, int n, const char *method, const char *kernel, gs_case *c) {
+  char *second = dim == 1 ? tl_fmt("%s", "")
+                 : tl_fmt(", {name: l, type: linear, min: 0.25, max: 1.25, cells: %d}%s", n,
+                          dim == 3 ? ", {name: g, type: linear, min: 0, max: 0.5, cells: 8}" : "");
+  char *yaml = tl_fmt("grid: {axes: [{name: s, type: linear, min: 0, max: 2, cells: %d}%s]}\n"
+                      "initial: {type: cell, number: 1, index: [%s]}\n"
+                      "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: %s,"
+                      " negligible: 0, kernel: {type: %s, beta0: 1.5}}\n"
+                      "output: {end: 1}\n",
+                      n, second, dim == 3 ? "1, 1, 1" : dim == 2 ? "1, 1" : "1", method, kernel);
+  free(second);
+  int rc = tl_case(yaml, c);
+  free(yaml);
+  if (rc) return rc;
+  tl_rng r = {42};
+  for (size_t k = 0; k < c->model.grid.ncells; k++) c->y0[k] = tl_uniform(&r);
+  return 0;
+}
+
+static void test_rates_equal(void) {
+  for (int dim = 1; dim <= 3; dim++)
+    for (int kk = 0; kk < 3; kk++) {
+      const int n = dim == 1 ? 200 : dim == 2 ? 24 : 8; /* 3-D: 8 x 8 x 8 */
+      gs_case c[2];
+      double *d[2], *dl[2], birth[2], death[2];
+      const char *methods[2] = {"pairs", "fft"};
+      int ok = 1;
+      for (int s = 0; s < 2; s++) {
+        if (random_case(dim, n, methods[s], kernels[kk], &c[s])) {
+          ok = 0;
+          continue;
+        }
+        d[s] = calloc(c[s].model.nstate, sizeof(double));
+        dl[s] = calloc(c[s].model.nledger, sizeof(double));
+        gs_model_rhs(&c[s].model, &c[s].eval, 0, c[s].y0, d[s], dl[s]);
+        gs_mech_number_rates(&c[s].model, &c[s].model.mech[0], NULL, 0.0, c[s].y0, &birth[s], &death[s]);
+      }
+      CHECK(ok);
+      if (!ok) continue;
+      const gs_model *m = &c[1].model;
+      const gs_grid *g = &m->grid;
+      double scale = 0, diff = 0, sum = 0, lostdiff = 0, volerr = 0;
+      for (size_t k = 0; k < g->ncells; k++) {
+        scale = fmax(scale, fabs(d[0][k]));
+        diff = fmax(diff, fabs(d[1][k] - d[0][k]));
+        sum += d[1][k];
+      }
+      for (int q = 0; q < dim; q++) {
+        double vrate = 0, vscale = 0;
+        for (size_t k = 0; k < g->ncells; k++) {
+          vrate += d[1][k] * g->x[k * (size_t)dim + (size_t)q];
+          vscale += fabs(d[1][k]) * g->x[k * (size_t)dim + (size_t)q];
+        }
+        const double l0 = tl_lost(m, dl[0], 0, q), l1 = tl_lost(m, dl[1], 0, q);
+        lostdiff = fmax(lostdiff, fabs(l1 - l0) / vscale);
+        volerr = fmax(volerr, fabs(vrate + l1) / vscale);
+        CHECK(l1 > 0); /* products leave the grid: the ledger path is exercised */
+      }
+      const double nerr = fabs(sum - (birth[1] - death[1])) / death[1];
+      const double berr = fmax(fabs(birth[1] - birth[0]), fabs(death[1] - death[0])) / death[0];
+      printf("%d-D %s kernel, %d cells per axis: FFT - pairs, largest rate %.3g, lost volume %.3g, "
+             "totals %.3g; FFT conservation: number %.3g, volume %.3g\n",
+             dim, kernels[kk], n, diff / scale, lostdiff, berr, nerr, volerr);
+      CHECK(diff <= 1e-12 * scale);
+      CHECK(lostdiff <= 1e-12);
+      CHECK(berr <= 1e-12);
+      CHECK(nerr <= 1e-12);
+      CHECK(volerr <= 1e-12);
+      for (int s = 0; s < 2; s++) tl_rates_free(&c[s], d[s], dl[s]);
+    }
+}
+
+/* T1 discrete on pivots 1..K (linear grid [1/2, K + 1/2]): products above K
+ * leave the grid (their volume to the ledger) without touching c_k, k <= K.
+ * The FFT's error is absolute (round-off of the largest rates, ~1e-16 of
+ * c_1 per evaluation), not relative per cell like the pairs': the pair
+ * scheme's tolerance (5e-10 relative, measured 1.4e-10) holds for c_k >=
+ * 1e-6, and the absolute error of every c_k must stay below 1e-13 (measured
+ * 1.0e-14; c_40 = 4.5e-13 has a relative error of 1.3e-6). */
+static void test_t1_discrete(void) {
+  const int K = 40;
+  char *yaml = tl_fmt("grid: {axes: [{name: v, type: linear, min: 0.5, max: %g, cells: %d}]}\n"
+                      "initial: {type: cell, number: 1, index: [1]}\n"
+                      "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: fft,\n"
+                      "     kernel: {type: constant, beta0: 1}}\n"
+                      "output: {times: [0.5, 2]}\n"
+                      "solver: {method: rk, variant: rk8pd, rtol: 1.0e-10, atol: 1.0e-16}\n",
+                      K + 0.5, K);
+  gs_case c;
+  gs_run_report rep;
+  double *y = tl_build_run(yaml, &c, &rep);
+  if (y) {
+    double tau = 2, worst = 0, worst_abs = 0;
+    int kmax = 0;
+    for (int k = 1; k <= K; k++) {
+      double want = pow(tau / 2, k - 1) / pow(1 + tau / 2, k + 1), e = fabs(y[k - 1] - want);
+      if (want >= 1e-6) {
+        worst = fmax(worst, e / want);
+        kmax = k;
+      }
+      worst_abs = fmax(worst_abs, e);
+    }
+    printf("T1 discrete, fft: largest relative error of c_k >= 1e-6 (k = 1..%d) at tau = 2: %.3g; "
+           "largest absolute error, k = 1..%d: %.3g (c_1 = 0.25)\n", kmax, worst, K, worst_abs);
+    CHECK(worst < 5e-10);
+    CHECK(worst_abs < 1e-13);
+    free(y);
+    gs_case_free(&c);
+  }
+  free(yaml);
+}
+
+/* A population in cells 3 and 4 of 64: the births fall on index sums 6..8
+ * alone, and every cell the pairs leave at exactly 0 (no event reaches it)
+ * stays exactly 0 under the FFT too (not round-off of either sign). */
+static void test_unreached_cells(void) {
+  gs_case c[2];
+  double *d[2], *dl[2];
+  const char *methods[2] = {"pairs", "fft"};
+  for (int s = 0; s < 2; s++) {
+    char *yaml = tl_fmt("grid: {axes: [{name: v, type: linear, min: 0, max: 1, cells: 64}]}\n"
+                        "initial: {type: cell, number: 1, index: [3]}\n"
+                        "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: %s,"
+                        " kernel: {type: constant, beta0: 1}}\n"
+                        "output: {end: 1}\n",
+                        methods[s]);
+    if (tl_case(yaml, &c[s])) {
+      free(yaml);
+      return;
+    }
+    free(yaml);
+    memset(c[s].y0, 0, c[s].model.grid.ncells * sizeof(double));
+    c[s].y0[3] = 1.0;
+    c[s].y0[4] = 0.5;
+    d[s] = calloc(c[s].model.nstate, sizeof(double));
+    dl[s] = calloc(c[s].model.nledger, sizeof(double));
+    gs_model_rhs(&c[s].model, &c[s].eval, 0, c[s].y0, d[s], dl[s]);
+  }
+  int zeros = 0, stray = 0;
+  for (size_t k = 0; k < 64; k++)
+    if (d[0][k] == 0.0) {
+      zeros++;
+      stray += d[1][k] != 0.0;
+    }
+  printf("population in cells 3, 4: %d cells without events, %d of them with FFT rates\n", zeros, stray);
+  CHECK(zeros >= 56);
+  CHECK(stray == 0);
+  for (int s = 0; s < 2; s++) tl_rates_free(&c[s], d[s], dl[s]);
+}
+
+/* auto: the FFT from 256 cells on, else the pairs; the choice shows as
+ * rates identical bit for bit to one method's. */
+static void test_auto(void) {
+  for (int i = 0; i < 2; i++) {
+    const int n = i == 0 ? 15 : 16; /* 2-D: 225 and 256 cells */
+    gs_case c[3];
+    double *d[3], *dl[3];
+    const char *methods[3] = {"auto", "pairs", "fft"};
+    int ok = 1;
+    for (int s = 0; s < 3; s++) {
+      if (random_case(2, n, methods[s], "sum", &c[s])) {
+        ok = 0;
+        continue;
+      }
+      d[s] = calloc(c[s].model.nstate, sizeof(double));
+      dl[s] = calloc(c[s].model.nledger, sizeof(double));
+      gs_model_rhs(&c[s].model, &c[s].eval, 0, c[s].y0, d[s], dl[s]);
+    }
+    CHECK(ok);
+    if (!ok) continue;
+    const size_t nc = c[0].model.grid.ncells;
+    const int same_pairs = !memcmp(d[0], d[1], nc * sizeof(double));
+    const int same_fft = !memcmp(d[0], d[2], nc * sizeof(double));
+    printf("auto, %zu cells: same as pairs %d, same as fft %d\n", nc, same_pairs, same_fft);
+    CHECK(i == 0 ? same_pairs && !same_fft : same_fft && !same_pairs);
+    for (int s = 0; s < 3; s++) tl_rates_free(&c[s], d[s], dl[s]);
+  }
+}
+
+/* Four compartments with their own beta0, evaluated by two threads (each
+ * with its own FFT scratch): the FFT's rates equal the pairs' in every
+ * compartment. */
+static void test_compartments_threads(void) {
+  omp_set_num_threads(2);
+  gs_case c[2];
+  double *d[2], *dl[2];
+  const char *methods[2] = {"pairs", "fft"};
+  int ok = 1;
+  for (int s = 0; s < 2; s++) {
+    char *yaml = tl_fmt("grid: {compartments: 4, axes: [{name: s, type: linear, min: 0, max: 2, cells: 12},"
+                        " {name: l, type: linear, min: 0, max: 1, cells: 12}]}\n"
+                        "initial: {type: cell, number: 1, index: [1, 1]}\n"
+                        "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: %s,"
+                        " negligible: 0, kernel: {type: sum, beta0: [1, 2, 3, 4]}}\n"
+                        "output: {end: 1}\n",
+                        methods[s]);
+    if (tl_case(yaml, &c[s])) {
+      ok = 0;
+      free(yaml);
+      continue;
+    }
+    free(yaml);
+    tl_rng r = {7};
+    for (size_t k = 0; k < c[s].model.nstate; k++) c[s].y0[k] = tl_uniform(&r);
+    d[s] = calloc(c[s].model.nstate, sizeof(double));
+    dl[s] = calloc(c[s].model.nledger, sizeof(double));
+    gs_model_rhs(&c[s].model, &c[s].eval, 0, c[s].y0, d[s], dl[s]);
+  }
+  omp_set_num_threads(1);
+  CHECK(ok);
+  if (!ok) return;
+  const size_t nc = c[0].model.grid.ncells;
+  double worst = 0;
+  for (size_t comp = 0; comp < 4; comp++) {
+    double scale = 0, diff = 0;
+    for (size_t k = comp * nc; k < (comp + 1) * nc; k++) {
+      scale = fmax(scale, fabs(d[0][k]));
+      diff = fmax(diff, fabs(d[1][k] - d[0][k]));
+    }
+    worst = fmax(worst, diff / scale);
+  }
+  printf("4 compartments, beta0 1..4, 2 threads: FFT - pairs, largest rate %.3g\n", worst);
+  CHECK(worst <= 1e-12);
+  for (int s = 0; s < 2; s++) tl_rates_free(&c[s], d[s], dl[s]);
+}
+
+static void test_refusals(void) {
+  EXPECT_INPUT("grid: {axes: [{name: v, type: linear, min: 0, max: 1, cells: 8}]}\n"
+               "initial: {type: cell, number: 1, index: [1]}\n"
+               "mechanisms:\n  - {type: aggregation, method: fft, kernel: {type: constant, beta0: 1}}\n"
+               "output: {end: 1}\n",
+               "bad.yaml:4", "method", "fft needs redistribution: fixed_pivot");
+  EXPECT_INPUT("grid: {axes: [{name: v, type: geometric, min: 1, ratio: 2, cells: 8}]}\n"
+               "initial: {type: cell, number: 1, index: [1]}\n"
+               "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: fft,"
+               " kernel: {type: constant, beta0: 1}}\n"
+               "output: {end: 1}\n",
+               "fft needs equally spaced pivots");
+  EXPECT_INPUT("grid: {axes: [{name: v, type: linear, min: 0, max: 1, cells: 8}]}\n"
+               "initial: {type: cell, number: 1, index: [1]}\n"
+               "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: fft,"
+               " kernel: {type: brownian, beta0: 1}}\n"
+               "output: {end: 1}\n",
+               "fft needs a kernel of separable form");
+  EXPECT_INPUT("grid: {axes: [{name: v, type: linear, min: 0, max: 1, cells: 8}]}\n"
+               "initial: {type: cell, number: 1, index: [1]}\n"
+               "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: fast,"
+               " kernel: {type: constant, beta0: 1}}\n"
+               "output: {end: 1}\n",
+               "method", "fast");
+}
+
+int main(void) {
+  omp_set_num_threads(1);
+  test_rates_equal();
+  test_t1_discrete();
+  test_unreached_cells();
+  test_auto();
+  test_compartments_threads();
+  test_refusals();
+  TEST_EXIT();
+}
