@@ -267,6 +267,51 @@ static void input_errors(void) {
   expect_error(BASE "velocity: 1\nspeed: 3\n", "speed");
 }
 
+/* Mean solid volume (in primary particles) at time `end` of a batch with
+ * 0.3 L/S of binder sprayed over 60 s and consolidation, from a feed of
+ * 100 um solid with pore gas g0 (examples/high-shear-semimech.yaml). */
+static double growth(double g0, double end) {
+  char *yaml = tl_fmt(
+      "grid:\n  axes:\n"
+      "    - {name: solid,  type: geometric, min: 2.6e-13, ratio: 2, cells: 10}\n"
+      "    - {name: liquid, type: geometric, min: 1.0e-14, ratio: 2.5, cells: 12, zero_first: true}\n"
+      "    - {name: gas,    type: geometric, min: 1.0e-14, ratio: 2.5, cells: 12, zero_first: true}\n"
+      "initial: {type: point, number: 3.8e8, at: [5.24e-13, 5.0e-15, %.17g]}\n"
+      "mechanisms:\n"
+      "  - type: aggregation\n"
+      "    kernel: {type: semi_mechanistic, beta0: 5.0e-9, velocity: 0.5, viscosity: 0.1, contact_angle: 60,\n"
+      "             solid_density: 1500, critical_saturation: 0.05}\n"
+      "  - {type: liquid_addition, rate: 1.0e-6, start: 0, end: 60}\n"
+      "  - {type: consolidation, rate: 0.005, min_porosity: 0.2}\n"
+      "solver: {method: cvode, rtol: 1.0e-5, atol: 0.1}\n"
+      "output: {end: %g, count: 2}\n", g0, end);
+  gs_case c;
+  gs_run_report rep;
+  double *y = tl_build_run(yaml, &c, &rep), r = NAN;
+  if (y) r = tl_mom(&c, y, 0, 1, 0, 0) / tl_mom(&c, y, 0, 0, 0, 0) / 5.24e-13;
+  free(y);
+  free(yaml);
+  gs_case_free(&c);
+  return r;
+}
+
+/* Chaudhury (2015) ch. 4: a porous feed (HP, eps0 = 0.74) holds the binder in
+ * its pores and does not grow until consolidation squeezes it out, then grows
+ * ever faster (induction); a dense feed (LP, eps0 = 0.263) wets its surface
+ * within seconds and grows steadily. */
+static void induction(void) {
+  const double s0 = 5.24e-13, hp = s0 * 0.74 / 0.26, lp = s0 * 0.263 / 0.737;
+  double h[3] = {growth(hp, 20), growth(hp, 60), growth(hp, 240)};
+  double l[3] = {growth(lp, 20), growth(lp, 60), growth(lp, 240)};
+  /* growth rate over [60, 240] against that over [0, 60] */
+  const double accel_hp = (h[2] - h[1]) / 180 / ((h[1] - 1) / 60), accel_lp = (l[2] - l[1]) / 180 / ((l[1] - 1) / 60);
+  fprintf(stderr, "mean solid / primary at 20, 60, 240 s: HP %.4f %.4f %.4f, LP %.4f %.4f %.4f; "
+          "acceleration HP %.2f, LP %.2f\n", h[0], h[1], h[2], l[0], l[1], l[2], accel_hp, accel_lp);
+  CHECK(h[0] < 1.005 && l[0] > 1.03);  /* induction: HP has not started */
+  CHECK(h[2] > 3 && l[2] > 3);         /* both grow */
+  CHECK(accel_hp > 1.5 * accel_lp);    /* HP takes off late, LP steadier */
+}
+
 int main(void) {
   droplet_numbers();
   surface_liquid();
@@ -276,5 +321,6 @@ int main(void) {
   impeller();
   collision_table();
   input_errors();
+  induction();
   TEST_EXIT();
 }
