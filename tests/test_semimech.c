@@ -265,6 +265,7 @@ static void input_errors(void) {
   expect_error(BASE "velocity: 1\nliquid_axis: water\n", "liquid_axis");
   expect_error(BASE "velocity: 1\ncollisions: no_such_file.csv\n", "no_such_file.csv");
   expect_error(BASE "velocity: 1\nspeed: 3\n", "speed");
+  expect_error(BASE "velocity: 1\ncollisions_measure: diameter\n", "without 'collisions'");
 }
 
 /* Mean solid volume (in primary particles) at time `end` of a batch with

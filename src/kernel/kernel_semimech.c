@@ -144,7 +144,10 @@ static int read_collisions(semimech_kernel *k, gs_cfg_node *node, const gs_grid 
   gs_cfg_node *fn = gs_cfg_get(node, "collisions");
   int measure = 0;
   int rc = gs_cfg_enum_opt(node, "collisions_measure", measures, 0, &measure, err);
-  if (rc || !fn) return rc;
+  if (rc || !fn) {
+    gs_cfg_node *m = gs_cfg_get(node, "collisions_measure");
+    return rc ? rc : m ? gs_cfg_fail(m, err, "given without 'collisions' (the DEM collision table)") : GS_OK;
+  }
   const char *name = gs_cfg_scalar(fn);
   if (!name) return gs_cfg_fail(fn, err, "expected a file name (the DEM collision table)");
   char path[4096];
