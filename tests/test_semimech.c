@@ -266,6 +266,7 @@ static void input_errors(void) {
   expect_error(BASE "velocity: 1\ncollisions: no_such_file.csv\n", "no_such_file.csv");
   expect_error(BASE "velocity: 1\nspeed: 3\n", "speed");
   expect_error(BASE "velocity: 1\ncollisions_measure: diameter\n", "without 'collisions'");
+  expect_error(BASE "velocity: 1\ngas_axis: liquid\n", "needs a solid axis");
 }
 
 /* Mean solid volume (in primary particles) at time `end` of a batch with

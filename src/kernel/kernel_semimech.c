@@ -191,8 +191,8 @@ static int semimech_create(gs_cfg_node *node, const gs_grid *g, const char *dir,
   if (!rc) rc = gs_cfg_double_range(node, "asperity_max", 0, 3e-6, 0, 1, HUGE_VAL, 0, &p->asperity_max, err);
   if (!rc) rc = read_axis(node, g, "liquid_axis", "liquid", 0, &k->liquid, err);
   if (!rc) rc = read_axis(node, g, "gas_axis", "gas", 1, &k->gas, err);
-  if (!rc && (k->gas == k->liquid || g->dim < 2))
-    rc = gs_cfg_fail(node, err, "the semi_mechanistic kernel needs a solid axis besides the liquid and gas axes");
+  if (!rc && (k->gas == k->liquid || g->dim - 1 - (k->gas >= 0) < 1))
+    rc = gs_cfg_fail(node, err, "the semi_mechanistic kernel needs a solid axis besides distinct liquid and gas axes");
   if (!rc) rc = read_collisions(k, node, g, dir, err);
   if (!rc) rc = gs_cfg_check_unused(node, err);
   if (rc) {
