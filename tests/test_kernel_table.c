@@ -19,6 +19,8 @@ static const char *kernels[] = {
     "{type: madec, beta0: 1e-3, alpha: 2, delta: 0.5, liquid_axis: l}",
     "{type: brownian, beta0: [1, 3]}",
     "{type: brownian, regime: free_molecular, beta0: 1}",
+    "{type: semi_mechanistic, beta0: [1, 2], velocity: 1e-3, viscosity: 0.1, contact_angle: 60, "
+    "solid_density: 1500, critical_saturation: 0.2, liquid_axis: l}",
 };
 
 /* The rates of `evals` evaluations (each into its own block of the result)

@@ -6,11 +6,11 @@
 #include "kernel/size_measure.h"
 
 extern const gs_kernel_type gs_kernel_constant, gs_kernel_sum, gs_kernel_product,
-    gs_kernel_madec, gs_kernel_table, gs_kernel_brownian;
+    gs_kernel_madec, gs_kernel_table, gs_kernel_brownian, gs_kernel_semimech;
 
 static const gs_kernel_type *const registry[] = {
     &gs_kernel_constant, &gs_kernel_sum, &gs_kernel_product, &gs_kernel_madec, &gs_kernel_table,
-    &gs_kernel_brownian, NULL};
+    &gs_kernel_brownian, &gs_kernel_semimech, NULL};
 
 const gs_kernel_type *const *gs_kernel_types(void) { return registry; }
 
