@@ -36,7 +36,7 @@ static void usage(FILE *fp) {
           "                         distributions and integrators\n"
           "  validate [--out FILE] [--quick] [--only IDS]\n"
           "                         grid-refinement study against analytical solutions;\n"
-          "                         writes a markdown report (default docs/validation.md)\n"
+          "                         writes a markdown report (default: standard output)\n"
           "  sweep CASE --set KEY=V1,V2,... | --design lhs:N --range KEY=LO:HI ... --out DIR\n"
           "                         many runs of a case over a grid or a Latin hypercube of\n"
           "                         variations; one row per run in DIR/sweep.csv\n"
