@@ -32,6 +32,7 @@ static void usage(FILE *fp) {
           "commands:\n"
           "  run CASE --out DIR     run a case file; writes DIR/result.h5 and DIR/summary.csv\n"
           "  check CASE             validate a case file without running it\n"
+          "  plot DIR [--times T,..] PNG and SVG plots of a run, DEM or coupled result folder\n"
           "  list                   list mechanisms, kernels, selection functions, daughter\n"
           "                         distributions and integrators\n"
           "  validate [--out FILE] [--quick] [--only IDS]\n"
@@ -298,6 +299,7 @@ int main(int argc, char **argv) {
   }
   if (!strcmp(argv[1], "sensitivity")) return gs_cmd_sensitivity(argc - 2, argv + 2);
   if (!strcmp(argv[1], "optimise")) return gs_cmd_optimise(argc - 2, argv + 2);
+  if (!strcmp(argv[1], "plot")) return gs_cmd_plot(argc - 2, argv + 2);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;
