@@ -73,16 +73,23 @@ FILE *gs_csv_open(gs_csv_out *t, const char *path, gs_error *err) {
 int gs_csv_close(gs_csv_out *t, const char *written_by, const char *const *units, gs_error *err) {
   int rc = GS_OK;
   if (fclose(t->fp) || !t->buf) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-  char *desc = rc ? NULL : malloc(t->len + 1), *p = t->buf;
-  size_t nd = 0;
-  if (!rc && !desc) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-  while (!rc && *p == '#') { /* "# text\n" lines: the description, one line each */
+  /* "# text" lines, wherever they are, make the description, one line each;
+   * the others, in order, the table */
+  char *desc = rc ? NULL : malloc(t->len + 1), *body = rc ? NULL : malloc(t->len + 1);
+  size_t nd = 0, nb = 0;
+  if (!rc && (!desc || !body)) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  for (char *p = t->buf; !rc && *p;) {
     char *nl = strchr(p, '\n');
     size_t n = nl ? (size_t)(nl - p) : strlen(p);
-    size_t skip = n > 1 && p[1] == ' ' ? 2 : 1;
-    if (nd) desc[nd++] = '\n';
-    memcpy(desc + nd, p + skip, n - skip);
-    nd += n - skip;
+    if (*p == '#') {
+      size_t skip = n > 1 && p[1] == ' ' ? 2 : 1;
+      if (nd) desc[nd++] = '\n';
+      memcpy(desc + nd, p + skip, n - skip);
+      nd += n - skip;
+    } else {
+      memcpy(body + nb, p, n + (nl != NULL));
+      nb += n + (nl != NULL);
+    }
     p += n + (nl != NULL);
   }
   if (desc) desc[nd] = '\0';
@@ -91,13 +98,14 @@ int gs_csv_close(gs_csv_out *t, const char *written_by, const char *const *units
   FILE *fp = rc ? NULL : fopen(partial, "w");
   if (!rc && !fp) rc = gs_error_set(err, GS_EIO, "%s: cannot write: %s", partial, strerror(errno));
   if (fp) {
-    fputs(p, fp);
+    fwrite(body, 1, nb, fp);
     int bad = ferror(fp);
     if (fclose(fp) || bad || rename(partial, t->path))
       rc = gs_error_set(err, GS_EIO, "%s: write failed: %s", t->path, strerror(errno));
   }
   if (!rc) rc = gs_csv_meta_write(t->path, written_by, desc, units, err);
   free(desc);
+  free(body);
   free(t->buf);
   t->buf = NULL;
   t->fp = NULL;

@@ -15,10 +15,10 @@
 int gs_csv_meta_write(const char *csv_path, const char *written_by, const char *description,
                       const char *const *units, gs_error *err);
 
-/* A table written in memory: its writer states what it holds in leading
- * "# " lines, as a reader of the file would want them, and gs_csv_close moves
- * those lines into the sidecar's description and writes the rest (header line
- * first) to path. */
+/* A table written in memory: its writer states what it holds in "# " lines,
+ * as a reader of the file would want them, and gs_csv_close moves those
+ * lines (wherever they are) into the sidecar's description and writes the
+ * rest, header line first, to path (renamed from path.partial). */
 typedef struct {
   char path[4200];
   char *buf;
