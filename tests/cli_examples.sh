@@ -18,7 +18,7 @@ for case in "$WORK"/clone/examples/*.yaml; do
   # from another folder: paths inside the case are relative to the case file
   ( cd "$WORK" && "$BIN" "$cmd" "$case" --out "$WORK/out/$name" --quiet ) >"$WORK/$name.log" 2>&1 ||
     { cat "$WORK/$name.log" >&2; fail "examples/$name.yaml: gransim $cmd failed in a fresh clone"; }
-  GRANSIM_PLOT_SCRIPT=$WORK/clone/scripts/gransim-plot "$BIN" plot "$WORK/out/$name" >"$WORK/$name.plot" 2>&1 ||
+  GRANSIM_PLOT_SCRIPT=$WORK/clone/scripts/gransim-plot "$BIN" plot "$WORK/out/$name" --format png >"$WORK/$name.plot" 2>&1 ||
     { cat "$WORK/$name.plot" >&2; fail "examples/$name.yaml: gransim plot failed"; }
   [ -s "$WORK/out/$name/plots/$( [ $cmd = dem ] && echo collisions || echo sizes).png" ] ||
     fail "examples/$name.yaml: no plots"

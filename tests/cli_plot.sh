@@ -34,8 +34,8 @@ run_rc 0 "$SRC/scripts/plot" "$WORK/cm/out" --times 20,85
   "$SIZES|compartment 4" "$PSD|compartment 4: q3|t = 20 s|t = 85 s" "volumes=total liquid [m^3]" || fail "CoriMix plots"
 [ "$(cut -d, -f1 "$WORK/cm/out/plots/psd.csv" | sort -u | tr '\n' ' ')" = "20 85 time [s] " ] ||
   fail "psd.csv times: $(cut -d, -f1 "$WORK/cm/out/plots/psd.csv" | sort -u | tr '\n' ' ')"
-run_rc 0 "$BIN" plot "$WORK/cm/out" --format svg --out "$WORK/cm/svg"
-[ -s "$WORK/cm/svg/sizes.svg" ] && [ ! -e "$WORK/cm/svg/sizes.png" ] || fail "--format svg"
+run_rc 0 "$BIN" plot "$WORK/expo" --format svg --out "$WORK/svg"
+[ -s "$WORK/svg/sizes.svg" ] && [ ! -e "$WORK/svg/sizes.png" ] || fail "--format svg"
 
 # ---- stochastic solver: confidence bands (sizes) and sieve classes (psd)
 run_rc 0 "$BIN" run "$SRC/examples/twin-screw.yaml" --out "$WORK/swa" --quiet
