@@ -104,9 +104,9 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   if (c->noutlets) gs_dem_remove_if(d, in_outlet, c);
   /* (the time step was checked against the Rayleigh time when the case was read) */
 
-  snprintf(path, sizeof path, "%s/timeseries.csv", dir);
-  FILE *ts = rc ? NULL : fopen(path, "w");
-  if (!rc && !ts) rc = gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  char ts_path[4300];
+  FILE *ts = rc ? NULL : gs_dem_table_open(dir, "timeseries.csv", ts_path, sizeof ts_path, err);
+  if (!rc && !ts) rc = err->code;
   if (ts) {
     fprintf(ts, "time,particles,holdup_number,holdup_mass,kinetic_energy,rotational_energy,contacts,"
             "collisions_per_s");
@@ -255,17 +255,16 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
             t_steady >= 0 ? "" : "; steady state not reached");
   }
   if (ts) {
-    int bad = ferror(ts);
-    if (fclose(ts) || bad) {
-      if (!rc) rc = gs_error_set(err, GS_EIO, "%s/timeseries.csv: write failed", dir);
-    } else if (!rc) {
-      const char *names[GS_DEM_MAX_WALLS];
-      for (size_t w = 0; w < gs_dem_nwalls(d); w++) names[w] = gs_dem_wall_name(d, w);
-      snprintf(path, sizeof path, "%s/timeseries.csv", dir);
-      rc = gs_dem_timeseries_meta(path, "hold-up, energies, contacts, collision and impact rates (per second "
-                                  "since the previous row) and torques on the walls about their rotation axis, "
-                                  "every output.every seconds", gs_dem_nwalls(d), names, err);
-    }
+    gs_error cerr = {0};
+    int crc = gs_dem_table_close(ts, ts_path, rc ? &cerr : err);
+    if (!rc) rc = crc;
+  }
+  if (ts && !rc) {
+    const char *names[GS_DEM_MAX_WALLS];
+    for (size_t w = 0; w < gs_dem_nwalls(d); w++) names[w] = gs_dem_wall_name(d, w);
+    rc = gs_dem_timeseries_meta(ts_path, "hold-up, energies, contacts, collision and impact rates (per second "
+                                "since the previous row) and torques on the walls about their rotation axis, "
+                                "every output.every seconds", gs_dem_nwalls(d), names, err);
   }
   if (!rc && !gs_dem_stats_have_window(&st, c, gs_dem_time(d), t_steady)) {
     if (c->start_steady)

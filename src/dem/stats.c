@@ -157,13 +157,26 @@ int gs_dem_stats_have_window(const gs_dem_stats *s, const gs_dem_case *c, double
   return s->nsamples > 0 && t_end > s->t0;
 }
 
-FILE *gs_dem_table_open(gs_csv_out *t, const char *dir, const char *name, gs_error *err) {
+FILE *gs_dem_table_open(const char *dir, const char *name, char *path, size_t n, gs_error *err) {
+  snprintf(path, n, "%s/%s", dir, name);
+  FILE *fp = fopen(path, "w");
+  if (!fp) gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  return fp;
+}
+
+int gs_dem_table_close(FILE *fp, const char *path, gs_error *err) {
+  int bad = ferror(fp);
+  if (fclose(fp) || bad) return gs_error_set(err, GS_EIO, "%s: write failed", path);
+  return GS_OK;
+}
+
+FILE *gs_dem_table_begin(gs_csv_out *t, const char *dir, const char *name, gs_error *err) {
   char path[4200];
   snprintf(path, sizeof path, "%s/%s", dir, name);
   return gs_csv_open(t, path, err);
 }
 
-int gs_dem_table_close(gs_csv_out *t, const char *const *units, gs_error *err) {
+int gs_dem_table_end(gs_csv_out *t, const char *const *units, gs_error *err) {
   return gs_csv_close(t, "gransim dem", units, err);
 }
 
@@ -290,7 +303,7 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
   }
 
   /* collisions per class pair */
-  if (!(fp = gs_dem_table_open(&tab, dir, "collisions.csv", err))) { free(C); free(e); return err->code; }
+  if (!(fp = gs_dem_table_begin(&tab, dir, "collisions.csv", err))) { free(C); free(e); return err->code; }
   fprintf(fp, "# collision events (contacts that began) from t = %.9g to %.9g s (%.9g s, %ld samples)%s%s\n",
           s->t0, t_end, win, s->nsamples, t_steady >= 0 ? "" : "; steady state not detected", note);
   fprintf(fp, "class_i,class_j,name_i,name_j,events,N_i,N_j,window_s,events_per_s,C_ij\n");
@@ -303,10 +316,10 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
       fprintf(fp, "%d,%d,%s,%s,%.0f,%.6g,%.6g,%.9g,%.9g,%.9g\n", i + 1, j + 1, c->cls[i].name,
               c->cls[j].name, ev, Ni, Nj, win, have ? ev / win : NAN, cij);
     }
-  if ((rc = gs_dem_table_close(&tab, gs_dem_units_collisions, err))) { free(C); free(e); return rc; }
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_collisions, err))) { free(C); free(e); return rc; }
 
   /* the same as a PBM kernel table: edges in diameter halfway between classes */
-  if (!(fp = gs_dem_table_open(&tab, dir, "collision_kernel.csv", err))) { free(C); free(e); return err->code; }
+  if (!(fp = gs_dem_table_begin(&tab, dir, "collision_kernel.csv", err))) { free(C); free(e); return err->code; }
   fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt) [1/s], window %.9g s%s;\n"
           "# edges are particle diameters [m]: use `kernel: {type: table, measure: diameter, ...}`\n"
           "edges", win, note);
@@ -319,10 +332,10 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
   }
   free(C);
   free(e);
-  if ((rc = gs_dem_table_close(&tab, gs_dem_units_kernel, err))) return rc;
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_kernel, err))) return rc;
 
   /* impacts per wall and class */
-  if (!(fp = gs_dem_table_open(&tab, dir, "impacts.csv", err))) return err->code;
+  if (!(fp = gs_dem_table_begin(&tab, dir, "impacts.csv", err))) return err->code;
   fprintf(fp, "# wall impacts (contacts that began) from t = %.9g to %.9g s (%.9g s)%s; vn: normal speed "
           "relative to the wall, vt: tangential speed of the contact point\n", s->t0, t_end, win, note);
   fprintf(fp, "wall,class,name,impacts,impacts_per_s,impacts_per_particle_s,mean_vn,std_vn,mean_vt\n");
@@ -336,14 +349,14 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
               c->cls[i].name, n, have ? n / win : NAN, !have ? NAN : Ni > 0 ? n / (Ni * win) : 0, mv, sv,
               n > 0 ? k.wall_vt_sum[q] / n : NAN);
     }
-  if ((rc = gs_dem_table_close(&tab, gs_dem_units_impacts, err))) return rc;
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_impacts, err))) return rc;
 
   /* the breakage selection's table: all walls, and each wall alone */
   if ((rc = write_impact_table(s, c, dir, -1, win, have, note, err))) return rc;
   for (size_t w = 0; w < k.nwalls; w++)
     if ((rc = write_impact_table(s, c, dir, (long)w, win, have, note, err))) return rc;
 
-  if (!(fp = gs_dem_table_open(&tab, dir, "impact_velocity.csv", err))) return err->code;
+  if (!(fp = gs_dem_table_begin(&tab, dir, "impact_velocity.csv", err))) return err->code;
   fprintf(fp, "# normal impact speed distributions (the last bin holds everything above)%s\n"
           "wall,class,vn_lo,vn_hi,impacts\n", note);
   for (size_t w = 0; w < k.nwalls; w++)
@@ -355,10 +368,10 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
         fprintf(fp, "%s,%d,%.6g,%.6g,%llu\n", gs_dem_wall_name(c->dem, w), i + 1, b * dv,
                 b + 1 < nb ? (b + 1) * dv : HUGE_VAL, (unsigned long long)h[b]);
     }
-  if ((rc = gs_dem_table_close(&tab, gs_dem_units_impact_velocity, err))) return rc;
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_impact_velocity, err))) return rc;
 
   /* velocities per class and compartment */
-  if (!(fp = gs_dem_table_open(&tab, dir, "velocity.csv", err))) return err->code;
+  if (!(fp = gs_dem_table_begin(&tab, dir, "velocity.csv", err))) return err->code;
   fprintf(fp, "# over the %ld samples from t = %.9g to %.9g s, every particle of the class in the compartment "
           "once per sample: speed |v|, velocity components and the axial component v.axis; std: sample "
           "standard deviation (n - 1)%s\n", s->nsamples, s->t0, t_end, note);
@@ -383,7 +396,7 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
         fprintf(fp, ",%.6g", n > 1 ? sqrt(fmax(0, (s->cv_v2[3 * at + a] - n * mc[a] * mc[a]) / (n - 1))) : NAN);
       fprintf(fp, "\n");
     }
-  if ((rc = gs_dem_table_close(&tab, gs_dem_units_velocity, err))) return rc;
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_velocity, err))) return rc;
 
   /* residence times of particles that left through an outlet: all, and per class */
   double mx = 0, sum = 0;
@@ -393,7 +406,7 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
   }
   const int nb = 50;
   const double bw = mx > 0 ? mx / nb * (1 + 1e-9) : 1;
-  if (!(fp = gs_dem_table_open(&tab, dir, "residence.csv", err))) return err->code;
+  if (!(fp = gs_dem_table_begin(&tab, dir, "residence.csv", err))) return err->code;
   fprintf(fp, "# %zu particles left through outlets (%.6g kg) from t = %.9g to %.9g s; mean residence %.6g s;"
           " mean hold-up %.6g particles, %.6g kg%s\n",
           s->nrt, s->out_mass, s->t0, t_end, s->nrt ? sum / (double)s->nrt : NAN, have ? s->hold_n_sum / ns : NAN,
@@ -405,9 +418,9 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
       if ((int)(s->rt[r] / bw) == b) cnt++;
     fprintf(fp, "%.6g,%.6g,%zu,%.6g\n", b * bw, (b + 1) * bw, cnt, (double)cnt / (double)s->nrt);
   }
-  if ((rc = gs_dem_table_close(&tab, gs_dem_units_residence, err))) return rc;
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_residence, err))) return rc;
 
-  if (!(fp = gs_dem_table_open(&tab, dir, "residence_class.csv", err))) return err->code;
+  if (!(fp = gs_dem_table_begin(&tab, dir, "residence_class.csv", err))) return err->code;
   fprintf(fp, "# residence-time distribution per class of the %zu particles that left through outlets from "
           "t = %.9g to %.9g s, bins as in residence.csv; fraction: of the class%s\n", s->nrt, s->t0, t_end, note);
   for (int i = 0; i < ncl; i++) {
@@ -430,7 +443,7 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
               n ? (double)cnt / (double)n : NAN);
     }
   }
-  return gs_dem_table_close(&tab, gs_dem_units_residence_class, err);
+  return gs_dem_table_end(&tab, gs_dem_units_residence_class, err);
 }
 
 int gs_dem_timeseries_meta(const char *path, const char *description, size_t nw,
