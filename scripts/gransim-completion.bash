@@ -11,7 +11,7 @@ _gransim() {
     words=("${COMP_WORDS[@]}")
     cword=$COMP_CWORD
   fi
-  local commands="run check list validate validate-cfd sweep fit sensitivity optimise dem dem-reduce couple"
+  local commands="run check list validate validate-cfd plot sweep fit sensitivity optimise dem dem-reduce couple"
   if [ "$cword" -eq 1 ]; then
     COMPREPLY=($(compgen -W "$commands --help --version" -- "$cur"))
     return
@@ -23,6 +23,7 @@ _gransim() {
     list) opts="" ;;
     validate) opts="--out --quick --only --threads --max-loss --help" ;;
     validate-cfd) opts="--out --long --help" ;;
+    plot) opts="--times --format --out --help" ;;
     sweep) opts="--set --design --range --seed --out --outputs --resume --threads --quiet --progress --help" ;;
     fit) opts="--data --params --help" ;;
     sensitivity) opts="--range --outputs --method --levels --bootstrap --conf --seed --out --resume --threads --quiet --progress --help" ;;

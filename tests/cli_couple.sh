@@ -79,20 +79,21 @@ sed -n 's/.*radius: \[\([^,]*\), \([^]]*\)\].*/\1 \2/p' "$WORK/out/dem/case.yaml
 read -r e0 e1 e2 e3 < "$WORK/expected-radii"
 [ "$(cat "$WORK/radii")" = "$e0 $e1 $e1 $e2 $e2 $e3 " ] ||
   fail "derived radii $(cat "$WORK/radii"), expected $e0 $e1 | $e1 $e2 | $e2 $e3"
-[ "$(grep -v '^#' "$WORK/out/dem/classes.csv" | cut -d, -f1,2,5 | tr '\n' ' ')" = "class,name,pbm_cells 1,c1,1 2,c2,1 3,c3,1 " ] ||
+[ "$(cut -d, -f1,2,5 "$WORK/out/dem/classes.csv" | tr '\n' ' ')" = "class,name,pbm_cells 1,c1,1 2,c2,1 3,c3,1 " ] ||
   fail "classes.csv: $(cat "$WORK/out/dem/classes.csv")"
-grep -q '12 PBM cells outside them take the nearest class' "$WORK/out/dem/classes.csv" || fail "classes.csv lacks the outside count"
+grep -q '12 PBM cells outside them take the nearest class' "$WORK/out/dem/classes.json" || fail "classes.json lacks the outside count"
 grep -q '^edges' "$WORK/out/dem/collision_kernel.csv" || fail "collision_kernel.csv has no edges line"
 [ "$(grep '^edges' "$WORK/out/dem/collision_kernel.csv" | tr ',' '\n' | wc -l)" = 5 ] ||
   fail "collision_kernel.csv: expected 3 classes"
 
-# The detector fired and its figures are written.
-grep -q '^# steady$' "$WORK/out/dem/steady.csv" || fail "steady.csv does not say steady"
-head -2 "$WORK/out/dem/steady.csv" | grep -q 'holdup_mean,holdup_deviation,collisions_mean,collisions_deviation,steady' ||
-  fail "steady.csv header: $(head -2 "$WORK/out/dem/steady.csv")"
+# The detector fired and its figures are written (the verdict in steady.json's description).
+grep -qF '\nsteady\n' "$WORK/out/dem/steady.json" || fail "steady.json does not say steady"
+head -1 "$WORK/out/dem/steady.csv" | grep -q '^time,.*holdup_mean,holdup_deviation,collisions_mean,collisions_deviation,steady' ||
+  fail "steady.csv header: $(head -1 "$WORK/out/dem/steady.csv")"
+! grep -q '^#' "$WORK/out/dem/steady.csv" "$WORK/out/dem/classes.csv" || fail "'#' lines in steady.csv or classes.csv"
 grep -q ',1$' "$WORK/out/dem/steady.csv" || fail "no steady row in steady.csv"
-grep -q '^# drift of the window means from the firing to the end: hold-up mass 0 %' "$WORK/out/dem/steady.csv" ||
-  fail "steady.csv lacks the drift after the firing (the closed drum's hold-up is constant)"
+grep -qF '\ndrift of the window means from the firing to the end: hold-up mass 0 %' "$WORK/out/dem/steady.json" ||
+  fail "steady.json lacks the drift after the firing (the closed drum's hold-up is constant)"
 
 # The same two commands by hand: the DEM case as written, then the PBM with its tables.
 run_rc 0 "$BIN" dem "$WORK/out/dem/case.yaml" --out "$WORK/manual-dem" --quiet
@@ -153,7 +154,7 @@ stderr_has "did not reach a steady state by t = 0.015 s (coupling.steady.max_tim
 stderr_has "the collision rate"
 stderr_has "tolerance 50 %"
 [ ! -e "$WORK/short/dem" ] || fail "an unsteady DEM stage was taken as complete"
-grep -q '^# NOT STEADY' "$WORK/short/dem.partial/steady.csv" || fail "steady.csv does not say NOT STEADY"
+grep -qF '\nNOT STEADY' "$WORK/short/dem.partial/steady.json" || fail "steady.json does not say NOT STEADY"
 
 # Bad input.
 bad() { # bad NAME SED_SCRIPT EXPECTED_STDERR

@@ -29,9 +29,9 @@ run_rc 1 "$BIN" fit "$start" --data "$WORK/none.csv" "${P[@]}"
 stderr_has "cannot read data file"
 
 run_rc 0 "$BIN" run "$truth" --out "$WORK/truth" --quiet --threads 1
-# summary.csv: time,compartment,M0,M1,M2,d10,d50,...; the data: M0 and d50 after t = 0
-# (one compartment: d50 names d50_c1)
-awk -F, 'NR == 1 { print "time,M0,d50" } NR > 2 { print $1 "," $3 "," $7 }' \
+# summary.csv: time [s],compartment,M0 [1],M1 [m^3],M2 [m^6],d10 [m],d50 [m],...; the data: M0
+# and d50 after t = 0, their units kept (one compartment: d50 names d50_c1)
+awk -F, 'NR == 1 { print $1 "," $3 "," $7 } NR > 2 { print $1 "," $3 "," $7 }' \
   "$WORK/truth/summary.csv" >"$WORK/data.csv"
 run_rc 0 "$BIN" fit "$start" --data "$WORK/data.csv" "${P[@]}"
 stdout_has "R^2 = " "correlations:" "4 times x 2 columns"

@@ -53,13 +53,13 @@ int main(int argc, char **argv) {
   }
   if (gs_api_case_run(c, argv[1], 0, &err)) { fprintf(stderr, "%s\n", err.msg); return 1; }
   gs_api_case_free(c);
-  /* summary.csv: time,compartment,M0,...; one row per output time */
+  /* summary.csv: "time [s],compartment,M0 [1],..."; one row per output time */
   char file[4096], line[4096];
   snprintf(file, sizeof file, "%s/summary.csv", argv[1]);
   FILE *fp = fopen(file, "r");
   double m0[3] = {0};
   int rows = 0;
-  if (!fp || !fgets(line, sizeof line, fp) || strncmp(line, "time,compartment,M0,", 20)) return 1;
+  if (!fp || !fgets(line, sizeof line, fp) || strncmp(line, "time [s],compartment,M0", 23)) return 1;
   while (rows < 3 && fgets(line, sizeof line, fp)) {
     double t;
     int comp;

@@ -37,7 +37,8 @@ run_rc 1 "$BIN" optimise "$start" --target "$WORK/none.csv" "${C[@]}"
 stderr_has "cannot read data file"
 
 run_rc 0 "$BIN" run "$truth" --out "$WORK/truth" --quiet --threads 1
-# summary.csv: time,compartment,M0,M1,M2,d10,d50,d90,mean_solid,mean_liquid,total_solid,total_liquid
+# summary.csv: time [s],compartment,M0 [1],M1 [m^3],M2 [m^6],d10 [m],d50 [m],d90 [m],mean_solid [m^3],
+# mean_liquid [m^3],total_solid [m^3],total_liquid [m^3]
 awk -F, 'NR == 1 { print "time,M0,d50,total_liquid" } NR > 2 { print $1 "," $3 "," $7 "," $12 }' \
   "$WORK/truth/summary.csv" >"$WORK/target.csv"
 

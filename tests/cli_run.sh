@@ -29,7 +29,7 @@ done
 ntimes=5 ncomp=2
 csv=$out/summary.csv
 header=$(head -n 1 "$csv")
-want="time,compartment,M0,M1,M2,d10,d50,d90,mean_solid,mean_liquid,total_solid,total_liquid"
+want="time [s],compartment,M0 [1],M1 [m^3],M2 [m^6],d10 [m],d50 [m],d90 [m],mean_solid [m^3],mean_liquid [m^3],total_solid [m^3],total_liquid [m^3]"
 [ "$header" = "$want" ] || fail "summary.csv header is '$header', expected '$want'"
 rows=$(($(wc -l <"$csv") - 1))
 [ "$rows" -eq $((ntimes * ncomp)) ] ||

@@ -19,9 +19,15 @@ for f in spray.csv granulation.csv granulation_classes.csv granulation_collision
   [ -s "$WORK/out/$f" ] || fail "missing $f"
 done
 # the VTK frames carry each particle's liquid content, some of it wet at the end
-grep -q '^SCALARS liquid_content double 1$' "$WORK/out/vtk/particles_000001.vtk" || fail "no liquid_content in the VTK file"
-awk '/^SCALARS liquid_content/ { on = 1; getline; next } /^(SCALARS|VECTORS)/ { on = 0 } on && $1 > 0 { wet++ }
-     END { exit !(wet > 0) }' "$WORK/out/vtk/particles_000001.vtk" || fail "no wet particle in the last VTK frame"
+/usr/bin/python3 - "$WORK/out/vtk/particles_000001.vtp" <<'PY' || fail "no liquid_content with a wet particle in the last VTK frame"
+import sys
+from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
+r = vtkXMLPolyDataReader()
+r.SetFileName(sys.argv[1])
+r.Update()
+a = r.GetOutput().GetPointData().GetArray("liquid_content")
+sys.exit(0 if a is not None and any(a.GetValue(i) > 0 for i in range(a.GetNumberOfTuples())) else 1)
+PY
 # ledger: injected = on particles + airborne + on walls + left, to round-off; droplets absorbed
 awk -F, 'NR > 1 { s = $6 + $7 + $8 + $9; d = $5 - s; if (d < 0) d = -d; if (d > 1e-12 * $5) bad = 1; n++ }
          END { exit bad || n != 7 }' "$WORK/out/spray.csv" || fail "ledger: $(cat "$WORK/out/spray.csv")"

@@ -23,7 +23,7 @@ stdout_has "swa.yaml: valid. swa solver" "2 compartments" "4 runs of 512 particl
 run_rc 0 "$BIN" run "$ok" --out "$WORK/a" --threads 1
 stderr_has "swa, 4 runs of 512 particles done to t = 4"
 for f in .result.h5.partial .summary.csv.partial; do [ ! -e "$WORK/a/$f" ] || fail "$f left behind"; done
-head -1 "$WORK/a/summary.csv" | grep -qx 'time,compartment,M0,M1,M2,d10,d50,d90,mean_solid,total_solid,ci_M0,ci_M1,ci_M2,ci_d10,ci_d50,ci_d90,ci_mean_solid,ci_total_solid' ||
+head -1 "$WORK/a/summary.csv" | grep -qxF 'time [s],compartment,M0 [1],M1 [m^3],M2 [m^6],d10 [m],d50 [m],d90 [m],mean_solid [m^3],total_solid [m^3],ci_M0 [1],ci_M1 [m^3],ci_M2 [m^6],ci_d10 [m],ci_d50 [m],ci_d90 [m],ci_mean_solid [m^3],ci_total_solid [m^3]' ||
   fail "unexpected summary.csv header: $(head -1 "$WORK/a/summary.csv")"
 [ "$(wc -l <"$WORK/a/summary.csv")" = 7 ] || fail "expected 1 + 3 times x 2 compartments lines"
 # at t = 0: compartment 1 holds 1000 particles exactly (the weights), compartment 2 none

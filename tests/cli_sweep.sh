@@ -75,7 +75,7 @@ fi
 # run 6 again with gransim run: the same final M0, M1, d10, d50, d90, M2
 sed -e 's/beta0: 1}/beta0: 2e-3}/' "$c" >"$WORK/run6.yaml"
 run_rc 0 "$BIN" run "$WORK/run6.yaml" --out "$WORK/run6" --threads 1 --quiet
-# summary.csv: time,compartment,M0,M1,M2,d10,d50,d90,...; its numbers have 10 digits
+# summary.csv: time [s],compartment,M0 [1],M1 [m^3],M2 [m^6],d10 [m],d50 [m],d90 [m],...; its numbers have 10 digits
 awk -F, 'END { print $3 "," $4 "," $6 "," $7 "," $8 "," $5 }' "$WORK/run6/summary.csv" >"$WORK/want"
 awk -F, '$1 == 6 { print $5 "," $6 "," $7 "," $8 "," $9 "," $10 }' "$out/sweep.csv" >"$WORK/got"
 csv_rows_close "$WORK/want" "$WORK/got" 1e-9

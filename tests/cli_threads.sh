@@ -34,10 +34,10 @@ fi
 
 # full precision from result.h5 when hdf5-tools are installed
 if command -v h5dump >/dev/null 2>&1; then
-  # values of a dataset, one per line, in full precision
+  # values of a dataset, one per line, in full precision (its DATA, not its attributes')
   values() {
     h5dump -y -m %.17g -d "$2" "$1" |
-      awk '/DATA \{/ { on = 1; next } on && /^ *\}/ { on = 0 } on' | tr ',' '\n' | awk 'NF { print $1 }'
+      awk '/DATA \{/ && !done { on = 1; next } on && /^ *\}/ { on = 0; done = 1 } on' | tr ',' '\n' | awk 'NF { print $1 }'
   }
   for col in M0 M1 M2 d10 d50 d90 mean_solid mean_liquid total_solid total_liquid; do
     values "$WORK/t1/result.h5" "/summary/$col" >"$WORK/a"

@@ -14,8 +14,27 @@ for s in '`gransim validate --quick --only T1,T7b --threads 1`' '## T1: constant
 done
 ! grep -qF '| failed: ' "$WORK/ok.md" || fail "a run failed in the passing subset"
 # every table row has numbers: 2 schemes x 2 grids x 2 studies
-[ "$(grep -cE '^\| [0-9]+ \| [0-9.]+ \| (CA|FP) \| [0-9]' "$WORK/ok.md")" = 8 ] ||
+[ "$(grep -cE '^\| [0-9]+ \| [0-9.]+ \| (CA|FP) \| -?[0-9]' "$WORK/ok.md")" = 8 ] ||
   { cat "$WORK/ok.md" >&2; fail "expected 8 rows with numbers"; }
+# errors are signed and the header says which sign over-predicts: T1's M0 is slightly
+# under-predicted on the coarsest grids, its M2 over-predicted by the fixed pivot
+grep -qF '| cells | ratio | scheme | M0 % (+ over) | M1 % (+ over) | M2 % (+ over) |' "$WORK/ok.md" ||
+  fail "table header does not say which sign over-predicts"
+grep -qE '^\| 31 \| 2 \| CA \| -[0-9.e-]+ \| ' "$WORK/ok.md" || fail "T1 CA M0 error should be negative"
+grep -qE '^\| 31 \| 2 \| FP \| -[0-9.e-]+ \| [0-9.e-]+ \| 25\.6 \|' "$WORK/ok.md" ||
+  fail "T1 FP M2 error should be +25.6 %"
+grep -qF 'positive means the scheme over-predicts' "$WORK/ok.md" || fail "no sign convention"
+
+# ---- without --out the report goes to standard output (nothing written in the cwd)
+( cd "$WORK" && mkdir -p cwd && cd cwd && "$BIN" validate --quick --only T1 --threads 1 >../stdout.md 2>../stderr.txt ) ||
+  fail "validate to standard output failed"
+grep -qF '## T1: constant kernel' "$WORK/stdout.md" || fail "report not on standard output"
+[ -z "$(ls -A "$WORK/cwd")" ] || fail "validate wrote into the current directory without --out"
+# an unwritable --out fails before any run
+run_rc 1 "$BIN" validate --quick --only T1 --threads 1 --out "$WORK/no/such/dir/v.md"
+stderr_has "cannot write $WORK/no/such/dir/v.md.partial"
+! grep -q "level 1" "$WORK/stderr" || fail "runs started before the output was checked"
+
 # the 50x50 grid was not run (--quick): the comparison says so, and the target is not judged
 grep -qF '| 50x50 | 4.3 | 13.7 | not run | not run | not run | not run |' "$WORK/ok.md" ||
   { cat "$WORK/ok.md" >&2; fail "50x50 row should say 'not run'"; }

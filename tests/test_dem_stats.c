@@ -117,14 +117,18 @@ static void test_residence(void) {
   CHECK(row(ts, "0.02,", r, 2) == 2);
   long at_start = (long)r[1];
   free(ts);
-  char *res = dt_slurp("res", "residence.csv"), *cls = dt_slurp("res", "residence_class.csv");
+  /* the counts and means are in the tables' descriptions (their JSON sidecars) */
+  char *res = dt_slurp("res", "residence.json"), *cls = dt_slurp("res", "residence_class.csv");
+  char *clsj = dt_slurp("res", "residence_class.json");
   long pooled = -1, n_low = -1, n_high = -1;
   double mean_low = 0, mean_high = 0;
-  CHECK(sscanf(res, "# %ld particles left", &pooled) == 1);
-  const char *p = strstr(cls, "# class 1 (low): "), *q = strstr(cls, "# class 2 (high): ");
+  const char *d = strstr(res, "\"description\": \"");
+  CHECK(d && sscanf(d, "\"description\": \"%ld particles left", &pooled) == 1);
+  const char *p = strstr(clsj, "class 1 (low): "), *q = strstr(clsj, "class 2 (high): ");
   CHECK(p && q);
-  if (p) CHECK(sscanf(p, "# class 1 (low): %ld particles, mean residence %lf", &n_low, &mean_low) == 2);
-  if (q) CHECK(sscanf(q, "# class 2 (high): %ld particles, mean residence %lf", &n_high, &mean_high) == 2);
+  if (p) CHECK(sscanf(p, "class 1 (low): %ld particles, mean residence %lf", &n_low, &mean_low) == 2);
+  if (q) CHECK(sscanf(q, "class 2 (high): %ld particles, mean residence %lf", &n_high, &mean_high) == 2);
+  CHECK(strncmp(cls, "class,name,t_lo,t_hi,count,fraction\n", 36) == 0); /* the header first */
   fprintf(stderr, "residence: %ld particles present at the window start, %ld counted (%ld low, %ld high; mean "
           "residence %.4f, %.4f s)\n", at_start, pooled, n_low, n_high, mean_low, mean_high);
   /* all 30 'high' particles start above 0.03 m and leave inside the window;
@@ -137,7 +141,7 @@ static void test_residence(void) {
    * to the next list rebuild): low in [0.02, 0.03], high in [0.03, 0.05] */
   int bad = 0;
   long cnt[2] = {0, 0};
-  for (const char *l = strstr(cls, "\nclass,"); l && (l = strchr(l + 1, '\n')) && l[1];) {
+  for (const char *l = strchr(cls, '\n'); l && l[1]; l = strchr(l + 1, '\n')) {
     int k;
     double lo, hi, f;
     long n;
@@ -290,20 +294,23 @@ static void test_never_steady(void) {
   gs_dem_case_free(c);
   if (rc) return;
   char *msg = dt_slurp("never", "../never.log");
-  char *col = dt_slurp("never", "collisions.csv"), *ker = dt_slurp("never", "collision_kernel.csv");
-  char *imp = dt_slurp("never", "impact_table.csv");
+  char *col = dt_slurp("never", "collisions.csv"), *ker = dt_slurp("never", "collision_kernel.json");
+  char *imp = dt_slurp("never", "impact_table.json"), *colj = dt_slurp("never", "collisions.json");
+  char *kerc = dt_slurp("never", "collision_kernel.csv");
   fprintf(stderr, "never steady: stderr: %s", msg);
   CHECK(strstr(msg, "warning") && strstr(msg, "steady state was not reached"));
-  CHECK(strstr(col, "NO STATISTICS WINDOW") && strstr(ker, "NO STATISTICS WINDOW") &&
+  CHECK(strstr(colj, "NO STATISTICS WINDOW") && strstr(ker, "NO STATISTICS WINDOW") &&
         strstr(imp, "NO STATISTICS WINDOW"));
   double r[10] = {0};
   CHECK(row(col, "1,1,", r, 10) == 8); /* class_i, class_j, events, N_i, N_j, window, per s, C (names skipped) */
   CHECK(isnan(r[3]) && isnan(r[6]) && isnan(r[7]));
-  CHECK(strstr(ker, "\nnan\n") != NULL);
+  CHECK(strstr(kerc, "\nnan\n") != NULL);
   free(msg);
   free(col);
   free(ker);
   free(imp);
+  free(colj);
+  free(kerc);
 }
 
 int main(void) {

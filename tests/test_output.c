@@ -120,11 +120,11 @@ static size_t count_lines(const char *dir, const char *name, char *first, size_t
 }
 
 static void expected_header(const gs_model *m, char *buf, size_t n) {
-  size_t len = (size_t)snprintf(buf, n, "time,compartment,M0,M1,M2,d10,d50,d90");
+  size_t len = (size_t)snprintf(buf, n, "time [s],compartment,M0 [1],M1 [m^3],M2 [m^6],d10 [m],d50 [m],d90 [m]");
   for (int k = 0; k < m->grid.dim; k++)
-    len += (size_t)snprintf(buf + len, n - len, ",mean_%s", m->grid.axis[k].name);
+    len += (size_t)snprintf(buf + len, n - len, ",mean_%s [m^3]", m->grid.axis[k].name);
   for (int k = 0; k < m->grid.dim; k++)
-    len += (size_t)snprintf(buf + len, n - len, ",total_%s", m->grid.axis[k].name);
+    len += (size_t)snprintf(buf + len, n - len, ",total_%s [m^3]", m->grid.axis[k].name);
   snprintf(buf + len, n - len, "\n");
 }
 

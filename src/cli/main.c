@@ -34,11 +34,12 @@ static void usage(FILE *fp) {
           "commands:\n"
           "  run CASE --out DIR     run a case file; writes DIR/result.h5 and DIR/summary.csv\n"
           "  check CASE             validate a case file without running it\n"
+          "  plot DIR [--times T,..] PNG and SVG plots of a run, DEM or coupled result folder\n"
           "  list                   list mechanisms, kernels, selection functions, daughter\n"
           "                         distributions and integrators\n"
           "  validate [--out FILE] [--quick] [--only IDS]\n"
           "                         grid-refinement study against analytical solutions;\n"
-          "                         writes a markdown report (default docs/validation.md)\n"
+          "                         writes a markdown report (default: standard output)\n"
           "  sweep CASE --set KEY=V1,V2,... | --design lhs:N --range KEY=LO:HI ... --out DIR\n"
           "                         many runs of a case over a grid or a Latin hypercube of\n"
           "                         variations; one row per run in DIR/sweep.csv\n"
@@ -316,6 +317,7 @@ int main(int argc, char **argv) {
   }
   if (!strcmp(argv[1], "sensitivity")) return gs_cmd_sensitivity(argc - 1, argv + 1);
   if (!strcmp(argv[1], "optimise")) return gs_cmd_optimise(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "plot")) return gs_cmd_plot(argc - 1, argv + 1);
   fprintf(stderr, "gransim: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;

@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "couple/couple_internal.h"
+#include "demdata/csv_meta.h"
 #include "gransim/case.h"
 #include "gransim/couple.h"
 #include "gransim/dem.h"
@@ -286,15 +287,17 @@ int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
 static int write_classes(const couple *k, const char *dir, gs_error *err) {
   char p[4400];
   snprintf(p, sizeof p, "%s/classes.csv", dir);
-  FILE *fp = fopen(p, "w");
-  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", p, strerror(errno));
+  gs_csv_out t;
+  FILE *fp = gs_csv_open(&t, p, err);
+  if (!fp) return err->code;
   fprintf(fp, "# DEM classes derived from the PBM grid (volume-equivalent diameters of grid.size_axes, "
           "window [%g, %g] m); %zu PBM cells outside them take the nearest class (coupling.classes.outside: %s)\n"
           "class,name,d_lo,d_hi,pbm_cells\n", k->s.dmin, k->s.dmax, k->cl.outside,
           k->s.outside_error ? "error" : "nearest");
   for (size_t c = 0; c < k->cl.n; c++)
     fprintf(fp, "%zu,c%zu,%.9g,%.9g,%zu\n", c + 1, c + 1, k->cl.edges[c], k->cl.edges[c + 1], k->cl.cells_in[c]);
-  return fclose(fp) ? gs_error_set(err, GS_EIO, "%s: cannot write", p) : GS_OK;
+  static const char *const units[] = {"class", "1", "d_lo", "m", "d_hi", "m", "pbm_cells", "1", NULL};
+  return gs_csv_close(&t, "gransim couple", units, err);
 }
 
 static int rm_entry(const char *p, const struct stat *sb, int flag, struct FTW *f) {

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "couple/couple_internal.h"
+#include "demdata/csv_meta.h"
 
 /* Mean and largest relative deviation from it of the w values ending at a[n-1]. */
 static void window_figures(const double *a, long n, long w, double *mean, double *dev) {
@@ -77,8 +78,9 @@ int gs_couple_steady_report(const char *dem_dir, const gs_couple_settings *s, do
   fclose(fp);
   if (!t || !m || !c || !flag) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   snprintf(path, sizeof path, "%s/steady.csv", dem_dir);
-  FILE *out = rc ? NULL : fopen(path, "w");
-  if (!rc && !out) rc = gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  gs_csv_out tab; /* its "#" lines go to steady.json */
+  FILE *out = rc ? NULL : gs_csv_open(&tab, path, err);
+  if (!rc && !out) rc = err->code;
   double mm = NAN, md = NAN, cmn = NAN, cd = NAN, mm_f = NAN, cm_f = NAN;
   *t_steady = -1;
   if (out) {
@@ -112,7 +114,11 @@ int gs_couple_steady_report(const char *dem_dir, const gs_couple_settings *s, do
                 "(%.3g %%); the tables average a bed that was not steady: raise coupling.steady.window or "
                 "max_time\n", path, *t_steady, 100 * s->tolerance, mm_f, mm, 100 * dm, cm_f, cmn, 100 * dc);
     }
-    if (fclose(out)) rc = gs_error_set(err, GS_EIO, "%s: cannot write", path);
+    static const char *const units[] = {"time", "s", "holdup_mass", "kg", "collisions_per_s", "1/s",
+                                        "holdup_mean", "kg", "holdup_deviation", "1", "collisions_mean", "1/s",
+                                        "collisions_deviation", "1", "steady", "1", NULL};
+    int wrc = gs_csv_close(&tab, "gransim couple", units, err);
+    if (!rc) rc = wrc;
   }
   if (!rc && *t_steady < 0)
     rc = gs_error_set(err, GS_ENUMERIC,

@@ -6,6 +6,7 @@
 #include <stdio.h>
 
 #include "dem/dem_case.h"
+#include "demdata/csv_meta.h"
 
 typedef struct {
   int ncl;
@@ -50,10 +51,24 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
 /* 1 if the window holds statistics (gs_dem_stats_write writes rates). */
 int gs_dem_stats_have_window(const gs_dem_stats *s, const gs_dem_case *c, double t_end, double t_steady);
 /* The tables' helpers, shared with the LIGGGHTS engine's reduction
- * (src/liggghts/tables.c) so that both write the same edges and files:
- * dir/name opened for writing (path receives it), closed with its error
- * checked, and the class edges in diameter (nclass + 1 values). */
+ * (src/liggghts/tables.c) so that both write the same edges and files.
+ * A table written at the end: dir/name begun in memory (its "# " lines
+ * become the description in dir/NAME.json, demdata/csv_meta.h) and ended
+ * with the units of its columns.  A table written row by row as the run goes
+ * (header line first, no "#" lines): dir/name opened for writing (path
+ * receives it) and closed with its error checked.  And the class edges in
+ * diameter (nclass + 1 values). */
+FILE *gs_dem_table_begin(gs_csv_out *t, const char *dir, const char *name, gs_error *err);
+int gs_dem_table_end(gs_csv_out *t, const char *const *units, gs_error *err);
 FILE *gs_dem_table_open(const char *dir, const char *name, char *path, size_t n, gs_error *err);
 int gs_dem_table_close(FILE *fp, const char *path, gs_error *err);
+/* the units of each table's columns (gs_csv_meta_write) */
+extern const char *const gs_dem_units_collisions[], *const gs_dem_units_kernel[],
+    *const gs_dem_units_impacts[], *const gs_dem_units_impact_velocity[], *const gs_dem_units_velocity[],
+    *const gs_dem_units_residence[], *const gs_dem_units_residence_class[];
 void gs_dem_class_edges(const gs_dem_case *c, double *e);
+/* timeseries.json beside path (timeseries.csv, written row by row as the run
+ * goes): the description and the units of its columns, walls included. */
+int gs_dem_timeseries_meta(const char *path, const char *description, size_t nw,
+                           const char *const *wall_names, gs_error *err);
 #endif

@@ -7,6 +7,7 @@
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -61,6 +62,21 @@ static void add_totals(const gs_dem *d, uint64_t *events, uint64_t *impacts) {
     for (int i = 0; i < k.nclass; i++) impacts[w] += k.wall_impacts[w * (size_t)k.nclass + i];
 }
 
+/* One object's frame (wall w, or the particles when w is SIZE_MAX) and its
+ * series file rewritten with the frame's time, so that an interrupted run
+ * leaves a series ParaView opens. */
+static int vtk_frame(const gs_dem *d, const char *vdir, const char *stem, size_t w, long frame,
+                     const double *times, char *path, size_t n, gs_error *err) {
+  snprintf(path, n, "%s/%s_%06ld.vtp", vdir, stem, frame);
+  int rc = w == SIZE_MAX ? gs_dem_write_vtp_particles(d, path, err)
+                         : gs_dem_write_vtp_wall(d, w, path, err);
+  if (!rc) {
+    snprintf(path, n, "%s/%s.pvd", vdir, stem);
+    rc = gs_dem_write_pvd(path, stem, times, frame + 1, err);
+  }
+  return rc;
+}
+
 static double wall_seconds(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -82,9 +98,10 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   if ((rc = gs_dem_stats_init(&st, c, err))) return rc;
   gs_dem_health health;
   gs_dem_health_init(&health, c);
-  long cap = 1024, ns = 0;
+  long cap = 1024, ns = 0, frame_cap = 64;
+  double *frame_t = malloc((size_t)frame_cap * sizeof *frame_t); /* times of the VTK frames */
   double *ser_m = malloc(cap * sizeof(double)), *ser_c = malloc(cap * sizeof(double));
-  if (!ser_m || !ser_c) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  if (!ser_m || !ser_c || !frame_t) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
 
   /* initial fill */
   for (size_t k = 0; k < c->nfill && !rc; k++) {
@@ -103,9 +120,9 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   if (c->noutlets) gs_dem_remove_if(d, in_outlet, c);
   /* (the time step was checked against the Rayleigh time when the case was read) */
 
-  snprintf(path, sizeof path, "%s/timeseries.csv", dir);
-  FILE *ts = rc ? NULL : fopen(path, "w");
-  if (!rc && !ts) rc = gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  char ts_path[4300];
+  FILE *ts = rc ? NULL : gs_dem_table_open(dir, "timeseries.csv", ts_path, sizeof ts_path, err);
+  if (!rc && !ts) rc = err->code;
   if (ts) {
     fprintf(ts, "time,particles,holdup_number,holdup_mass,kinetic_energy,rotational_energy,contacts,"
             "collisions_per_s");
@@ -217,12 +234,16 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       if (!rc) rc = gs_dem_wet_output(c, err);
     }
     if (!rc && vtk_k && step % vtk_k == 0) {
-      snprintf(path, sizeof path, "%s/particles_%06ld.vtk", vdir, frame);
-      rc = gs_dem_write_vtk_particles(d, path, err);
-      for (size_t w = 0; w < gs_dem_nwalls(d) && !rc; w++) {
-        snprintf(path, sizeof path, "%s/%s_%06ld.vtk", vdir, gs_dem_wall_name(d, w), frame);
-        rc = gs_dem_write_vtk_wall(d, w, path, err);
+      if (frame == frame_cap) {
+        double *nt = realloc(frame_t, 2 * (size_t)frame_cap * sizeof *nt);
+        if (!nt) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+        else frame_t = nt, frame_cap *= 2;
       }
+      if (!rc) frame_t[frame] = gs_dem_time(d);
+      if (!rc) rc = vtk_frame(d, vdir, "particles", SIZE_MAX, frame, frame_t, path, sizeof path, err);
+      for (size_t w = 0; w < gs_dem_nwalls(d) && !rc; w++)
+        if (gs_dem_wall_triangles(d, w, NULL))
+          rc = vtk_frame(d, vdir, gs_dem_wall_name(d, w), w, frame, frame_t, path, sizeof path, err);
       frame++;
     }
     if (rc || step == nsteps) break; /* a failed event above stops the run here */
@@ -262,7 +283,18 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
             "rebuilds%s\n", nsteps, el, el > 0 ? psteps / el : 0, (unsigned long long)k.rebuilds,
             t_steady >= 0 ? "" : "; steady state not reached");
   }
-  if (ts) fclose(ts);
+  if (ts) {
+    gs_error cerr = {0};
+    int crc = gs_dem_table_close(ts, ts_path, rc ? &cerr : err);
+    if (!rc) rc = crc;
+  }
+  if (ts && !rc) {
+    const char *names[GS_DEM_MAX_WALLS];
+    for (size_t w = 0; w < gs_dem_nwalls(d); w++) names[w] = gs_dem_wall_name(d, w);
+    rc = gs_dem_timeseries_meta(ts_path, "hold-up, energies, contacts, collision and impact rates (per second "
+                                "since the previous row) and torques on the walls about their rotation axis, "
+                                "every output.every seconds", gs_dem_nwalls(d), names, err);
+  }
   {
     gs_error werr = {0};
     int wrc = gs_dem_wet_finish(c, rc ? &werr : err);
@@ -283,5 +315,6 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   gs_dem_stats_free(&st);
   free(ser_m);
   free(ser_c);
+  free(frame_t);
   return rc;
 }

@@ -170,6 +170,33 @@ int gs_dem_table_close(FILE *fp, const char *path, gs_error *err) {
   return GS_OK;
 }
 
+FILE *gs_dem_table_begin(gs_csv_out *t, const char *dir, const char *name, gs_error *err) {
+  char path[4200];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  return gs_csv_open(t, path, err);
+}
+
+int gs_dem_table_end(gs_csv_out *t, const char *const *units, gs_error *err) {
+  return gs_csv_close(t, "gransim dem", units, err);
+}
+
+const char *const gs_dem_units_collisions[] = {
+    "class_i", "1", "class_j", "1", "events", "1", "N_i", "1", "N_j", "1", "window_s", "s",
+    "events_per_s", "1/s", "C_ij", "1/s", NULL};
+const char *const gs_dem_units_kernel[] = {"edges", "m", "C_ij", "1/s", NULL};
+const char *const gs_dem_units_impacts[] = {
+    "class", "1", "impacts", "1", "impacts_per_s", "1/s", "impacts_per_particle_s", "1/s",
+    "mean_vn", "m/s", "std_vn", "m/s", "mean_vt", "m/s", NULL};
+const char *const gs_dem_units_impact_velocity[] = {"class", "1", "vn_lo", "m/s", "vn_hi", "m/s",
+                                                     "impacts", "1", NULL};
+const char *const gs_dem_units_velocity[] = {
+    "class", "1", "compartment", "1", "from", "m", "to", "m", "mean_number", "1", "mean_speed", "m/s",
+    "std_speed", "m/s", "mean_axial_velocity", "m/s", "mean_vx", "m/s", "mean_vy", "m/s", "mean_vz", "m/s",
+    "std_vx", "m/s", "std_vy", "m/s", "std_vz", "m/s", NULL};
+const char *const gs_dem_units_residence[] = {"t_lo", "s", "t_hi", "s", "count", "1", "fraction", "1", NULL};
+const char *const gs_dem_units_residence_class[] = {"class", "1", "t_lo", "s", "t_hi", "s", "count", "1",
+                                                     "fraction", "1", NULL};
+
 /* The class edges of the written tables, in particle diameter: halfway
  * between neighbouring classes' radius ranges, the outer edges just outside
  * the smallest and largest diameters. */
@@ -265,7 +292,7 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
                          : "; NO STATISTICS WINDOW: no sample was taken in it, so every rate and mean below is nan";
   gs_dem_counters k;
   gs_dem_get_counters(c->dem, &k);
-  char path[4200];
+  gs_csv_out tab;
   FILE *fp;
   int rc;
   double *C = calloc((size_t)ncl * ncl, sizeof(double)), *e = malloc(((size_t)ncl + 1) * sizeof(double));
@@ -276,7 +303,7 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
   }
 
   /* collisions per class pair */
-  if (!(fp = gs_dem_table_open(dir, "collisions.csv", path, sizeof path, err))) { free(C); free(e); return err->code; }
+  if (!(fp = gs_dem_table_begin(&tab, dir, "collisions.csv", err))) { free(C); free(e); return err->code; }
   fprintf(fp, "# collision events (contacts that began) from t = %.9g to %.9g s (%.9g s, %ld samples)%s%s\n",
           s->t0, t_end, win, s->nsamples, t_steady >= 0 ? "" : "; steady state not detected", note);
   fprintf(fp, "class_i,class_j,name_i,name_j,events,N_i,N_j,window_s,events_per_s,C_ij\n");
@@ -289,10 +316,10 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
       fprintf(fp, "%d,%d,%s,%s,%.0f,%.6g,%.6g,%.9g,%.9g,%.9g\n", i + 1, j + 1, c->cls[i].name,
               c->cls[j].name, ev, Ni, Nj, win, have ? ev / win : NAN, cij);
     }
-  if ((rc = gs_dem_table_close(fp, path, err))) { free(C); free(e); return rc; }
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_collisions, err))) { free(C); free(e); return rc; }
 
   /* the same as a PBM kernel table: edges in diameter halfway between classes */
-  if (!(fp = gs_dem_table_open(dir, "collision_kernel.csv", path, sizeof path, err))) { free(C); free(e); return err->code; }
+  if (!(fp = gs_dem_table_begin(&tab, dir, "collision_kernel.csv", err))) { free(C); free(e); return err->code; }
   fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt) [1/s], window %.9g s%s;\n"
           "# edges are particle diameters [m]: use `kernel: {type: table, measure: diameter, ...}`\n"
           "edges", win, note);
@@ -305,10 +332,10 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
   }
   free(C);
   free(e);
-  if ((rc = gs_dem_table_close(fp, path, err))) return rc;
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_kernel, err))) return rc;
 
   /* impacts per wall and class */
-  if (!(fp = gs_dem_table_open(dir, "impacts.csv", path, sizeof path, err))) return err->code;
+  if (!(fp = gs_dem_table_begin(&tab, dir, "impacts.csv", err))) return err->code;
   fprintf(fp, "# wall impacts (contacts that began) from t = %.9g to %.9g s (%.9g s)%s; vn: normal speed "
           "relative to the wall, vt: tangential speed of the contact point\n", s->t0, t_end, win, note);
   fprintf(fp, "wall,class,name,impacts,impacts_per_s,impacts_per_particle_s,mean_vn,std_vn,mean_vt\n");
@@ -322,14 +349,14 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
               c->cls[i].name, n, have ? n / win : NAN, !have ? NAN : Ni > 0 ? n / (Ni * win) : 0, mv, sv,
               n > 0 ? k.wall_vt_sum[q] / n : NAN);
     }
-  if ((rc = gs_dem_table_close(fp, path, err))) return rc;
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_impacts, err))) return rc;
 
   /* the breakage selection's table: all walls, and each wall alone */
   if ((rc = write_impact_table(s, c, dir, -1, win, have, note, err))) return rc;
   for (size_t w = 0; w < k.nwalls; w++)
     if ((rc = write_impact_table(s, c, dir, (long)w, win, have, note, err))) return rc;
 
-  if (!(fp = gs_dem_table_open(dir, "impact_velocity.csv", path, sizeof path, err))) return err->code;
+  if (!(fp = gs_dem_table_begin(&tab, dir, "impact_velocity.csv", err))) return err->code;
   fprintf(fp, "# normal impact speed distributions (the last bin holds everything above)%s\n"
           "wall,class,vn_lo,vn_hi,impacts\n", note);
   for (size_t w = 0; w < k.nwalls; w++)
@@ -341,10 +368,10 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
         fprintf(fp, "%s,%d,%.6g,%.6g,%llu\n", gs_dem_wall_name(c->dem, w), i + 1, b * dv,
                 b + 1 < nb ? (b + 1) * dv : HUGE_VAL, (unsigned long long)h[b]);
     }
-  if ((rc = gs_dem_table_close(fp, path, err))) return rc;
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_impact_velocity, err))) return rc;
 
   /* velocities per class and compartment */
-  if (!(fp = gs_dem_table_open(dir, "velocity.csv", path, sizeof path, err))) return err->code;
+  if (!(fp = gs_dem_table_begin(&tab, dir, "velocity.csv", err))) return err->code;
   fprintf(fp, "# over the %ld samples from t = %.9g to %.9g s, every particle of the class in the compartment "
           "once per sample: speed |v|, velocity components and the axial component v.axis; std: sample "
           "standard deviation (n - 1)%s\n", s->nsamples, s->t0, t_end, note);
@@ -369,7 +396,7 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
         fprintf(fp, ",%.6g", n > 1 ? sqrt(fmax(0, (s->cv_v2[3 * at + a] - n * mc[a] * mc[a]) / (n - 1))) : NAN);
       fprintf(fp, "\n");
     }
-  if ((rc = gs_dem_table_close(fp, path, err))) return rc;
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_velocity, err))) return rc;
 
   /* residence times of particles that left through an outlet: all, and per class */
   double mx = 0, sum = 0;
@@ -379,7 +406,7 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
   }
   const int nb = 50;
   const double bw = mx > 0 ? mx / nb * (1 + 1e-9) : 1;
-  if (!(fp = gs_dem_table_open(dir, "residence.csv", path, sizeof path, err))) return err->code;
+  if (!(fp = gs_dem_table_begin(&tab, dir, "residence.csv", err))) return err->code;
   fprintf(fp, "# %zu particles left through outlets (%.6g kg) from t = %.9g to %.9g s; mean residence %.6g s;"
           " mean hold-up %.6g particles, %.6g kg%s\n",
           s->nrt, s->out_mass, s->t0, t_end, s->nrt ? sum / (double)s->nrt : NAN, have ? s->hold_n_sum / ns : NAN,
@@ -391,9 +418,9 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
       if ((int)(s->rt[r] / bw) == b) cnt++;
     fprintf(fp, "%.6g,%.6g,%zu,%.6g\n", b * bw, (b + 1) * bw, cnt, (double)cnt / (double)s->nrt);
   }
-  if ((rc = gs_dem_table_close(fp, path, err))) return rc;
+  if ((rc = gs_dem_table_end(&tab, gs_dem_units_residence, err))) return rc;
 
-  if (!(fp = gs_dem_table_open(dir, "residence_class.csv", path, sizeof path, err))) return err->code;
+  if (!(fp = gs_dem_table_begin(&tab, dir, "residence_class.csv", err))) return err->code;
   fprintf(fp, "# residence-time distribution per class of the %zu particles that left through outlets from "
           "t = %.9g to %.9g s, bins as in residence.csv; fraction: of the class%s\n", s->nrt, s->t0, t_end, note);
   for (int i = 0; i < ncl; i++) {
@@ -416,5 +443,26 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
               n ? (double)cnt / (double)n : NAN);
     }
   }
-  return gs_dem_table_close(fp, path, err);
+  return gs_dem_table_end(&tab, gs_dem_units_residence_class, err);
+}
+
+int gs_dem_timeseries_meta(const char *path, const char *description, size_t nw,
+                           const char *const *wall_names, gs_error *err) {
+  static const char *const fixed[] = {
+      "time", "s", "particles", "1", "holdup_number", "1", "holdup_mass", "kg", "kinetic_energy", "J",
+      "rotational_energy", "J", "contacts", "1", "collisions_per_s", "1/s", "lost", "1", "steady", "1",
+      "wall_seconds", "s"};
+  enum { NF = sizeof fixed / sizeof fixed[0] };
+  const char *units[NF + 4 * GS_DEM_CASE_MAX_WALLS + 1];
+  char names[2 * GS_DEM_CASE_MAX_WALLS][96];
+  size_t n = 0;
+  for (size_t i = 0; i < NF; i++) units[n++] = fixed[i];
+  for (size_t w = 0; w < nw && w < GS_DEM_CASE_MAX_WALLS; w++) {
+    snprintf(names[2 * w], sizeof names[0], "impacts_per_s_%s", wall_names[w]);
+    snprintf(names[2 * w + 1], sizeof names[0], "torque_axis_%s", wall_names[w]);
+    units[n++] = names[2 * w], units[n++] = "1/s";
+    units[n++] = names[2 * w + 1], units[n++] = "N m";
+  }
+  units[n] = NULL;
+  return gs_csv_meta_write(path, "gransim dem", description, units, err);
 }

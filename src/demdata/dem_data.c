@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "demdata/csv_meta.h"
 #include "demdata/dump.h"
 
 void gs_dem_options_default(gs_dem_options *o) {
@@ -657,8 +658,9 @@ static int table_edges(const gs_dem_data *d, const char *path, double *e, gs_err
 int gs_dem_impact_table_write(const char *path, const char *comment, size_t nclass, const double *edges,
                               int edges_volume, const double *rate, const double *mu, const double *sigma,
                               gs_error *err) {
-  FILE *fp = fopen(path, "w");
-  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  gs_csv_out t;
+  FILE *fp = gs_csv_open(&t, path, err);
+  if (!fp) return err->code;
   if (comment) fputs(comment, fp);
   fprintf(fp, "# edges measure particle %s: use `selection: {type: dem_impact, measure: %s, file: ...}`\nedges",
           edges_volume ? "volume [m^3]" : "diameter [m]", edges_volume ? "volume" : "diameter");
@@ -669,9 +671,9 @@ int gs_dem_impact_table_write(const char *path, const char *comment, size_t ncla
     for (size_t i = 0; i < nclass; i++) fprintf(fp, "%s%.10g", i ? ", " : "", row[r][i]);
     fprintf(fp, "\n");
   }
-  int bad = ferror(fp);
-  if (fclose(fp) || bad) return gs_error_set(err, GS_EIO, "%s: write failed", path);
-  return GS_OK;
+  const char *const units[] = {"edges", edges_volume ? "m^3" : "m", "rate", "1/s", "mu", "ln(m/s)",
+                               "sigma", "1", NULL};
+  return gs_csv_close(&t, "gransim", units, err);
 }
 
 int gs_dem_data_write_impacts(const gs_dem_data *d, const char *path, gs_error *err) {
@@ -701,8 +703,9 @@ int gs_dem_data_write_impacts(const gs_dem_data *d, const char *path, gs_error *
 
 int gs_dem_kernel_table_write(const char *path, const char *comment, size_t nclass, const double *edges,
                               int edges_volume, const double *C, gs_error *err) {
-  FILE *fp = fopen(path, "w");
-  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  gs_csv_out t;
+  FILE *fp = gs_csv_open(&t, path, err);
+  if (!fp) return err->code;
   if (comment) fputs(comment, fp);
   fprintf(fp, "# edges measure particle %s: use `kernel: {type: table, measure: %s, file: ...}`\nedges",
           edges_volume ? "volume [m^3]" : "diameter [m]", edges_volume ? "volume" : "diameter");
@@ -712,9 +715,8 @@ int gs_dem_kernel_table_write(const char *path, const char *comment, size_t ncla
     for (size_t j = 0; j < nclass; j++) fprintf(fp, "%s%.10g", j ? ", " : "", C[i * nclass + j]);
     fprintf(fp, "\n");
   }
-  int bad = ferror(fp);
-  if (fclose(fp) || bad) return gs_error_set(err, GS_EIO, "%s: write failed", path);
-  return GS_OK;
+  const char *const units[] = {"edges", edges_volume ? "m^3" : "m", "C_ij", "1/s", NULL};
+  return gs_csv_close(&t, "gransim", units, err);
 }
 
 int gs_dem_data_write_table(const gs_dem_data *d, const char *path, gs_error *err) {

@@ -364,6 +364,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   const double t0 = nsnap ? steps[0] * dt : NAN, t1 = nsnap ? steps[nsnap - 1] * dt : NAN;
   const double win = c->duration - c->stats_start;
   FILE *fp = NULL;
+  gs_csv_out tab;
   double e[GS_DEM_MAX_CLASSES + 1];
   gs_dem_class_edges(c, e);
   char note[512];
@@ -373,7 +374,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   /* collisions per class pair */
   double *C = calloc(ncl * ncl, sizeof(double));
   if (!rc && !C) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-  if (!rc && (fp = gs_dem_table_open(out, "collisions.csv", path, sizeof path, err))) {
+  if (!rc && (fp = gs_dem_table_begin(&tab, out, "collisions.csv", err))) {
     fprintf(fp, "# collision events from t = %.9g to %.9g s (%.9g s, %.0f snapshots from t = %.9g to %.9g s)%s\n",
             c->stats_start, c->duration, win, ns, t0, t1, note);
     /* demdata's estimate from the contact snapshots, for comparison (it
@@ -396,9 +397,9 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
         fprintf(fp, "%zu,%zu,%s,%s,%.0f,%.6g,%.6g,%.9g,%.9g,%.9g\n", i + 1, j + 1, c->cls[i].name, c->cls[j].name,
                 ev, Ni, Nj, win, ev / win, cij);
       }
-    rc = gs_dem_table_close(fp, path, err);
+    rc = gs_dem_table_end(&tab, gs_dem_units_collisions, err);
   } else if (!rc) rc = err->code;
-  if (!rc && (fp = gs_dem_table_open(out, "collision_kernel.csv", path, sizeof path, err))) {
+  if (!rc && (fp = gs_dem_table_begin(&tab, out, "collision_kernel.csv", err))) {
     fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt) [1/s], window %.9g s%s;\n"
             "# edges are particle diameters [m]: use `kernel: {type: table, measure: diameter, ...}`\nedges", win, note);
     for (size_t i = 0; i <= ncl; i++) fprintf(fp, ", %.9g", e[i]);
@@ -407,12 +408,12 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
       for (size_t j = 0; j < ncl; j++) fprintf(fp, "%s%.9g", j ? ", " : "", C[i * ncl + j]);
       fprintf(fp, "\n");
     }
-    rc = gs_dem_table_close(fp, path, err);
+    rc = gs_dem_table_end(&tab, gs_dem_units_kernel, err);
   } else if (!rc) rc = err->code;
   free(C);
 
   /* impacts per wall and class; the breakage selection's tables */
-  if (!rc && (fp = gs_dem_table_open(out, "impacts.csv", path, sizeof path, err))) {
+  if (!rc && (fp = gs_dem_table_begin(&tab, out, "impacts.csv", err))) {
     fprintf(fp, "# wall impacts (contacts that began) from t = %.9g to %.9g s (%.9g s)%s; vn, vt: not in LIGGGHTS' "
             "contact lists (nan); impact_table.csv holds the fits of the relative speed\n", c->stats_start, c->duration,
             win, note);
@@ -423,11 +424,11 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
         fprintf(fp, "%s,%zu,%s,%.0f,%.9g,%.9g,nan,nan,nan\n", c->wall_src[w].name, i + 1, c->cls[i].name, n, n / win,
                 Ni > 0 ? n / (Ni * win) : 0);
       }
-    rc = gs_dem_table_close(fp, path, err);
+    rc = gs_dem_table_end(&tab, gs_dem_units_impacts, err);
   } else if (!rc) rc = err->code;
   if (!rc) rc = impact_table(&a, c, out, -1, ns, NULL, err);
   for (size_t w = 0; w < nw && !rc; w++) rc = impact_table(&a, c, out, (long)w, ns, NULL, err);
-  if (!rc && (fp = gs_dem_table_open(out, "impact_velocity.csv", path, sizeof path, err))) {
+  if (!rc && (fp = gs_dem_table_begin(&tab, out, "impact_velocity.csv", err))) {
     fprintf(fp, "# impact speed distributions (the last bin holds everything above); engine liggghts: the relative "
             "speed |v - v_wall| of the wall contacts in the snapshots, not the normal speed at first contact\n"
             "wall,class,vn_lo,vn_hi,impacts\n");
@@ -436,11 +437,11 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
         for (int b = 0; b < a.nbins; b++)
           fprintf(fp, "%s,%zu,%.6g,%.6g,%.0f\n", c->wall_src[w].name, i + 1, b * a.dv,
                   b + 1 < a.nbins ? (b + 1) * a.dv : HUGE_VAL, a.hist[(w * ncl + i) * (size_t)a.nbins + (size_t)b]);
-    rc = gs_dem_table_close(fp, path, err);
+    rc = gs_dem_table_end(&tab, gs_dem_units_impact_velocity, err);
   } else if (!rc) rc = err->code;
 
   /* velocities per class and compartment */
-  if (!rc && (fp = gs_dem_table_open(out, "velocity.csv", path, sizeof path, err))) {
+  if (!rc && (fp = gs_dem_table_begin(&tab, out, "velocity.csv", err))) {
     fprintf(fp, "# over the %.0f snapshots from t = %.9g to %.9g s, every particle of the class in the compartment "
             "once per snapshot: speed |v|, velocity components and the axial component v.axis; std: sample "
             "standard deviation (n - 1); engine liggghts\n", ns, t0, t1);
@@ -459,23 +460,23 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
           fprintf(fp, ",%.6g", n > 1 ? sqrt(fmax(0, (a.cv_v2[3 * at + d] - n * mc[d] * mc[d]) / (n - 1))) : NAN);
         fprintf(fp, "\n");
       }
-    rc = gs_dem_table_close(fp, path, err);
+    rc = gs_dem_table_end(&tab, gs_dem_units_velocity, err);
   } else if (!rc) rc = err->code;
 
   /* residence times: LIGGGHTS' delete_atoms keeps no record of who left when */
-  if (!rc && (fp = gs_dem_table_open(out, "residence.csv", path, sizeof path, err))) {
+  if (!rc && (fp = gs_dem_table_begin(&tab, out, "residence.csv", err))) {
     fprintf(fp, "# engine liggghts: residence times are not measured (delete_atoms keeps no record)\n"
             "t_lo,t_hi,count,fraction\n");
-    rc = gs_dem_table_close(fp, path, err);
+    rc = gs_dem_table_end(&tab, gs_dem_units_residence, err);
   } else if (!rc) rc = err->code;
-  if (!rc && (fp = gs_dem_table_open(out, "residence_class.csv", path, sizeof path, err))) {
+  if (!rc && (fp = gs_dem_table_begin(&tab, out, "residence_class.csv", err))) {
     fprintf(fp, "# engine liggghts: residence times are not measured (delete_atoms keeps no record)\n"
             "class,name,t_lo,t_hi,count,fraction\n");
-    rc = gs_dem_table_close(fp, path, err);
+    rc = gs_dem_table_end(&tab, gs_dem_units_residence_class, err);
   } else if (!rc) rc = err->code;
 
   /* the time series from LIGGGHTS' thermo rows; what it does not report is nan */
-  if (!rc && (fp = gs_dem_table_open(out, "timeseries.csv", path, sizeof path, err))) {
+  if (!rc && (fp = gs_dem_table_begin(&tab, out, "timeseries.csv", err))) {
     fprintf(fp, "time,particles,holdup_number,holdup_mass,kinetic_energy,rotational_energy,contacts,collisions_per_s");
     for (size_t w = 0; w < nw; w++) fprintf(fp, ",impacts_per_s_%s", c->wall_src[w].name);
     for (size_t w = 0; w < nw; w++) fprintf(fp, ",torque_axis_%s", c->wall_src[w].name);
@@ -486,7 +487,12 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
       for (size_t w = 0; w < 2 * nw; w++) fprintf(fp, ",nan");
       fprintf(fp, ",nan,0,%.6f\n", v[4]);
     }
-    rc = gs_dem_table_close(fp, path, err);
+    const char *names[GS_DEM_CASE_MAX_WALLS];
+    for (size_t w = 0; w < nw; w++) names[w] = c->wall_src[w].name;
+    rc = gs_dem_table_end(&tab, NULL, err);
+    if (!rc)
+      rc = gs_dem_timeseries_meta(tab.path, "engine liggghts: LIGGGHTS' thermo rows; what they do not report is nan",
+                                  nw, names, err);
   } else if (!rc) rc = err->code;
 
   free(a.num), free(a.cv_n), free(a.cv_s), free(a.cv_s2), free(a.cv_a), free(a.cv_v), free(a.cv_v2);

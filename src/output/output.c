@@ -48,6 +48,7 @@
 #include "gransim/version.h"
 #include "output/chunk_writer.h"
 #include "output/csv_number.h"
+#include "output/units.h"
 #include "output/h5_setup.h"
 #include "output/journal.h"
 #include "output/journal_header.h"
@@ -79,6 +80,7 @@ struct gs_output {
   int nseries, ncol;
   hid_t ds[NSERIES_MAX];
   char sname[NSERIES_MAX][GS_NAME_LEN + 24]; /* "/summary/total_<axis>" */
+  char axis_names[GS_MAX_DIM * GS_NAME_LEN + 8]; /* "a,b": the dimensions of /number */
   int rank[NSERIES_MAX];
   hsize_t rest[NSERIES_MAX][RANK_MAX - 1]; /* dimensions after time */
   size_t rowlen[NSERIES_MAX];              /* values per time row */
@@ -153,33 +155,10 @@ static int h5_error(gs_error *err, const char *path, const char *fmt, ...) {
 
 /* ---- attributes ----------------------------------------------------------- */
 
-/* Fixed-length UTF-8 string attribute; an existing one is replaced because a
- * fixed-length type cannot change size in place ("running" -> "complete"). */
-static herr_t set_str_attr(hid_t loc, const char *name, const char *value) {
-  if (H5Aexists(loc, name) > 0 && H5Adelete(loc, name) < 0) return -1;
-  hid_t type = H5Tcopy(H5T_C_S1);
-  if (type < 0) return -1;
-  hid_t space = H5Screate(H5S_SCALAR), attr = H5I_INVALID_HID;
-  herr_t st = -1;
-  if (space >= 0 && H5Tset_size(type, strlen(value) + 1) >= 0 &&
-      H5Tset_strpad(type, H5T_STR_NULLTERM) >= 0 && H5Tset_cset(type, H5T_CSET_UTF8) >= 0 &&
-      (attr = H5Acreate2(loc, name, type, space, H5P_DEFAULT, H5P_DEFAULT)) >= 0)
-    st = H5Awrite(attr, type, value);
-  if (attr >= 0 && H5Aclose(attr) < 0) st = -1;
-  if (space >= 0) H5Sclose(space);
-  H5Tclose(type);
-  return st;
-}
-
-static herr_t set_i64_attr(hid_t loc, const char *name, long long value) {
-  hid_t space = H5Screate(H5S_SCALAR);
-  if (space < 0) return -1;
-  hid_t attr = H5Acreate2(loc, name, H5T_STD_I64LE, space, H5P_DEFAULT, H5P_DEFAULT);
-  herr_t st = attr >= 0 ? H5Awrite(attr, H5T_NATIVE_LLONG, &value) : -1;
-  if (attr >= 0 && H5Aclose(attr) < 0) st = -1;
-  H5Sclose(space);
-  return st;
-}
+/* Strings are fixed-length UTF-8, an existing one replaced because a
+ * fixed-length type cannot change size in place ("running" -> "complete");
+ * integers 64-bit: gs_h5_str_attr, gs_h5_i64_attr (units.c), shared with the
+ * stochastic solver's writer. */
 
 /* Overwrites an existing integer attribute in place (same size, so the object
  * header is rewritten where it is, never moved). */
@@ -229,6 +208,7 @@ static void describe_series(gs_output *o, const gs_model *m) {
   const int nvol = m->nvol;
   hsize_t rest[RANK_MAX - 1] = {g->ncomp}, lrest[2] = {g->ncomp, 2 * (hsize_t)nvol};
   for (int k = 0; k < g->dim; k++) rest[1 + k] = g->axis[k].n;
+  join_axis_names(g, o->axis_names, sizeof o->axis_names);
   set_series(o, S_TIME, "/time", 1, rest);
   set_series(o, S_NUMBER, "/number", 2 + g->dim, rest);
   set_series(o, S_LEDGER, "/ledger", 3, lrest);
@@ -269,6 +249,8 @@ static int write_axis(gs_output *o, hid_t grid, const gs_axis *ax, gs_error *err
   if (g < 0) return h5_error(err, o->h5_path, "create group /grid/%s", ax->name);
   herr_t st = write_vector(g, "edges", ax->edges, ax->n + 1);
   if (st >= 0) st = write_vector(g, "pivots", ax->pivots, ax->n);
+  if (st >= 0) st = gs_h5_describe(g, "edges", "m^3", "edge");
+  if (st >= 0) st = gs_h5_describe(g, "pivots", "m^3", "cell");
   int rc = st < 0 ? h5_error(err, o->h5_path, "write /grid/%s/edges and pivots", ax->name) : GS_OK;
   if (H5Gclose(g) < 0 && !rc) rc = h5_error(err, o->h5_path, "close group /grid/%s", ax->name);
   return rc;
@@ -280,10 +262,10 @@ static int write_grid(gs_output *o, const gs_grid *g, gs_error *err) {
   hid_t grid = H5Gcreate2(o->file, "grid", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   if (grid < 0) return h5_error(err, o->h5_path, "create group /grid");
   int rc = GS_OK;
-  if (set_i64_attr(grid, "dim", g->dim) < 0 ||
-      set_i64_attr(grid, "ncomp", (long long)g->ncomp) < 0 ||
-      set_i64_attr(grid, "ncells", (long long)g->ncells) < 0 ||
-      set_str_attr(grid, "axis_names", names) < 0)
+  if (gs_h5_i64_attr(grid, "dim", g->dim) < 0 ||
+      gs_h5_i64_attr(grid, "ncomp", (long long)g->ncomp) < 0 ||
+      gs_h5_i64_attr(grid, "ncells", (long long)g->ncells) < 0 ||
+      gs_h5_str_attr(grid, "axis_names", names) < 0)
     rc = h5_error(err, o->h5_path, "write the attributes of /grid");
   for (int k = 0; k < g->dim && !rc; k++) rc = write_axis(o, grid, &g->axis[k], err);
   if (H5Gclose(grid) < 0 && !rc) rc = h5_error(err, o->h5_path, "close group /grid");
@@ -294,12 +276,13 @@ static int write_case(gs_output *o, const char *text, const char *name, gs_error
   hid_t c = H5Gcreate2(o->file, "case", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   if (c < 0) return h5_error(err, o->h5_path, "create group /case");
   int rc = GS_OK;
-  if (set_str_attr(c, "text", text ? text : "") < 0 || set_str_attr(c, "file", name ? name : "") < 0)
+  if (gs_h5_str_attr(c, "text", text ? text : "") < 0 || gs_h5_str_attr(c, "file", name ? name : "") < 0)
     rc = h5_error(err, o->h5_path, "write the attributes text and file of /case");
   if (H5Gclose(c) < 0 && !rc) rc = h5_error(err, o->h5_path, "close group /case");
-  if (!rc && (set_str_attr(o->file, "gransim_version", gs_version()) < 0 ||
-              set_str_attr(o->file, "status", "running") < 0 ||
-              set_i64_attr(o->file, "ntimes", 0) < 0))
+  if (!rc && (gs_h5_str_attr(o->file, "gransim_version", gs_version()) < 0 ||
+              gs_h5_str_attr(o->file, "status", "running") < 0 ||
+              gs_h5_str_attr(o->file, "solver", "sectional") < 0 ||
+              gs_h5_i64_attr(o->file, "ntimes", 0) < 0))
     rc = h5_error(err, o->h5_path, "write the attributes gransim_version, status, ntimes of /");
   return rc;
 }
@@ -334,8 +317,12 @@ static int write_discretisation(gs_output *o, const gs_model *m, gs_error *err) 
               write_vector(g, "represented", buf + n * w, n * w) < 0 ||
               write_vector(g, "error", buf + 2 * n * w, n) < 0 ||
               write_vector(g, "tolerance", buf + 2 * n * w + n, 1) < 0 ||
-              set_str_attr(g, "keys", keys) < 0 ||
-              set_str_attr(g, "layout", "requested and represented: per distribution (keys), its "
+              gs_h5_describe(g, "requested", "1 (number), m^3 (volume of each axis)", "entry (per distribution: number then volumes)") < 0 ||
+              gs_h5_describe(g, "represented", "1 (number), m^3 (volume of each axis)", "entry (per distribution: number then volumes)") < 0 ||
+              gs_h5_describe(g, "error", "1", "distribution") < 0 ||
+              gs_h5_describe(g, "tolerance", "1", "") < 0 ||
+              gs_h5_str_attr(g, "keys", keys) < 0 ||
+              gs_h5_str_attr(g, "layout", "requested and represented: per distribution (keys), its "
                                          "number, then the volume of every axis; error: the largest "
                                          "relative error of number, volumes and mean sizes") < 0))
     rc = h5_error(err, o->h5_path, "write /discretisation");
@@ -402,11 +389,31 @@ static int create_series(gs_output *o, int i, gs_error *err) {
   return o->ds[i] < 0 ? h5_error(err, o->h5_path, "create dataset %s", o->sname[i]) : GS_OK;
 }
 
+/* The units and dimension names of series i (units.h). */
+static int describe_dataset(gs_output *o, int i, gs_error *err) {
+  char dims[64 + GS_MAX_DIM * GS_NAME_LEN] = "time,compartment";
+  const char *units = "m^3";
+  if (i == S_TIME) snprintf(dims, sizeof dims, "time");
+  else if (i == S_LEDGER) snprintf(dims, sizeof dims, "time,compartment,entry");
+  else if (i == S_NUMBER || i == o->s_carried) {
+    snprintf(dims, sizeof dims, "time,compartment%s,%s", i == S_NUMBER ? "" : ",quantity", o->axis_names);
+    if (i == S_NUMBER) units = "1";
+  } else if (i >= S_SUMMARY && i < S_SUMMARY + o->ncol) {
+    const char *u = gs_summary_unit(colname(o, i - S_SUMMARY));
+    units = u ? u : "1";
+  }
+  if (i == S_TIME) units = "s";
+  return gs_h5_describe(o->ds[i], ".", units, dims) < 0
+             ? h5_error(err, o->h5_path, "write the attributes units and dimensions of %s", o->sname[i])
+             : GS_OK;
+}
+
 static int create_all_series(gs_output *o, gs_error *err) {
   hid_t sg = H5Gcreate2(o->file, "summary", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   if (sg < 0 || H5Gclose(sg) < 0) return h5_error(err, o->h5_path, "create group /summary");
   int rc = GS_OK;
   for (int i = 0; i < o->nseries && !rc; i++) rc = create_series(o, i, err);
+  for (int i = 0; i < o->nseries && !rc; i++) rc = describe_dataset(o, i, err);
   return rc;
 }
 
@@ -465,8 +472,11 @@ static int csv_error(gs_output *o, gs_error *err) {
 }
 
 static int csv_header(gs_output *o, gs_error *err) {
-  for (int c = 0; c < o->ncol; c++)
-    if (fprintf(o->csv, "%s%s", c ? "," : "", colname(o, c)) < 0) return csv_error(o, err);
+  char name[GS_NAME_LEN + 40];
+  for (int c = 0; c < o->ncol; c++) {
+    gs_summary_header(colname(o, c), name, sizeof name);
+    if (fprintf(o->csv, "%s%s", c ? "," : "", name) < 0) return csv_error(o, err);
+  }
   return fputc('\n', o->csv) == EOF ? csv_error(o, err) : GS_OK;
 }
 
@@ -912,7 +922,7 @@ int gs_output_finish(gs_output *o, int ok, gs_error *err) {
   if (ok && o->next_part)
     rc = gs_error_set(err, GS_EINPUT, "an output time was only partly written");
   if (ok && !rc) rc = commit(o, 1, err);
-  if (!rc && ok && set_str_attr(o->file, "status", "complete") < 0)
+  if (!rc && ok && gs_h5_str_attr(o->file, "status", "complete") < 0)
     rc = h5_error(err, o->h5_path, "write the attribute status of /");
   int crc = output_close(o, rc ? NULL : err);
   if (!rc) rc = crc;

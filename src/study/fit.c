@@ -40,6 +40,14 @@ static size_t split_fields(char *line, char **field, size_t max) {
   return n;
 }
 
+/* A header field without its unit: summary.csv writes "d50 [m]", and data
+ * taken from it may keep the units. */
+static void strip_unit(char *f) {
+  size_t n = strlen(f);
+  char *b = n && f[n - 1] == ']' ? strstr(f, " [") : NULL;
+  if (b) *b = '\0';
+}
+
 int gs_fit_data_read(const char *path, gs_fit_data *d, gs_error *err) {
   memset(d, 0, sizeof *d);
   FILE *f = fopen(path, "r");
@@ -52,6 +60,7 @@ int gs_fit_data_read(const char *path, gs_fit_data *d, gs_error *err) {
     if (line[0] == '#' || line[strspn(line, " \t\r\n")] == '\0') continue;
     nf = split_fields(line, field, 256);
     if (!d->names) { /* the header: time, then the measured columns */
+      for (size_t j = 0; j < nf; j++) strip_unit(field[j]);
       if (nf < 2 || strcmp(field[0], "time")) {
         rc = gs_error_set(err, GS_EINPUT,
                           "%s:%zu: expected a header 'time,NAME,...' (e.g. time,M0,d50_c1)", path,

@@ -10,6 +10,7 @@
 
 #include "output/h5_setup.h"
 #include "gransim/version.h"
+#include "output/units.h"
 
 
 static int mkdir_p(const char *dir, gs_error *err) {
@@ -48,26 +49,23 @@ static int put(hid_t loc, const char *name, int rank, const hsize_t *dims, const
   return e < 0 ? -1 : 0;
 }
 
+/* Attributes as the sectional writer's (output/units.h): fixed-length UTF-8
+ * strings, 64-bit integers, `units` and `dimensions` on every dataset. */
 static int attr_str(hid_t loc, const char *name, const char *value) {
-  hid_t t = H5Tcopy(H5T_C_S1);
-  H5Tset_size(t, strlen(value) + 1);
-  hid_t sp = H5Screate(H5S_SCALAR);
-  hid_t a = H5Acreate2(loc, name, t, sp, H5P_DEFAULT, H5P_DEFAULT);
-  herr_t e = a < 0 ? -1 : H5Awrite(a, t, value);
+  herr_t e = gs_h5_str_attr(loc, name, value);
   if (e < 0) note_cause();
-  if (a >= 0) H5Aclose(a);
-  H5Sclose(sp);
-  H5Tclose(t);
   return e < 0 ? -1 : 0;
 }
 
-static int attr_num(hid_t loc, const char *name, double value) {
-  hid_t sp = H5Screate(H5S_SCALAR);
-  hid_t a = H5Acreate2(loc, name, H5T_IEEE_F64LE, sp, H5P_DEFAULT, H5P_DEFAULT);
-  herr_t e = a < 0 ? -1 : H5Awrite(a, H5T_NATIVE_DOUBLE, &value);
+static int attr_int(hid_t loc, const char *name, long long value) {
+  herr_t e = gs_h5_i64_attr(loc, name, value);
   if (e < 0) note_cause();
-  if (a >= 0) H5Aclose(a);
-  H5Sclose(sp);
+  return e < 0 ? -1 : 0;
+}
+
+static int describe(hid_t loc, const char *path, const char *units, const char *dims) {
+  herr_t e = gs_h5_describe(loc, path, units, dims);
+  if (e < 0) note_cause();
   return e < 0 ? -1 : 0;
 }
 
@@ -86,16 +84,24 @@ static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results
     hid_t ax = H5Gcreate2(grid, g->axis[a].name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
     hsize_t ne = g->axis[a].n + 1, np = g->axis[a].n;
     bad |= put(ax, "edges", 1, &ne, g->axis[a].edges) | put(ax, "pivots", 1, &np, g->axis[a].pivots);
+    bad |= describe(ax, "edges", "m^3", "edge") | describe(ax, "pivots", "m^3", "cell");
     H5Gclose(ax);
   }
-  bad |= attr_num(grid, "dim", g->dim) | attr_num(grid, "ncomp", (double)nz) | attr_num(grid, "ncells", (double)g->ncells);
+  char axes[GS_MAX_DIM * GS_NAME_LEN + 8] = "", ndims[GS_MAX_DIM * GS_NAME_LEN + 40];
+  for (int a = 0; a < g->dim; a++)
+    snprintf(axes + strlen(axes), sizeof axes - strlen(axes), "%s%s", a ? "," : "", g->axis[a].name);
+  snprintf(ndims, sizeof ndims, "time,compartment,%s", axes);
+  bad |= attr_int(grid, "dim", g->dim) | attr_int(grid, "ncomp", (long long)nz) |
+         attr_int(grid, "ncells", (long long)g->ncells) | attr_str(grid, "axis_names", axes);
   H5Gclose(grid);
   hsize_t d1 = nt;
-  bad |= put(f, "time", 1, &d1, c->times);
+  bad |= put(f, "time", 1, &d1, c->times) | describe(f, "time", "s", "time");
   hsize_t dims[2 + GS_MAX_DIM] = {nt, nz};
   for (int a = 0; a < g->dim; a++) dims[2 + a] = g->axis[a].n;
   bad |= put(f, "number", 2 + g->dim, dims, r->hist) | put(f, "number_ci", 2 + g->dim, dims, r->hist_ci);
   bad |= put(f, "outside", 2, dims, r->outside) | put(f, "particles", 2, dims, r->particles);
+  bad |= describe(f, "number", "1", ndims) | describe(f, "number_ci", "1", ndims) |
+         describe(f, "outside", "1", "time,compartment") | describe(f, "particles", "1", "time,compartment");
   hid_t sm = H5Gcreate2(f, "summary", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   hid_t sc = H5Gcreate2(f, "summary_ci", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   double *col = malloc(nt * nz * sizeof(double)), *cic = malloc(nt * nz * sizeof(double));
@@ -107,6 +113,8 @@ static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results
       cic[i] = r->ci[i * ncol + k];
     }
     bad |= put(sm, name, 2, dims, col) | put(sc, name, 2, dims, cic);
+    const char *u = gs_summary_unit(name);
+    bad |= describe(sm, name, u ? u : "1", "time,compartment") | describe(sc, name, u ? u : "1", "time,compartment");
   }
   bad |= !col || !cic;
   free(col);
@@ -118,15 +126,17 @@ static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results
     hsize_t ne = c->nsieve + 1, sd[3] = {nt, nz, c->nsieve};
     bad |= put(sg, "edges", 1, &ne, c->sieves) | put(sg, "mass_fraction", 3, sd, r->sieve) |
            put(sg, "mass_fraction_ci", 3, sd, r->sieve_ci);
+    bad |= describe(sg, "edges", "m", "edge") | describe(sg, "mass_fraction", "1", "time,compartment,sieve_class") |
+           describe(sg, "mass_fraction_ci", "1", "time,compartment,sieve_class");
     H5Gclose(sg);
   }
   hid_t cs = H5Gcreate2(f, "case", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   bad |= attr_str(cs, "text", gs_cfg_source(c->cfg)) | attr_str(cs, "file", gs_cfg_name(c->cfg));
   H5Gclose(cs);
   bad |= attr_str(f, "gransim_version", gs_version()) | attr_str(f, "solver", "swa");
-  bad |= attr_num(f, "runs", (double)c->runs) | attr_num(f, "particles", (double)m->nmax);
-  bad |= attr_num(f, "seed", (double)c->seed) | attr_num(f, "jumps", (double)r->stats.jumps);
-  bad |= attr_num(f, "fictitious", (double)r->stats.fictitious) | attr_num(f, "ntimes", (double)nt);
+  bad |= attr_int(f, "runs", (long long)c->runs) | attr_int(f, "particles", (long long)m->nmax);
+  bad |= attr_int(f, "seed", (long long)c->seed) | attr_int(f, "jumps", (long long)r->stats.jumps);
+  bad |= attr_int(f, "fictitious", (long long)r->stats.fictitious) | attr_int(f, "ntimes", (long long)nt);
   bad |= attr_str(f, "status", "complete");
   if (H5Fclose(f) < 0) {
     note_cause();
@@ -141,15 +151,15 @@ static int write_csv(const gs_swa_case *c, const char *path, const gs_swa_result
   FILE *fp = fopen(path, "w");
   if (!fp) return -1;
   char name[GS_NAME_LEN + 16];
-  fprintf(fp, "time,compartment");
-  for (size_t k = 0; k < ncol; k++) {
-    gs_swa_column_name(m, (int)k, name, sizeof name);
-    fprintf(fp, ",%s", name);
-  }
-  for (size_t k = 0; k < ncol; k++) {
-    gs_swa_column_name(m, (int)k, name, sizeof name);
-    fprintf(fp, ",ci_%s", name);
-  }
+  char head[GS_NAME_LEN + 48];
+  fprintf(fp, "time [s],compartment");
+  for (int ci = 0; ci < 2; ci++)
+    for (size_t k = 0; k < ncol; k++) {
+      gs_swa_column_name(m, (int)k, name + 3, sizeof name - 3);
+      memcpy(name, "ci_", 3);
+      gs_summary_header(ci ? name : name + 3, head, sizeof head);
+      fprintf(fp, ",%s", head);
+    }
   fprintf(fp, "\n");
   for (size_t t = 0; t < c->ntimes; t++)
     for (size_t z = 0; z < nz; z++) {
