@@ -606,8 +606,10 @@ static void find_spans(agg_t *A, size_t comp, const double *N, double noise) {
  * difference quotients, whose perturbed state has tolerance-sized noise in
  * every cell), so that Newton iterations see one smooth right-hand side. */
 static void choose_cells(agg_t *A, size_t comp, double t, const double *N, const gs_eval *ev) {
-  int keep = A->cs[comp].span_valid &&
-             (ev->hold || (ev->in_integrator && t == A->cs[comp].span_t && ev->era == A->cs[comp].span_era));
+  /* held or not, a choice never outlives its output interval (era): a run
+   * resumed there makes it afresh, so the uninterrupted run must too */
+  int keep = A->cs[comp].span_valid && ev->era == A->cs[comp].span_era &&
+             (ev->hold || (ev->in_integrator && t == A->cs[comp].span_t));
   if (!keep) {
     find_spans(A, comp, N, A->negligible > 0 ? ev->noise_floor : 0.0);
     A->cs[comp].span_t = t;
@@ -723,7 +725,9 @@ static void carried_loads(const agg_t *A, const gs_model *m, const gs_eval *ev, 
 static const double *wet_cells(agg_t *A, const gs_model *m, const gs_eval *ev, size_t comp,
                                double t, const double *y) {
   double *psi = A->wet_ok + comp * A->wet_len;
-  if (ev->hold || (ev->in_integrator && t == A->cs[comp].wet_t && ev->era == A->cs[comp].wet_era)) return psi;
+  if (!isnan(A->cs[comp].wet_t) && ev->era == A->cs[comp].wet_era &&
+      (ev->hold || (ev->in_integrator && t == A->cs[comp].wet_t)))
+    return psi;
   const double *N = gs_eval_numbers_c(m, ev, y, comp), *L = gs_eval_carried_c(m, ev, y, comp, A->wet_liquid);
   const double lo = A->wet_min * (1 - 0.5 * A->wet_ramp), hi = A->wet_min * (1 + 0.5 * A->wet_ramp);
   for (size_t c = 0; c < A->ncells; c++) {
