@@ -157,6 +157,7 @@ static void test_residence(void) {
   CHECK(mean_high > 0.03 && mean_high < 0.0502);
   free(res);
   free(cls);
+  free(clsj);
 }
 
 /* ---- velocities per compartment ------------------------------------------- */

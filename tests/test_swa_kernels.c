@@ -268,7 +268,7 @@ static void regression(void) {
  * lie 1.6 % and 2.2 % from those with the solid ratio 2^(1/2) too (M0 5 % from
  * ratios 2 and 2.5), so 4 % is allowed; with B0 doubled in the stochastic run
  * the check must fail. */
-static const char *semimech_body(double beta0) {
+static char *semimech_body(double beta0) { /* the caller frees it */
   return tl_fmt("grid:\n  axes:\n"
                 "    - {name: solid, type: geometric, min: 2.6e-13, ratio: 2, cells: 10}\n"
                 "    - {name: liquid, type: geometric, min: 1e-14, ratio: %.17g, cells: 23, zero_first: true}\n"
@@ -283,12 +283,15 @@ static const char *semimech_body(double beta0) {
 
 static void semimech_vs_sectional(void) {
   gs_summary s;
-  CHECK(sectional(semimech_body(1.9e-3), &s) == 0);
+  char *body = semimech_body(1.9e-3);
+  CHECK(sectional(body, &s) == 0);
+  free(body);
   CHECK(s.m0 < 0.5 * 1000); /* aggregation took a good share of the particles */
   for (int doubled = 0; doubled < 2; doubled++) {
     gs_swa_case c;
-    sw_case(sw_fmt("%ssolver: {method: swa, particles: 2048, runs: 16, seed: 7}\n",
-                   semimech_body(doubled ? 3.8e-3 : 1.9e-3)), &c);
+    body = semimech_body(doubled ? 3.8e-3 : 1.9e-3);
+    sw_case(sw_fmt("%ssolver: {method: swa, particles: 2048, runs: 16, seed: 7}\n", body), &c);
+    free(body);
     sw_result r;
     CHECK(sw_run(&c, &r) == 0);
     const int ok = agree(doubled ? "semi_mechanistic, beta0 x2" : "semi_mechanistic", &c, &r, &s, 0.04, 1);
