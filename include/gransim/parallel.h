@@ -17,6 +17,10 @@ extern "C" {
 /* Start MPI if built with it and launched by mpirun; harmless otherwise.
  * Call once, first thing in main. */
 void gs_parallel_init(int *argc, char ***argv);
+/* What an MPI error leaves behind and how to go on ("case c.yaml, results in
+ * out: ... --resume"), appended to the message that an MPI error prints before
+ * it ends every rank with exit status 1 (src/core/mpi_errors.c).  Copied. */
+void gs_parallel_context(const char *text);
 /* Stop MPI if gs_parallel_init started it. */
 void gs_parallel_finalize(void);
 /* 1 when the binary was built with MPI. */

@@ -11,6 +11,7 @@
 #include <HYPRE_struct_ls.h>
 
 #include "cfd/cfd_internal.h"
+#include "core/mpi_errors.h"
 
 struct gs_cfd_psolver {
   int n[3];
@@ -38,6 +39,7 @@ static int ensure_mpi(gs_error *err) {
     return gs_error_set(err, GS_EINPUT, "gas phase: MPI (needed by hypre) did not start");
   if (!started_mpi) atexit(stop_mpi);
   started_mpi = 1;
+  gs_mpi_errors_install();
   return GS_OK;
 }
 
@@ -82,6 +84,7 @@ void gs_cfd_pressure_free(gs_cfd_psolver *ps) {
 int gs_cfd_pressure_solve(gs_cfd_psolver *ps, const double *nb, const double *diag,
                           const double *rhs, double *x, double tol, int max_iter, int *its,
                           double *res) {
+  gs_mpi_doing("hypre's pressure solve of the gas phase (MPI_COMM_SELF)");
   const size_t nc = ps->ncell;
   for (size_t c = 0; c < nc; c++) {
     double s = diag[c];

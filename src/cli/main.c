@@ -123,6 +123,12 @@ static int cmd_run(int argc, char **argv) {
   gs_case c;
   gs_cfg *cfg = gs_cfg_load_file(path, &err);
   const gs_api_kind kind = cfg ? gs_api_kind_of_cfg(cfg) : GS_API_SECTIONAL;
+  char context[1024];
+  if (kind == GS_API_SWA)
+    snprintf(context, sizeof context, "case %s, results in %s: nothing was written (the swa solver writes its results at the end); run it again", path, out);
+  else
+    snprintf(context, sizeof context, "case %s, results in %s: the output times committed before the error are kept in %s/.result.journal; continue with `gransim run %s --out %s --resume`", path, out, out, path, out);
+  gs_parallel_context(context);
   if (kind == GS_API_SWA) return gs_cmd_run_swa(cfg, path, out, opt.progress, opt.resume);
   if (kind == GS_API_COUPLED || kind == GS_API_DEM) {
     fprintf(stderr, "gransim: %s is a %s: run it with `gransim %s %s --out %s`\n", path,

@@ -146,6 +146,9 @@ int gs_cmd_sweep(int argc, char **argv) {
     rc = 2;
     goto done;
   }
+  char context[1024];
+  snprintf(context, sizeof context, "sweep of %s, results in %s: the runs finished before the error are kept in %s/runs.csv; continue with the same command and --resume", path, opt.out_dir, opt.out_dir);
+  gs_parallel_context(context);
   cfg = gs_cfg_load_file(path, &err);
   gs_sweep_report rep;
   if (!cfg || gs_sweep_run(cfg, &d, &opt, &rep, &err)) {

@@ -2,6 +2,8 @@
  * -DGRANSIM_MPI=ON. */
 #include "gransim/parallel.h"
 
+#include "core/mpi_errors.h"
+
 #include <limits.h>
 #include <stdlib.h>
 
@@ -36,6 +38,7 @@ void gs_parallel_init(int *argc, char ***argv) {
   /* threads inside a rank never call MPI */
   MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
   started = 1;
+  gs_mpi_errors_install();
 }
 
 void gs_parallel_finalize(void) {
@@ -67,7 +70,10 @@ int gs_parallel_size(void) {
 }
 
 double gs_parallel_max(double v) {
-  if (gs_parallel_size() > 1) MPI_Allreduce(MPI_IN_PLACE, &v, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  if (gs_parallel_size() < 2) return v;
+  const char *was = gs_mpi_doing("the maximum over ranks (MPI_Allreduce)");
+  MPI_Allreduce(MPI_IN_PLACE, &v, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  gs_mpi_doing(was);
   return v;
 }
 
@@ -76,26 +82,32 @@ double gs_parallel_max(double v) {
 
 void gs_parallel_sum(double *v, size_t n) {
   if (gs_parallel_size() < 2) return;
+  const char *was = gs_mpi_doing("the sum over ranks (MPI_Allreduce)");
   for (size_t i = 0; i < n; i += CHUNK) {
     size_t k = n - i < CHUNK ? n - i : CHUNK;
     MPI_Allreduce(MPI_IN_PLACE, v + i, (int)k, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
   }
+  gs_mpi_doing(was);
 }
 
 void gs_parallel_broadcast(double *v, size_t n) {
   if (gs_parallel_size() < 2) return;
+  const char *was = gs_mpi_doing("the broadcast from rank 0 (MPI_Bcast)");
   for (size_t i = 0; i < n; i += CHUNK) {
     size_t k = n - i < CHUNK ? n - i : CHUNK;
     MPI_Bcast(v + i, (int)k, MPI_DOUBLE, 0, MPI_COMM_WORLD);
   }
+  gs_mpi_doing(was);
 }
 
 void gs_parallel_broadcast_bytes(void *v, size_t n) {
   if (gs_parallel_size() < 2) return;
+  const char *was = gs_mpi_doing("the broadcast from rank 0 (MPI_Bcast)");
   for (size_t i = 0; i < n; i += CHUNK) {
     size_t k = n - i < CHUNK ? n - i : CHUNK;
     MPI_Bcast((char *)v + i, (int)k, MPI_BYTE, 0, MPI_COMM_WORLD);
   }
+  gs_mpi_doing(was);
 }
 
 #else /* one process */

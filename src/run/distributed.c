@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/mpi_errors.h"
 #include "gransim/parallel.h"
 
 #ifdef GRANSIM_HAVE_MPI
@@ -229,6 +230,7 @@ void gs_dist_free(gs_dist *d) {
   if (d->requests) {
     gs_dist_max_lagged_finish(d);
     gs_dist_sum_finish(d);
+    gs_mpi_doing("the last boundary messages of the run (MPI_Waitall)");
     MPI_Waitall(GS_DIST_NSEND + 1, d->requests, MPI_STATUSES_IGNORE);
   }
 #endif
@@ -264,6 +266,7 @@ static void pack_comp(const gs_dist *d, const double *yl, size_t comp, double *b
 static const double *exchange(gs_dist *d, const double *y, size_t send_comp, int to, int from) {
   const gs_model *m = d->m;
   const size_t len = (1 + (size_t)m->ncarried) * m->grid.ncells;
+  gs_mpi_doing("the boundary exchange between neighbouring ranks (MPI_Isend, MPI_Recv)");
   if (to != MPI_PROC_NULL) {
     MPI_Request *req = (MPI_Request *)d->requests + d->next_send;
     double *buf = d->sendbuf + (size_t)d->next_send * len;
@@ -301,6 +304,7 @@ double gs_dist_max_while(gs_dist *d, double v, int (*work)(void *), void *ctx) {
    * most one piece */
   double in = v, out = v;
   MPI_Request req;
+  gs_mpi_doing("the step agreement over ranks (MPI_Iallreduce)");
   MPI_Iallreduce(&in, &out, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD, &req);
   int done = 0;
   if (work) MPI_Test(&req, &done, MPI_STATUS_IGNORE);
@@ -332,6 +336,7 @@ void gs_dist_collect(gs_dist *d, double *y) {
 #ifdef GRANSIM_HAVE_MPI
   if (d->size < 2) return;
   enum { TAG_STATE = 1 }; /* the boundary exchange uses tag 0 */
+  gs_mpi_doing("gathering the state on rank 0 for output (MPI_Isend, MPI_Recv)");
   if (d->rank) {
     /* the last output time's block has long arrived: rank 0 received it
      * before this rank could pass that time's step agreements */
@@ -362,6 +367,7 @@ double gs_dist_max_lagged(gs_dist *d, double v) {
 #ifdef GRANSIM_HAVE_MPI
   if (d->size > 1) {
     d->lagged_in = v;
+    gs_mpi_doing("the lagged maximum over ranks (MPI_Iallreduce)");
     MPI_Iallreduce(&d->lagged_in, &d->lagged_out, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD,
                    d->lagged_request);
     d->lagged_pending = 1;
@@ -375,6 +381,7 @@ double gs_dist_max_lagged(gs_dist *d, double v) {
 double gs_dist_max_lagged_finish(gs_dist *d) {
   if (!d->lagged_pending) return 0;
 #ifdef GRANSIM_HAVE_MPI
+  gs_mpi_doing("the lagged maximum over ranks (MPI_Wait)");
   MPI_Wait(d->lagged_request, MPI_STATUS_IGNORE);
 #endif
   d->lagged_pending = 0;
@@ -385,6 +392,7 @@ void gs_dist_sum_post(gs_dist *d, double *v, size_t n) {
   gs_dist_sum_finish(d);
 #ifdef GRANSIM_HAVE_MPI
   if (d->size > 1) {
+    gs_mpi_doing("the sum over ranks (MPI_Iallreduce)");
     MPI_Iallreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD, d->sum_request);
     d->sum_pending = 1;
   }
@@ -397,6 +405,7 @@ void gs_dist_sum_post(gs_dist *d, double *v, size_t n) {
 void gs_dist_sum_finish(gs_dist *d) {
   if (!d->sum_pending) return;
 #ifdef GRANSIM_HAVE_MPI
+  gs_mpi_doing("the sum over ranks (MPI_Wait)");
   MPI_Wait(d->sum_request, MPI_STATUS_IGNORE);
 #endif
   d->sum_pending = 0;
