@@ -19,9 +19,12 @@ output: {end: 4, count: 3}")
 
 run_rc 0 "$BIN" check "$ok"
 stdout_has "swa.yaml: valid. swa solver" "2 compartments" "4 runs of 512 particles"
+# the discretisation report: 4 runs x 384 particles of an exponential (number exact)
+stdout_has "discretisation: $WORK/swa.yaml:5: initial: the particles hold number 1000 (asked 1000), volume of 'solid' " \
+  "expected from sampling 0.026 (one standard error of 1536 particles), above the tolerance"
 
 run_rc 0 "$BIN" run "$ok" --out "$WORK/a" --threads 1
-stderr_has "swa, 4 runs of 512 particles done to t = 4"
+stderr_has "swa, 4 runs of 512 particles done to t = 4" "discretisation: $WORK/swa.yaml:5: initial: the particles hold number 1000"
 for f in .result.h5.partial .summary.csv.partial; do [ ! -e "$WORK/a/$f" ] || fail "$f left behind"; done
 head -1 "$WORK/a/summary.csv" | grep -qxF 'time [s],compartment,M0 [1],M1 [m^3],M2 [m^6],d10 [m],d50 [m],d90 [m],mean_solid [m^3],total_solid [m^3],ci_M0 [1],ci_M1 [m^3],ci_M2 [m^6],ci_d10 [m],ci_d50 [m],ci_d90 [m],ci_mean_solid [m^3],ci_total_solid [m^3]' ||
   fail "unexpected summary.csv header: $(head -1 "$WORK/a/summary.csv")"
@@ -30,7 +33,8 @@ head -1 "$WORK/a/summary.csv" | grep -qxF 'time [s],compartment,M0 [1],M1 [m^3],
 awk -F, 'NR == 2 && ($3 != 1000) { exit 1 } NR == 3 && ($3 != 0) { exit 1 }' "$WORK/a/summary.csv" ||
   fail "initial M0 should be 1000 and 0: $(sed -n 2,3p "$WORK/a/summary.csv")"
 h5ls -r "$WORK/a/result.h5" >"$WORK/h5" || fail "h5ls failed"
-for d in /time /number /number_ci /outside /particles /summary/M0 /summary_ci/d50 /grid/solid/edges /case; do
+for d in /time /number /number_ci /outside /particles /summary/M0 /summary_ci/d50 /grid/solid/edges /case \
+  /discretisation/requested /discretisation/represented /discretisation/sampling_error /discretisation/error; do
   grep -q "^$d " "$WORK/h5" || fail "result.h5 lacks $d"
 done
 

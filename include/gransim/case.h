@@ -64,6 +64,9 @@ int gs_case_read_grid_only(gs_cfg_node *root, gs_grid *g, int *size_axes, gs_cfg
  * malloc'ed. */
 int gs_case_read_times(gs_cfg_node *root, double *t0, double **times, size_t *ntimes,
                        gs_error *err);
+/* discretisation.tolerance (default GS_DISC_TOLERANCE): the largest relative
+ * error with which a case's distributions may be represented. */
+int gs_case_read_disc_tolerance(gs_cfg_node *root, double *tolerance, gs_error *err);
 
 #ifdef __cplusplus
 }

@@ -60,6 +60,12 @@ typedef struct gs_swa_process_type {
    * x by dt (LPDA; must keep the particle's mass). */
   void (*advance)(const void *self, size_t comp, double *x, double dt);
   void (*free)(void *self);
+  /* Processes that bring particles in from a distribution (feed), else NULL:
+   * that distribution, its key ("file:line: path"), the compartment, the
+   * physical rate (particles per unit time) and the window [start, end), for
+   * the discretisation report (src/swa/disc.c). */
+  const struct gs_swa_spec *(*inflow)(const void *self, const char **key, size_t *comp,
+                                      double *rate, double window[2]);
 } gs_swa_process_type;
 
 const gs_swa_process_type *const *gs_swa_process_types(void); /* NULL-terminated */
@@ -172,6 +178,25 @@ int gs_swa_sim_advance(gs_swa_sim *s, double t_end, gs_error *err);
 void gs_swa_sim_sync(gs_swa_sim *s);
 gs_swa_stats gs_swa_sim_stats(const gs_swa_sim *s);
 
+/* ---- the discretisation report of a case ----------------------------------
+ * Each distribution of a case (initial entries, feeds) as asked and as its
+ * computational particles hold it: the initial entries as the runs sample
+ * them (every run's particles, summed over the runs and divided by their
+ * number: the ensemble the results start from), a feed as a sample of the
+ * particles the runs are expected to feed (at most 10^6).  Sampling makes
+ * the represented values random: sigma is the relative standard error a
+ * sample of that many particles has (from the distribution's moments and
+ * weights).  A case is refused when some quantity misses by more than
+ * discretisation.tolerance AND by more than 5 sigma: a distortion that
+ * sampling does not explain (docs/reliability.md). */
+typedef struct gs_swa_disc {
+  char key[160];                       /* "file:line: path" of the distribution */
+  double number[2];                    /* requested, represented (per unit time for feeds) */
+  double volume[GS_SWA_MAX_COORD][2];  /* of every coordinate: requested, represented */
+  double sigma[1 + 2 * GS_SWA_MAX_COORD]; /* relative standard error: number, volumes, mean sizes */
+  double particles;                    /* computational particles in the sample */
+} gs_swa_disc;
+
 /* ---- cases: `solver: {method: swa, ...}` ---------------------------------- */
 typedef struct gs_swa_case {
   gs_cfg *cfg;
@@ -188,7 +213,17 @@ typedef struct gs_swa_case {
   void *initial;
   double *sieves; /* solver.sieves: nsieve + 1 diameter edges, or NULL */
   size_t nsieve;  /* classes */
+  gs_swa_disc *disc; /* the discretisation report, ndisc entries */
+  size_t ndisc;
+  double disc_tolerance; /* discretisation.tolerance */
 } gs_swa_case;
+
+/* One report of a case as a line for people (gransim check, the start of a
+ * run): the key, what the particles hold against what was asked, the largest
+ * relative error, the sampling error and the tolerance. */
+void gs_swa_disc_format(const gs_swa_case *c, const gs_swa_disc *r, char *buf, size_t len);
+/* Its largest relative error (number, volumes, mean sizes). */
+double gs_swa_disc_error(const gs_swa_case *c, const gs_swa_disc *r);
 
 /* True (1) if the case file's solver.method is "swa". */
 int gs_swa_case_wanted(gs_cfg *cfg);

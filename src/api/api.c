@@ -141,6 +141,12 @@ int gs_api_case_check(const gs_api_case *c, char *desc, size_t n, gs_error *err)
       snprintf(desc, n, "swa solver, %d coordinates, %zu compartments, %zu mechanisms, %zu runs of %zu "
                "particles, %zu output times from %g to %g", s.model.ncoord, s.model.ncomp, s.model.nproc, s.runs,
                s.model.nmax, s.ntimes, s.times[0], s.times[s.ntimes - 1]);
+    for (size_t i = 0; !rc && i < s.ndisc; i++) {
+      char line[2048];
+      size_t used = strlen(desc);
+      gs_swa_disc_format(&s, &s.disc[i], line, sizeof line);
+      if (used + 1 < n) snprintf(desc + used, n - used, "\n  discretisation: %s", line);
+    }
     gs_swa_case_free(&s);
   } else {
     gs_case s;

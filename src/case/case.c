@@ -176,10 +176,10 @@ static int read_initial_one(gs_cfg_node *n, gs_model *m, double *y, gs_error *er
 
 /* discretisation: {tolerance}: the largest relative error of number, volume
  * or mean size with which the grid may hold a distribution of the case. */
-static int read_discretisation(gs_cfg_node *root, gs_model *m, gs_error *err) {
+int gs_case_read_disc_tolerance(gs_cfg_node *root, double *tolerance, gs_error *err) {
   gs_cfg_node *n = gs_cfg_get(root, "discretisation");
   int rc = n ? gs_cfg_require_kind(n, GS_CFG_MAP, err) : GS_OK;
-  if (!rc) rc = gs_cfg_double_range(n, "tolerance", 0, GS_DISC_TOLERANCE, 0, 1, HUGE_VAL, 0, &m->disc->tolerance, err);
+  if (!rc) rc = gs_cfg_double_range(n, "tolerance", 0, GS_DISC_TOLERANCE, 0, 1, HUGE_VAL, 0, tolerance, err);
   if (!rc && n) rc = gs_cfg_check_unused(n, err);
   return rc;
 }
@@ -477,7 +477,7 @@ int gs_case_from_cfg(gs_cfg *cfg, gs_case *c, gs_error *err) {
     c->y0 = gs_calloc(c->model.nstate + c->model.nledger, sizeof(double), err);
     if (!c->y0) rc = GS_ENOMEM;
   }
-  if (!rc) rc = read_discretisation(root, &c->model, err);
+  if (!rc) rc = gs_case_read_disc_tolerance(root, &c->model.disc->tolerance, err);
   if (!rc) rc = read_initial(root, &c->model, c->y0, err);
   if (!rc) rc = read_mechanisms(root, &c->model, err);
   if (!rc) rc = read_output(root, c, err);

@@ -20,6 +20,11 @@ int gs_cmd_run_swa(gs_cfg *cfg, const char *path, const char *out, int progress,
     return 2;
   }
   int rc = gs_swa_case_from_cfg(cfg, &c, &err);
+  for (size_t i = 0; !rc && root && progress != 0 && i < c.ndisc; i++) {
+    char line[2048];
+    gs_swa_disc_format(&c, &c.disc[i], line, sizeof line);
+    fprintf(stderr, "  discretisation: %s\n", line);
+  }
   gs_swa_report rep = {0};
   if (!rc) rc = gs_swa_case_run(&c, out, progress < 0 ? isatty(2) : progress, NULL, NULL, &rep, &err);
   if (root && rc) fprintf(stderr, "gransim: %s\n", err.msg);

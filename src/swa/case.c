@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "gransim/case.h"
+#include "gransim/distribution.h"
 #include "gransim/kernel.h"
 #include "swa/sim.h"
 #include "swa/spec.h"
@@ -17,7 +18,19 @@ typedef struct initial_set {
   size_t n;
   gs_swa_spec *spec;
   size_t *comp;
+  char (*key)[160]; /* "file:line: path" of each entry */
 } initial_set;
+
+size_t gs_swa_case_initial_count(const gs_swa_case *c) {
+  const initial_set *set = c->initial;
+  return set ? set->n : 0;
+}
+
+const gs_swa_spec *gs_swa_case_initial(const gs_swa_case *c, size_t i, const char **key) {
+  const initial_set *set = c->initial;
+  *key = set->key[i];
+  return &set->spec[i];
+}
 
 /* Look a key up without noting it as asked for, so that the "expected one
  * of" lists of the sectional reader are unchanged by this peek. */
@@ -125,7 +138,8 @@ static int read_initial(gs_cfg_node *root, gs_swa_case *c, gs_error *err) {
   size_t n = seq ? gs_cfg_size(init) : 1;
   set->spec = gs_calloc(n, sizeof *set->spec, err);
   set->comp = gs_calloc(n, sizeof *set->comp, err);
-  if (!set->spec || !set->comp) return GS_ENOMEM;
+  set->key = gs_calloc(n, sizeof *set->key, err);
+  if (!set->spec || !set->comp || !set->key) return GS_ENOMEM;
   for (size_t i = 0; i < n; i++) {
     gs_cfg_node *e = seq ? gs_cfg_item(init, i) : init;
     long comp = 1;
@@ -134,6 +148,7 @@ static int read_initial(gs_cfg_node *root, gs_swa_case *c, gs_error *err) {
     if (!rc) rc = gs_swa_spec_read(e, &c->model, &c->grid, c->bin_coord, "number", &set->spec[i], err);
     set->n = i + 1;
     set->comp[i] = (size_t)(comp - 1);
+    snprintf(set->key[i], sizeof set->key[i], "%s:%d: %s", gs_cfg_file(e), gs_cfg_line(e), gs_cfg_path(e));
     if (rc) return rc;
   }
   return GS_OK;
@@ -185,6 +200,8 @@ int gs_swa_case_from_cfg(gs_cfg *cfg, gs_swa_case *c, gs_error *err) {
   if (!rc) rc = read_initial(root, c, err);
   if (!rc) rc = read_mechanisms(root, c, err);
   if (!rc) rc = gs_case_read_times(root, &c->t0, &c->times, &c->ntimes, err);
+  if (!rc) rc = gs_case_read_disc_tolerance(root, &c->disc_tolerance, err);
+  if (!rc) rc = gs_swa_check_limits(root, c, err);
   if (!rc) rc = gs_cfg_check_unused(root, err);
   if (!rc) {
     /* every compartment needs a sample volume: from its initial particles,
@@ -196,6 +213,7 @@ int gs_swa_case_from_cfg(gs_cfg *cfg, gs_swa_case *c, gs_error *err) {
                         "number of particles that fill_fraction * particles computational particles stand for)",
                         gs_cfg_name(cfg));
   }
+  if (!rc) rc = gs_swa_case_disc(c, err);
   return rc;
 }
 
@@ -208,8 +226,10 @@ void gs_swa_case_free(gs_swa_case *c) {
     for (size_t i = 0; i < set->n; i++) gs_swa_spec_free(&set->spec[i]);
     free(set->spec);
     free(set->comp);
+    free(set->key);
     free(set);
   }
+  free(c->disc);
   free(c->bin_coord);
   free(c->sieves);
   free(c->times);
@@ -218,39 +238,69 @@ void gs_swa_case_free(gs_swa_case *c) {
   memset(c, 0, sizeof *c);
 }
 
-int gs_swa_case_init_run(const gs_swa_case *c, gs_swa_sim *s, gs_error *err) {
+/* The fill of compartment z at the start: fill_fraction * nmax particles (at
+ * least 1). */
+static size_t initial_fill(const gs_swa_model *m) {
+  size_t n0 = (size_t)llround(m->fill_fraction * (double)m->nmax);
+  return n0 < 1 ? 1 : n0;
+}
+
+static double initial_number(const initial_set *set, size_t z) {
+  double total = 0;
+  for (size_t i = 0; i < set->n; i++)
+    if (set->comp[i] == z) total += set->spec[i].number;
+  return total;
+}
+
+double gs_swa_case_vsamp0(const gs_swa_case *c, size_t z) {
   const gs_swa_model *m = &c->model;
   const initial_set *set = c->initial;
-  size_t n0 = (size_t)llround(m->fill_fraction * (double)m->nmax);
-  if (n0 < 1) n0 = 1;
-  double vfirst = 0;
-  s->t = c->t0;
-  s->next_checkpoint = m->lpda_interval > 0 ? c->t0 + m->lpda_interval : HUGE_VAL;
+  const double n0 = (double)initial_fill(m), total = initial_number(set, z);
+  if (total > 0) return n0 / total;
+  if (m->reference_number > 0) return n0 / m->reference_number;
+  for (size_t y = 0; y < m->ncomp; y++) /* the first filled compartment's */
+    if (initial_number(set, y) > 0) return n0 / initial_number(set, y);
+  return 1;
+}
+
+int gs_swa_case_init_tally(const gs_swa_case *c, gs_swa_sim *s, gsl_rng *rng, double *tally,
+                           gs_error *err) {
+  const gs_swa_model *m = &c->model;
+  const initial_set *set = c->initial;
+  const size_t n0 = initial_fill(m), nc = (size_t)m->ncoord;
+  if (s) {
+    rng = s->rng;
+    s->t = c->t0;
+    s->next_checkpoint = m->lpda_interval > 0 ? c->t0 + m->lpda_interval : HUGE_VAL;
+  }
   for (size_t z = 0; z < m->ncomp; z++) {
-    double total = 0;
-    for (size_t i = 0; i < set->n; i++)
-      if (set->comp[i] == z) total += set->spec[i].number;
+    const double total = initial_number(set, z), v = gs_swa_case_vsamp0(c, z);
+    if (s) gs_swa_set_vsamp(s, z, v);
     if (!(total > 0)) continue;
-    double v = (double)n0 / total;
-    gs_swa_set_vsamp(s, z, v);
-    if (!(vfirst > 0)) vfirst = v;
+    size_t placed = 0; /* the compartment starts empty, and never overflows */
     for (size_t i = 0; i < set->n; i++) {
       if (set->comp[i] != z) continue;
       size_t cnt = (size_t)llround((double)n0 * set->spec[i].number / total);
       if (cnt < 1) cnt = 1;
-      if (cnt > m->nmax - gs_swa_count(s, z)) cnt = m->nmax - gs_swa_count(s, z);
-      double wbase = set->spec[i].number * v / (double)cnt;
+      if (cnt > m->nmax - placed) cnt = m->nmax - placed;
+      double wbase = set->spec[i].number * v / (double)cnt, *t = tally ? tally + i * (nc + 2) : NULL;
       for (size_t k = 0; k < cnt; k++) {
         double x[GS_SWA_MAX_COORD], w;
-        gs_swa_spec_sample(&set->spec[i], s->rng, x, &w);
+        gs_swa_spec_sample(&set->spec[i], rng, x, &w);
+        if (t) t[nc + 1] += 1;
         if (!(w > 0)) continue; /* VWI: a diameter outside the feed distribution */
-        int rc = gs_swa_sim_place(s, z, x, w * wbase, err);
+        placed++;
+        int rc = s ? gs_swa_sim_place(s, z, x, w * wbase, err) : GS_OK;
         if (rc) return rc;
+        if (!t) continue;
+        t[0] += w * wbase / v;
+        for (size_t a = 0; a < nc; a++) t[1 + a] += w * wbase / v * x[a];
       }
     }
   }
-  double vempty = m->reference_number > 0 ? (double)n0 / m->reference_number : vfirst;
-  for (size_t z = 0; z < m->ncomp; z++)
-    if (gs_swa_count(s, z) == 0) gs_swa_set_vsamp(s, z, vempty);
   return GS_OK;
+}
+
+int gs_swa_case_init_run(const gs_swa_case *c, gs_swa_sim *s, gs_error *err) {
+  return gs_swa_case_init_tally(c, s, NULL, NULL, err);
 }

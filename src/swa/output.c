@@ -69,6 +69,64 @@ static int describe(hid_t loc, const char *path, const char *units, const char *
   return e < 0 ? -1 : 0;
 }
 
+/* /discretisation: each distribution of the case as asked and as the
+ * particles hold it (gransim/swa.h, gs_swa_disc): rows of the number, then
+ * the volume of every coordinate. */
+static int write_discretisation(hid_t f, const gs_swa_case *c) {
+  const size_t n = c->ndisc, nc = (size_t)c->model.ncoord, w = 1 + nc;
+  double *buf = calloc(5 * n * w + 2 * n + 1, sizeof *buf);
+  size_t keys_len = 1;
+  for (size_t i = 0; i < n; i++) keys_len += strlen(c->disc[i].key) + 1;
+  char *keys = calloc(keys_len, 1);
+  int bad = !buf || !keys;
+  for (size_t i = 0; !bad && i < n; i++) {
+    const gs_swa_disc *r = &c->disc[i];
+    double *req = buf + i * w, *rep = buf + (n + i) * w, *sig = buf + (2 * n + i) * w;
+    req[0] = r->number[0];
+    rep[0] = r->number[1];
+    sig[0] = r->sigma[0];
+    for (size_t k = 0; k < nc; k++) {
+      req[1 + k] = r->volume[k][0];
+      rep[1 + k] = r->volume[k][1];
+      sig[1 + k] = r->sigma[1 + k];
+    }
+    buf[3 * n * w + i] = gs_swa_disc_error(c, r);
+    buf[3 * n * w + n + i] = r->particles;
+    if (i) strcat(keys, "\n");
+    strcat(keys, r->key);
+  }
+  if (bad) return -1;
+  buf[3 * n * w + 2 * n] = c->disc_tolerance;
+  hid_t g = H5Gcreate2(f, "discretisation", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  if (g < 0) {
+    note_cause();
+    free(buf);
+    free(keys);
+    return -1;
+  }
+  hsize_t dims[2] = {n, w}, dn = n, one = 1;
+  const char *layout = "1 (number; per unit time for feeds), m^3 (volume of each coordinate)";
+  bad |= put(g, "requested", 2, dims, buf) | put(g, "represented", 2, dims, buf + n * w) |
+         put(g, "sampling_error", 2, dims, buf + 2 * n * w) | put(g, "error", 1, &dn, buf + 3 * n * w) |
+         put(g, "particles", 1, &dn, buf + 3 * n * w + n) | put(g, "tolerance", 1, &one, buf + 3 * n * w + 2 * n);
+  bad |= describe(g, "requested", layout, "distribution,quantity") |
+         describe(g, "represented", layout, "distribution,quantity") |
+         describe(g, "sampling_error", "1", "distribution,quantity") | describe(g, "error", "1", "distribution") |
+         describe(g, "particles", "1", "distribution") | describe(g, "tolerance", "1", "");
+  bad |= attr_str(g, "keys", keys) |
+         attr_str(g, "layout", "requested, represented and sampling_error (relative standard error of the "
+                               "sample): per distribution (keys), its number, then the volume of every "
+                               "coordinate; error: the largest relative error of number, volumes and "
+                               "mean sizes; particles: the computational particles of the sample");
+  if (H5Gclose(g) < 0) {
+    note_cause();
+    bad = 1;
+  }
+  free(buf);
+  free(keys);
+  return bad ? -1 : 0;
+}
+
 static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results *r) {
   const gs_grid *g = &c->grid;
   const gs_swa_model *m = &c->model;
@@ -130,6 +188,7 @@ static int write_h5(const gs_swa_case *c, const char *path, const gs_swa_results
            describe(sg, "mass_fraction_ci", "1", "time,compartment,sieve_class");
     H5Gclose(sg);
   }
+  bad |= write_discretisation(f, c);
   hid_t cs = H5Gcreate2(f, "case", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   bad |= attr_str(cs, "text", gs_cfg_source(c->cfg)) | attr_str(cs, "file", gs_cfg_name(c->cfg));
   H5Gclose(cs);

@@ -9,7 +9,8 @@
  *   coordinates the grid axes name), /number_ci, /outside (numbers outside
  *   the grid), /summary/<col>, /summary_ci/<col>, /particles (mean count of
  *   computational particles), with solver.sieves /sieve/edges and
- *   /sieve/mass_fraction[_ci] (ntimes, ncomp, classes), /case (attributes text, file), and root
+ *   /sieve/mass_fraction[_ci] (ntimes, ncomp, classes), /discretisation (the
+ *   distributions as asked and as the particles hold them, gs_swa_disc), /case (attributes text, file), and root
  *   attributes gransim_version, solver = "swa", runs, particles, seed,
  *   jumps, fictitious, status = "complete". */
 #ifndef GS_SWA_OUTPUT_H

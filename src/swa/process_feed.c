@@ -4,6 +4,7 @@
  * weight w-bar * (relative weight of the sample) enters at rate R V / w-bar,
  * so every estimate receives R per unit time in expectation. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "swa/sim.h"
@@ -14,6 +15,7 @@ typedef struct feed {
   double rate; /* physical particles per unit time */
   double start, end;
   gs_swa_spec spec;
+  char key[160]; /* "file:line: path" of the distribution */
 } feed;
 
 static void feed_free(void *self) {
@@ -33,6 +35,7 @@ static int feed_create(gs_cfg_node *node, gs_swa_model *m, void **self, gs_error
   f->comp = (size_t)(comp - 1);
   if (!rc) rc = gs_cfg_map_req(node, "distribution", &d, err);
   if (!rc) rc = gs_swa_spec_read(d, m, NULL, NULL, NULL, &f->spec, err);
+  if (!rc) snprintf(f->key, sizeof f->key, "%s:%d: %s", gs_cfg_file(d), gs_cfg_line(d), gs_cfg_path(d));
   if (!rc && !!gs_cfg_get(node, "rate") == !!gs_cfg_get(node, "mass_rate"))
     rc = gs_cfg_fail(node, err, "a feed needs exactly one of 'rate' (particles per unit time) or 'mass_rate'");
   if (!rc && gs_cfg_get(node, "rate")) rc = gs_cfg_double_range(node, "rate", 1, 0, 0, 0, HUGE_VAL, 0, &f->rate, err);
@@ -67,6 +70,17 @@ static int feed_jump(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
   return gs_swa_add(s, z, x, w * f->spec.mean_weight * gs_swa_gain(s, z), err);
 }
 
+static const gs_swa_spec *feed_inflow(const void *self, const char **key, size_t *comp,
+                                      double *rate, double window[2]) {
+  const feed *f = self;
+  *key = f->key;
+  *comp = f->comp;
+  *rate = f->rate;
+  window[0] = f->start;
+  window[1] = f->end;
+  return &f->spec;
+}
+
 const gs_swa_process_type gs_swa_feed = {
     .name = "feed",
     .summary = "inception of particles into a compartment; equal (EWI) or variable (VWI) weights",
@@ -74,4 +88,5 @@ const gs_swa_process_type gs_swa_feed = {
     .rate = feed_rate,
     .jump = feed_jump,
     .free = feed_free,
+    .inflow = feed_inflow,
 };

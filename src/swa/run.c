@@ -21,7 +21,7 @@
 #define CI_FACTOR 1.64
 
 /* splitmix64: decorrelated 32-bit seeds for the runs of one case seed */
-static unsigned long run_seed(uint64_t seed, size_t run) {
+unsigned long gs_swa_run_seed(uint64_t seed, size_t run) {
   uint64_t z = seed * 0x9E3779B97F4A7C15ull + (uint64_t)run + 1;
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
@@ -95,7 +95,7 @@ static int one_run(const gs_swa_case *c, size_t r, double *obs, double *hist, do
                    double *sieve, gs_swa_stats *stats, swa_progress *prog, gs_error *err) {
   const gs_swa_model *m = &c->model;
   size_t nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid.ncells;
-  gs_swa_sim *s = gs_swa_sim_alloc(m, run_seed(c->seed, r), err);
+  gs_swa_sim *s = gs_swa_sim_alloc(m, gs_swa_run_seed(c->seed, r), err);
   if (!s) return err->code;
   int rc = gs_swa_case_init_run(c, s, err);
   for (size_t t = 0; !rc && t < c->ntimes; t++) {

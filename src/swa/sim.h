@@ -35,4 +35,25 @@ void gs_swa_maintain(gs_swa_sim *s, size_t z);
 /* External liquid left after dt of penetration (a0, b0 > 0; see process_penetration.c). */
 double gs_swa_penetration_left(double a0, double b0, double k, double kappa, double dt);
 
+/* The seed of run r of a case seeded with seed (decorrelated streams). */
+unsigned long gs_swa_run_seed(uint64_t seed, size_t run);
+/* The sample volume of compartment z at the start of a run. */
+double gs_swa_case_vsamp0(const gs_swa_case *c, size_t z);
+/* gs_swa_case_init_run, adding to tally (when not NULL) what each initial
+ * entry i placed: tally[i * (ncoord + 2) + ...] = number, the volume of every
+ * coordinate, particles drawn.  Without a run (s NULL) it draws from rng
+ * what a run seeded alike would place, and places nothing. */
+int gs_swa_case_init_tally(const gs_swa_case *c, gs_swa_sim *s, gsl_rng *rng, double *tally,
+                           gs_error *err);
+/* The initial entries of a case: their number, and entry i's distribution
+ * and key ("file:line: path"). */
+size_t gs_swa_case_initial_count(const gs_swa_case *c);
+const struct gs_swa_spec *gs_swa_case_initial(const gs_swa_case *c, size_t i, const char **key);
+/* limits.memory_gb and limits.output_gb against what a run of the case
+ * needs (src/swa/resources.c); the processes must be read. */
+int gs_swa_check_limits(gs_cfg_node *root, const gs_swa_case *c, gs_error *err);
+/* Build c->disc (src/swa/disc.c): the initial entries as every run samples
+ * them, the feeds from a sample; refuses a distortion (gransim/swa.h). */
+int gs_swa_case_disc(gs_swa_case *c, gs_error *err);
+
 #endif

@@ -34,6 +34,14 @@ int gs_swa_spec_read(gs_cfg_node *n, const gs_swa_model *m, const gs_grid *g,
                      const int *grid_coord, const char *number_key, gs_swa_spec *sp,
                      gs_error *err);
 void gs_swa_spec_free(gs_swa_spec *sp);
+/* What one draw (x, w) contributes, in expectation: the number estimate is
+ * mean(w), the volume estimate of coordinate k mean(w x_k); ew2 = E[w^2],
+ * mu[k] = E[w x_k], ew2x[k] = E[w^2 x_k], ew2x2[k] = E[w^2 x_k^2], from which
+ * the variance of a sample's estimates follows (src/swa/disc.c). */
+typedef struct gs_swa_moments {
+  double ew2, mu[GS_SWA_MAX_COORD], ew2x[GS_SWA_MAX_COORD], ew2x2[GS_SWA_MAX_COORD];
+} gs_swa_moments;
+void gs_swa_spec_moments(const gs_swa_spec *sp, gs_swa_moments *mo);
 /* Draw one particle: x (ncoord values) and its weight relative to the mean (1 for equal weights). */
 void gs_swa_spec_sample(const gs_swa_spec *sp, gsl_rng *r, double *x, double *w);
 
