@@ -296,7 +296,10 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
   gsl_multifit_nlinear_workspace *w = NULL;
   gsl_vector *zv = gsl_vector_alloc(np);
   gsl_matrix *covar = gsl_matrix_alloc(np, np);
-  gsl_error_handler_t *old = gsl_set_error_handler_off();
+  /* a GSL failure is recorded by libgransim's handler (src/core/error.c)
+   * and reported with its reason: in a run, by the run's error; in the
+   * solver, below */
+  gs_gsl_clear();
   omp_set_max_active_levels(1);
   if (!rc) {
     gsl_multifit_nlinear_parameters fp = gsl_multifit_nlinear_default_parameters();
@@ -309,7 +312,8 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
       *err = fc.err;
       rc = err->code;
     } else if (st && st != GSL_EMAXITER && st != GSL_ENOPROG) {
-      rc = gs_error_set(err, GS_ENUMERIC, "the fit failed: %s", gsl_strerror(st));
+      rc = gs_gsl_reason()[0] ? gs_gsl_error(err, GS_ENUMERIC, "the fit failed (gsl_multifit_nlinear)")
+                              : gs_error_set(err, GS_ENUMERIC, "the fit failed: %s", gsl_strerror(st));
     } else {
       res->converged = st == GSL_SUCCESS;
       res->iterations = gsl_multifit_nlinear_niter(w);
@@ -348,7 +352,6 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
     res->r2 = sst > 0 ? 1 - chi2 / sst : NAN;
     res->runs = fc.runs;
   }
-  gsl_set_error_handler(old);
   if (w) gsl_multifit_nlinear_free(w);
   gsl_vector_free(zv);
   gsl_matrix_free(covar);

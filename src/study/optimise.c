@@ -91,6 +91,7 @@ static int run_nelder_mead(opt_ctx *oc, const double *x0, double tol, int *conve
   gsl_multimin_fminimizer_free(s);
   gsl_vector_free(z);
   gsl_vector_free(step);
+  if (st && gs_gsl_reason()[0]) return gs_gsl_error(err, GS_ENUMERIC, "the simplex failed (gsl_multimin nmsimplex2)");
   if (st) return gs_error_set(err, GS_ENUMERIC, "the simplex failed: %s", gsl_strerror(st));
   return GS_OK;
 }
@@ -163,7 +164,7 @@ int gs_optimise_run(const gs_cfg *base, const gs_study_axis *controls, size_t nc
   oc.best_x = malloc(nc * sizeof *oc.best_x);
   res->x = malloc(nc * sizeof *res->x);
   if (!oc.r || !oc.best_x || !res->x) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-  gsl_error_handler_t *old = gsl_set_error_handler_off();
+  gs_gsl_clear(); /* GSL's reason is kept by libgransim's handler (src/core/error.c) */
   const double tol = opt->tol > 0 ? opt->tol : 1e-9;
   if (!rc) {
     res->start_objective = objective(&oc, x0);
@@ -175,7 +176,6 @@ int gs_optimise_run(const gs_cfg *base, const gs_study_axis *controls, size_t nc
   if (!rc)
     rc = opt->method == GS_OPT_NELDER_MEAD ? run_nelder_mead(&oc, x0, tol, &res->converged, err)
                                            : run_bobyqa(&oc, x0, tol, &res->converged, err);
-  gsl_set_error_handler(old);
   if (!rc) {
     res->ncontrols = nc;
     memcpy(res->x, oc.best_x, nc * sizeof *res->x);

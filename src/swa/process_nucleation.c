@@ -46,7 +46,7 @@ static int nuc_create(gs_cfg_node *node, gs_swa_model *m, void **self, gs_error 
   *self = n;
   n->m = m;
   long comp = 1;
-  double d;
+  double d = 0;
   int rc = gs_cfg_long_range(node, "compartment", 0, 1, 1, (long)m->ncomp, &comp, err);
   n->comp = (size_t)(comp - 1);
   if (!rc) rc = gs_cfg_double_range(node, "droplet_diameter", 1, 0, 0, 1, HUGE_VAL, 0, &d, err);
