@@ -1,5 +1,6 @@
 /* The DEM run's health checks (src/dem/health.c): overlapping particles at
  * the start (the insertion never places them so, so they are added by hand),
+ * coincident centres among them,
  * a non-finite position, particles lost beyond dem.max_lost (at the limit
  * and one past it), and the engine's own failure explained with the
  * particle.  The command-line cases (time step, soft particles, meshes) are
@@ -44,6 +45,15 @@ int main(void) {
   CHECK(run_pair(1.7e-3, &err) == GS_ENUMERIC);
   CHECK(has(err.msg, "particles 0 and 1 overlap by 30 % of the smaller radius (0.001 m) at step 0"));
   CHECK(has(err.msg, "the particles were placed inside each other"));
+  /* coincident centres (distance 0, where the pair force's normal divides by
+   * zero): refused by the same check before any force is used, with finite
+   * figures, not a non-finite position or a crash */
+  memset(&err, 0, sizeof err);
+  CHECK(run_pair(0, &err) == GS_ENUMERIC);
+  fprintf(stderr, "coincident centres: %s\n", err.msg);
+  CHECK(has(err.msg, "particles 0 and 1 overlap by 200 % of the smaller radius (0.001 m) at step 0"));
+  CHECK(has(err.msg, "the particles were placed inside each other"));
+  CHECK(!strstr(err.msg, "nan") && !strstr(err.msg, "inf"));
   /* 5 %: accepted, and the pair is pushed apart without reaching 50 % */
   memset(&err, 0, sizeof err);
   if (run_pair(1.95e-3, &err) != GS_OK) {
