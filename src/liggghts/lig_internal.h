@@ -10,6 +10,10 @@ typedef struct {
   size_t n, cap;
   double *row; /* 5 per row: time [s], atoms, kinetic energy, rotational energy, cpu seconds */
 } gs_lig_thermo;
+/* One line of LIGGGHTS' screen output: a thermo line (step, atoms, kinetic
+ * and rotational energy, cpu seconds, nothing else) is added to th as a row
+ * at time step * dt (1); any other line is left (0); -1: out of memory. */
+int gs_lig_thermo_add(gs_lig_thermo *th, const char *line, double dt);
 
 /* A deck that only reads mesh `wall` and writes the facets LIGGGHTS refuses
  * to ex_wall<wall>.txt (element_exclusion_list write). */

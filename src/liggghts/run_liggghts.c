@@ -106,18 +106,10 @@ static int run_deck(const char *dir, const char *launch, const char *bin, const 
       memcpy(first_error, tail[(nt - 1) % 12], sizeof first_error);
     }
     if (strstr(line, "Less insertions than requested")) short_insert++;
-    double step, atoms, ke, rke, cpu;
-    char extra;
-    if (th && sscanf(line, "%lf %lf %lf %lf %lf %c", &step, &atoms, &ke, &rke, &cpu, &extra) == 5) {
-      if (th->n == th->cap) {
-        size_t cap = th->cap ? 2 * th->cap : 256;
-        double *r = realloc(th->row, cap * 5 * sizeof(double));
-        if (!r) break;
-        th->row = r;
-        th->cap = cap;
-      }
-      double *r = th->row + 5 * th->n++;
-      r[0] = step * c->prm.dt, r[1] = atoms, r[2] = ke, r[3] = rke, r[4] = cpu;
+    const int added = th ? gs_lig_thermo_add(th, line, c->prm.dt) : 0;
+    if (added < 0) break;
+    if (added) {
+      const double *r = th->row + 5 * (th->n - 1), atoms = r[1], ke = r[2];
       if (progress)
         fprintf(stderr, "gransim dem (liggghts): t = %.5f / %.5f s, %.0f particles, kinetic energy %.4g J\n", r[0],
                 c->duration, atoms, ke);

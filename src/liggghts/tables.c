@@ -85,6 +85,11 @@ static void cmp_add(pass *a, const gs_dem_case *c, int k, const double x[3], con
   }
 }
 
+/* A whole number in [0, max] read as a double from a dump (an atom id, a
+ * type, a mesh id): anything else would make the conversion to an integer
+ * undefined, so it is refused. */
+static int whole(double v, double max) { return v >= 0 && v <= max && v == floor(v); }
+
 static int snapshot(pass *a, const gs_dem_case *c, const char *post, long step, gs_error *err) {
   char path[4600];
   gs_dump d;
@@ -99,8 +104,9 @@ static int snapshot(pass *a, const gs_dem_case *c, const char *post, long step, 
   if (!rc && !map) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   for (size_t r = 0; !rc && r < d.nrows; r++) {
     const double *v = d.v + r * d.ncols;
+    if (!whole(v[col[0]], 2147483647.0)) { rc = gs_error_set(err, GS_EINPUT, "%s: atom id %g is not an id (a whole number from 0 to 2^31 - 1)", path, v[col[0]]); break; }
+    if (!whole(v[col[1]], (double)a->ncl) || v[col[1]] < 1) { rc = gs_error_set(err, GS_EINPUT, "%s: type %g is no class (1 to %zu)", path, v[col[1]], a->ncl); break; }
     int k = (int)v[col[1]] - 1;
-    if (k < 0 || (size_t)k >= a->ncl) { rc = gs_error_set(err, GS_EINPUT, "%s: type %g is no class", path, v[col[1]]); break; }
     map[r] = (id_cls){(long)v[col[0]], k};
     a->num[k] += 1;
     const double x[3] = {v[col[2]], v[col[3]], v[col[4]]}, u[3] = {v[col[5]], v[col[6]], v[col[7]]};
@@ -140,6 +146,7 @@ static long next_list(FILE *fp, size_t ncol, double **rows, size_t *cap, size_t 
     else if (!strncmp(line, "ITEM: ENTRIES", 13)) break;
   }
   if (step < 0 || nrow < 0) return 0;
+  if ((unsigned long)nrow > (1ul << 32)) return -1; /* beyond any contact list, and beyond memory */
   if ((size_t)nrow * ncol > *cap) {
     double *r = realloc(*rows, ((size_t)nrow * ncol + 1) * sizeof(double));
     if (!r) return -1;
@@ -170,9 +177,15 @@ static int count_events(pass *a, const char *path, int wall, gs_error *err) {
     if (!t) { rc = gs_error_set(err, GS_EINPUT, "%s: unreadable contact list", path); break; }
     cur = t;
     ncur = 0;
-    for (size_t r = 0; r < n; r++) {
+    for (size_t r = 0; !rc && r < n; r++) {
       const double *v = rows + r * ncol;
       if (!(v[ncol - 1] > 0)) continue; /* not overlapping */
+      /* atom ids (LIGGGHTS tags are int) and mesh ids below 2^16 make the keys */
+      if (!whole(v[wall ? 8 : 0], 2147483647.0) || !whole(v[wall ? 6 : 1], wall ? 65535.0 : 2147483647.0)) {
+        rc = gs_error_set(err, GS_EINPUT, "%s: list at step %ld: row %zu: %s %g or %g is not an id", path, st - 1,
+                          r + 1, wall ? "atom or mesh id" : "atom id", v[wall ? 8 : 0], v[wall ? 6 : 1]);
+        break;
+      }
       unsigned long long i1 = (unsigned long long)(wall ? v[8] : v[0]), i2 = (unsigned long long)(wall ? v[6] : v[1]);
       unsigned long long key = wall ? i1 << 16 | i2 : (i1 < i2 ? i1 << 32 | i2 : i2 << 32 | i1);
       if (ncur && cur[ncur - 1] == key) continue; /* the same atom on another triangle of the mesh */
@@ -194,8 +207,11 @@ static int count_events(pass *a, const char *path, int wall, gs_error *err) {
       a->wall_contacts[at] += 1;
       double du[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]};
       double u = sqrt(du[0] * du[0] + du[1] * du[1] + du[2] * du[2]);
-      int b = (int)(u / a->dv);
-      if (b >= a->nbins) b = a->nbins - 1;
+      if (!isfinite(u)) {
+        rc = gs_error_set(err, GS_EINPUT, "%s: list at step %ld: row %zu: a velocity is not finite", path, st - 1, r + 1);
+        break;
+      }
+      int b = u / a->dv < a->nbins ? (int)(u / a->dv) : a->nbins - 1;
       a->hist[at * (size_t)a->nbins + (size_t)b] += 1;
       if (!(u >= GS_DEM_MIN_IMPACT_SPEED)) continue; /* resting contacts: no speed, as the embedded engine */
       if (a->nu == a->capu) {

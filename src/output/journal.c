@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/uio.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -158,8 +159,12 @@ static off_t read_header(gs_journal *j, void **head, size_t *nhead, gs_error *er
   char magic[8];
   uint64_t sizes[2];
   uint32_t crc_file;
-  if (read_at(j->fd, magic, 8, 0) || memcmp(magic, MAGIC, 8) || read_at(j->fd, sizes, sizeof sizes, 8) ||
-      sizes[1] > ((uint64_t)1 << 32) || sizes[0] == 0 || sizes[0] > ((uint64_t)1 << 40)) {
+  struct stat st;
+  /* sizes a damaged file cannot hold are refused before anything is
+   * allocated for them (fuzz_journal: a length of 2 GB in a file of 1 KB) */
+  if (fstat(j->fd, &st) || read_at(j->fd, magic, 8, 0) || memcmp(magic, MAGIC, 8) ||
+      read_at(j->fd, sizes, sizeof sizes, 8) || sizes[1] > (uint64_t)st.st_size || sizes[0] == 0 ||
+      sizes[0] > ((uint64_t)1 << 40)) {
     gs_error_set(err, GS_EIO, "cannot resume from %s: not a gransim journal, or its header is damaged", j->path);
     return -1;
   }
@@ -184,6 +189,13 @@ static off_t read_header(gs_journal *j, void **head, size_t *nhead, gs_error *er
  * record go to j->offsets; returns where that commit record ends. */
 static off_t scan_records(gs_journal *j, off_t at, gs_error *err) {
   const size_t row_bytes = j->row_values * sizeof(double);
+  struct stat st;
+  if (fstat(j->fd, &st)) return io_error(err, "read", j->path), -1;
+  /* no row fits in what the file holds: nothing to read, nothing to allocate */
+  if ((uint64_t)row_bytes > (uint64_t)st.st_size) {
+    j->appended = j->committed = 0;
+    return at;
+  }
   double *buf = gs_malloc(row_bytes, err);
   size_t cap = 0;
   uint64_t rows = 0;

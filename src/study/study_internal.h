@@ -49,4 +49,13 @@ int gs_fit_problem_init(gs_fit_problem *fc, const gs_cfg *base, const gs_study_a
 /* r[ntimes * ncols] at parameter values x[np] (one run of the case). */
 int gs_fit_problem_residuals(gs_fit_problem *fc, const double *x, double *r, gs_error *err);
 void gs_fit_problem_free(gs_fit_problem *fc);
+/* Reads DIR/runs.csv left by an earlier sweep (path): checks its header
+ * against this sweep's and that every row's values are this design's, keeps
+ * the whole rows (row[r] for run r + 1, with its newline; d->nruns entries,
+ * rows already there are kept) and cuts a torn last line (a write a kill
+ * interrupted) off the file; an empty or torn header leaves it empty (the
+ * caller writes the header again).  *nfinished counts the rows taken. */
+int gs_sweep_journal_read(const char *path, const char *header, const gs_design *d, char **row,
+                          size_t *nfinished, gs_error *err);
+
 #endif

@@ -13,11 +13,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <gsl/gsl_errno.h>
 
 #include "gransim/parallel.h"
 #include "gransim/run.h"
 #include "gransim/swa.h"
+#include "study/study_internal.h"
 #include "study/sweep_h5.h"
 
 #define JOURNAL "runs.csv"
@@ -91,61 +91,6 @@ typedef struct {
   char **row;
   size_t nruns;
 } rows_t;
-
-/* Reads DIR/runs.csv left by an earlier sweep: checks its header and that
- * every row's values are this design's, keeps the whole rows and cuts a
- * torn last line (a write the kill interrupted) off the file; an empty or
- * torn header leaves it empty (the caller writes the header again). */
-static int journal_read(const char *path, const char *header, const gs_design *d, rows_t *rows,
-                        size_t *nfinished, gs_error *err) {
-  FILE *f = fopen(path, "r");
-  if (!f) return gs_error_set(err, GS_EIO, "cannot read '%s': %s", path, strerror(errno));
-  char *line = NULL;
-  size_t cap = 0, lineno = 0;
-  long good_end = 0;
-  ssize_t len;
-  int rc = GS_OK;
-  while (!rc && (len = getline(&line, &cap, f)) > 0) {
-    lineno++;
-    if (line[len - 1] != '\n') break; /* torn: dropped below */
-    if (lineno == 1) {
-      if (strcmp(line, header))
-        rc = gs_error_set(err, GS_EINPUT,
-                          "cannot resume: '%s' was written by a sweep with other keys or outputs "
-                          "(header %.*s; this sweep's %.*s)",
-                          path, (int)len - 1, line, (int)strlen(header) - 1, header);
-    } else {
-      char *p = line, *end;
-      unsigned long r = strtoul(p, &end, 10);
-      if (end == p || *end != ',' || r < 1 || r > d->nruns) {
-        rc = gs_error_set(err, GS_EINPUT, "cannot resume: '%s' line %zu: run %.*s is not in this sweep (1..%zu)",
-                          path, lineno, (int)(end - p), p, d->nruns);
-        break;
-      }
-      p = strchr(end + 1, ','); /* past the status */
-      for (size_t k = 0; k < d->nkeys && p && !rc; k++) {
-        const char *v = d->values[(r - 1) * d->nkeys + k];
-        size_t vl = strlen(v);
-        if (strncmp(p + 1, v, vl) || (p[1 + vl] != ',' && p[1 + vl] != '\n'))
-          rc = gs_error_set(err, GS_EINPUT,
-                            "cannot resume: '%s' line %zu: run %lu has another %s than this "
-                            "sweep's %s (a different design or seed)",
-                            path, lineno, r, d->keys[k], v);
-        p = strchr(p + 1, ',');
-      }
-      if (!rc && !rows->row[r - 1]) {
-        if (!(rows->row[r - 1] = strdup(line))) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-        else ++*nfinished;
-      }
-    }
-    if (!rc) good_end = ftell(f);
-  }
-  free(line);
-  fclose(f);
-  if (!rc && truncate(path, good_end))
-    rc = gs_error_set(err, GS_EIO, "cannot cut the torn last row of '%s': %s", path, strerror(errno));
-  return rc;
-}
 
 /* DIR/base-case.yaml: the case file the sweep started from, so that the
  * directory records what its rows vary and a resume with an edited case
@@ -334,7 +279,7 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
                         "choose another --out",
                         journal);
     if (!rc) rc = keep_case(opt->out_dir, base, exists, err);
-    if (!rc && exists) rc = journal_read(journal, header.s, d, &rows, &rep->skipped, err);
+    if (!rc && exists) rc = gs_sweep_journal_read(journal, header.s, d, rows.row, &rep->skipped, err);
     if (!rc) {
       fd = open(journal, O_WRONLY | O_APPEND | O_CREAT, 0666);
       if (fd < 0) rc = gs_error_set(err, GS_EIO, "cannot open '%s': %s", journal, strerror(errno));
@@ -363,7 +308,6 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
 
   int io_failed = 0;
   if (!rc) {
-    gsl_error_handler_t *old = gsl_set_error_handler_off(); /* a GSL failure fails one run */
     const int show = rank == 0 && (opt->progress >= 0 ? opt->progress : isatty(STDERR_FILENO));
     size_t nfailed = 0; /* of the runs run now, for the progress line */
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
@@ -386,7 +330,6 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
         }
       }
     }
-    gsl_set_error_handler(old);
     if (show && rep->ran) fprintf(stderr, "\n");
   }
   if (fd >= 0) close(fd);
@@ -400,7 +343,7 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
     if (v[1] && !rc) rc = gs_error_set(err, GS_EIO, "the sweep failed on another MPI rank");
     if (!rc && rank == 0) { /* the other ranks' rows */
       size_t more = 0;
-      rc = journal_read(journal, header.s, d, &rows, &more, err);
+      rc = gs_sweep_journal_read(journal, header.s, d, rows.row, &more, err);
     }
   }
   if (!rc && rank == 0) {
