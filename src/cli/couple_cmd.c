@@ -78,6 +78,9 @@ int gs_cmd_couple(int argc, char **argv) {
     return 2;
   }
   gs_error err = {0};
+  char context[1024];
+  snprintf(context, sizeof context, "coupled case %s, results in %s: continue with `gransim couple %s --out %s --resume`", path, opt.out_dir, path, opt.out_dir);
+  gs_parallel_context(context);
   if (gs_couple_run(path, &opt, &err)) {
     fprintf(stderr, "gransim: %s\n", err.msg);
     return 1;

@@ -11,6 +11,7 @@
 #include "gransim/cfd.h"
 #include "gransim/dem.h"
 #include "gransim/liggghts.h"
+#include "gransim/parallel.h"
 
 static void dem_usage(FILE *fp) {
   fprintf(fp,
@@ -119,6 +120,9 @@ int gs_cmd_dem(int argc, char **argv) {
   else if (check) printf("%s: valid%s. %s\n", path, liggghts ? " (engine liggghts)" : "", desc);
   else {
     if (progress) fprintf(stderr, "gransim dem: %s: %s%s\n", path, desc, liggghts ? "; engine liggghts" : "");
+    char context[1024]; /* for an MPI error in the gas phase's pressure solve (hypre) */
+    snprintf(context, sizeof context, "DEM case %s, results in %s: run it again", path, out);
+    gs_parallel_context(context);
     rc = liggghts ? gs_lig_case_run(c, out, &lig, &err) : gs_dem_case_run(c, out, progress, &err);
     if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
     else if (progress) fprintf(stderr, "gransim dem: results in %s\n", out);
