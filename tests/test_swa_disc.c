@@ -5,6 +5,7 @@
  *    `diameters` with equal and variable weights;
  *  - fixed seed: point entries are held exactly (sigma 0), every run's
  *    initial particles are counted, a feed is sampled as stated;
+ *  - an ensemble of 12.6 million particles is compared on 10^7 draws;
  *  - statistical: over 400 seeds, the represented volume of an exponential
  *    entry deviates from the requested one by the stated standard error
  *    (mean of z = error / sigma near 0, variance near 1);
@@ -116,6 +117,21 @@ static void test_is_the_run(void) {
   gs_swa_case_free(&c);
 }
 
+/* ---- an ensemble too large to draw at check time: a sample of it ---- */
+static void test_large(void) {
+  gs_swa_case c;
+  /* 0.75 x 2^24 = 12.6 million particles in one run: compared on 10^7 draws */
+  sw_case(sw_fmt("%ssolver: {method: swa, particles: 16777216, runs: 1}\n"
+                 "initial: {type: exponential, number: 1e9, mean: [5e-12]}\noutput: {end: 1, count: 2}\n",
+                 GRID),
+          &c);
+  CHECK(c.disc[0].particles == 1e7);
+  CHECK_REL(c.disc[0].number[1], 1e9, 1e-12);
+  CHECK_REL(c.disc[0].sigma[1], 1 / sqrt(1e7), 1e-9);
+  CHECK(fabs(c.disc[0].volume[0][1] / 5e-3 - 1) < 5 * c.disc[0].sigma[1]);
+  gs_swa_case_free(&c);
+}
+
 /* ---- the stated error is the error ---- */
 static void test_statistics(void) {
   const int seeds = 400;
@@ -183,6 +199,7 @@ int main(void) {
   test_moments();
   test_fixed_seed();
   test_is_the_run();
+  test_large();
   test_statistics();
   test_refusals();
   TEST_EXIT();

@@ -264,7 +264,7 @@ double gs_swa_case_vsamp0(const gs_swa_case *c, size_t z) {
 }
 
 int gs_swa_case_init_tally(const gs_swa_case *c, gs_swa_sim *s, gsl_rng *rng, double *tally,
-                           gs_error *err) {
+                           size_t cap, gs_error *err) {
   const gs_swa_model *m = &c->model;
   const initial_set *set = c->initial;
   const size_t n0 = initial_fill(m), nc = (size_t)m->ncoord;
@@ -284,12 +284,18 @@ int gs_swa_case_init_tally(const gs_swa_case *c, gs_swa_sim *s, gsl_rng *rng, do
       if (cnt < 1) cnt = 1;
       if (cnt > m->nmax - placed) cnt = m->nmax - placed;
       double wbase = set->spec[i].number * v / (double)cnt, *t = tally ? tally + i * (nc + 2) : NULL;
-      for (size_t k = 0; k < cnt; k++) {
+      /* without a run, at most cap draws stand for the cnt particles */
+      const size_t draws = !s && cap && cnt > cap ? cap : cnt;
+      if (draws < cnt) {
+        placed += cnt;
+        wbase *= (double)cnt / (double)draws;
+      }
+      for (size_t k = 0; k < draws; k++) {
         double x[GS_SWA_MAX_COORD], w;
         gs_swa_spec_sample(&set->spec[i], rng, x, &w);
         if (t) t[nc + 1] += 1;
         if (!(w > 0)) continue; /* VWI: a diameter outside the feed distribution */
-        placed++;
+        if (draws == cnt) placed++;
         int rc = s ? gs_swa_sim_place(s, z, x, w * wbase, err) : GS_OK;
         if (rc) return rc;
         if (!t) continue;
@@ -302,5 +308,5 @@ int gs_swa_case_init_tally(const gs_swa_case *c, gs_swa_sim *s, gsl_rng *rng, do
 }
 
 int gs_swa_case_init_run(const gs_swa_case *c, gs_swa_sim *s, gs_error *err) {
-  return gs_swa_case_init_tally(c, s, NULL, NULL, err);
+  return gs_swa_case_init_tally(c, s, NULL, NULL, 0, err);
 }

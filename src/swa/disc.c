@@ -130,7 +130,8 @@ static int judge(const gs_swa_case *c, const gs_swa_disc *r, gs_error *err) {
 /* The initial entries: every run's initial particles, drawn as the runs draw
  * them (the same streams), or those of the first runs when all of them
  * would take more than SAMPLE_DRAWS draws (the represented values are then
- * that ensemble's, and the sampling error is stated for it). */
+ * that ensemble's, and the sampling error is stated for it), or, when one
+ * run alone would, a sample of each entry's particles in the first run. */
 static int initial_reports(gs_swa_case *c, size_t nentries, gs_error *err) {
   const gs_swa_model *m = &c->model;
   const size_t nc = (size_t)m->ncoord, stride = nc + 2;
@@ -147,9 +148,11 @@ static int initial_reports(gs_swa_case *c, size_t nentries, gs_error *err) {
   const double per_run = fmin(fmax(m->fill_fraction * (double)m->nmax, 1), (double)m->nmax) *
                          (double)m->ncomp * (1 + (double)sections);
   const size_t runs = (size_t)fmax(1, fmin((double)c->runs, floor(SAMPLE_DRAWS / per_run)));
+  /* one run alone too large: each entry on a sample of its particles */
+  const size_t cap = per_run > SAMPLE_DRAWS ? (size_t)fmax(1, SAMPLE_DRAWS / (double)nentries / (1 + (double)sections)) : 0;
   for (size_t r = 0; !rc && r < runs; r++) {
     gsl_rng_set(rng, gs_swa_run_seed(c->seed, r));
-    rc = gs_swa_case_init_tally(c, NULL, rng, tally, err);
+    rc = gs_swa_case_init_tally(c, NULL, rng, tally, cap, err);
   }
   for (size_t i = 0; !rc && i < nentries; i++) {
     const double *t = tally + i * stride;

@@ -42,9 +42,11 @@ double gs_swa_case_vsamp0(const gs_swa_case *c, size_t z);
 /* gs_swa_case_init_run, adding to tally (when not NULL) what each initial
  * entry i placed: tally[i * (ncoord + 2) + ...] = number, the volume of every
  * coordinate, particles drawn.  Without a run (s NULL) it draws from rng
- * what a run seeded alike would place, and places nothing. */
+ * what a run seeded alike would place, and places nothing; with cap > 0 an
+ * entry of more particles is represented by cap draws (weighted up), so
+ * that a very large ensemble is compared on a sample. */
 int gs_swa_case_init_tally(const gs_swa_case *c, gs_swa_sim *s, gsl_rng *rng, double *tally,
-                           gs_error *err);
+                           size_t cap, gs_error *err);
 /* The initial entries of a case: their number, and entry i's distribution
  * and key ("file:line: path"). */
 size_t gs_swa_case_initial_count(const gs_swa_case *c);
