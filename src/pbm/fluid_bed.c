@@ -25,20 +25,18 @@
 #include "gransim/pbm.h"
 #include "pbm/drying.h"
 #include "pbm/growth_scheme.h"
+#include "pbm/schedule.h"
 
 enum { S_H, S_W, S_EVAP, S_VIN, S_VOUT, S_QIN, S_QOUT, S_QLOST, NSCALAR };
 
-typedef struct {
-  double start, end, T, x, flow; /* [start, end): inlet temperature, humidity, dry air flow */
-} phase_t;
+enum { P_T, P_X, P_FLOW }; /* a phase's values: inlet temperature, humidity, dry air flow */
 
 typedef struct {
   int liquid;
   int solid[GS_MAX_DIM];
   double rho_s, rho_l, cs, cl, ca, cv, dH, Tref, P, k0;
   double Mair, loss, UA, Tamb, T0, x0;
-  phase_t *phase;
-  size_t nphase;
+  gs_schedule air; /* inlet air phases */
   double *d;     /* ncells: diameter of the granules that dry (0 at the first liquid pivot) */
   double *svol;  /* ncells: solid volume of the cell's granules */
   double *G;     /* rows of per-cell rates, one per slot (gs_eval.slot) */
@@ -50,7 +48,7 @@ typedef struct {
 static void bed_free(void *self) {
   bed_t *B = self;
   if (!B) return;
-  free(B->phase);
+  gs_schedule_free(&B->air);
   free(B->d);
   free(B->svol);
   free(B->G);
@@ -64,15 +62,6 @@ static void bed_free(void *self) {
 static double x_sat(const bed_t *B, double T) {
   const double p = fmin(gs_vapour_pressure(T), 0.99 * B->P);
   return 0.621945 * p / (B->P - p);
-}
-
-/* The phase of the inlet air at t (NULL: no air flows). */
-static const phase_t *phase_at(const bed_t *B, const gs_eval *ev, double t) {
-  for (size_t i = 0; i < B->nphase; i++)
-    if (ev ? gs_window_on(ev, B->phase[i].start, B->phase[i].end, t)
-           : t >= B->phase[i].start && t < B->phase[i].end)
-      return &B->phase[i];
-  return NULL;
 }
 
 /* What one compartment's state says: solid and liquid masses, T, x. */
@@ -122,8 +111,9 @@ static void bed_rates(void *self, const gs_model *m, const gs_eval *ev, size_t c
     gs_growth_apply(g, B->liquid, G, N, gs_eval_numbers(m, ev, dydt, comp), led, led + m->nvol);
     evap = B->rho_l * vol;
   }
-  const phase_t *ph = phase_at(B, ev, t);
-  const double air = ph ? ph->flow : 0, Tin = ph ? ph->T : B->Tref, xin = ph ? ph->x : 0;
+  const gs_phase *ph = gs_schedule_at(&B->air, ev, t);
+  const double air = ph ? ph->value[P_FLOW] : 0, Tin = ph ? ph->value[P_T] : B->Tref;
+  const double xin = ph ? ph->value[P_X] : 0;
   const double hin = air * (B->ca * (Tin - B->Tref) + xin * (B->dH + B->cv * (Tin - B->Tref)));
   const double hout = air * (B->ca * (v.T - B->Tref) + v.x * (B->dH + B->cv * (v.T - B->Tref)));
   const double lost = B->loss + B->UA * (v.T - B->Tamb);
@@ -173,17 +163,15 @@ static void bed_report(void *self, const gs_model *m, size_t comp, double t, con
   const double *s = gs_model_scalars_c(m, y, comp) + B->first;
   const bed_view v = view_of(B, g, N, s);
   const double drive = fmax(x_sat(B, v.T) - v.x, 0.0);
-  const phase_t *ph = phase_at(B, NULL, t);
-  for (size_t i = 0; !ph && i < B->nphase; i++) /* at its end: the phase that led there */
-    if (B->phase[i].end == t) ph = &B->phase[i];
+  const gs_phase *ph = gs_schedule_at(&B->air, NULL, t);
   out[0] = v.T;
   out[1] = v.x;
   out[2] = v.ms > 0 ? v.ml / v.ms : NAN;
   out[3] = B->k0 * drive * v.wet;
   out[4] = s[S_EVAP];
   out[5] = s[S_VOUT] - s[S_VIN]; /* net: what the air took out of the bed */
-  out[6] = ph ? ph->T : NAN;
-  out[7] = ph ? ph->flow : 0;
+  out[6] = ph ? ph->value[P_T] : NAN;
+  out[7] = ph ? ph->value[P_FLOW] : 0;
 }
 
 static double bed_balance(void *self, const gs_model *m, size_t comp, const double *y, char *msg,
@@ -208,43 +196,26 @@ static double bed_balance(void *self, const gs_model *m, size_t comp, const doub
 
 static double bed_switch(void *self, double t) {
   const bed_t *B = self;
-  double next = INFINITY;
-  for (size_t i = 0; i < B->nphase; i++)
-    next = fmin(next, gs_window_next_switch(B->phase[i].start, B->phase[i].end, t));
-  return next;
+  return gs_schedule_next_switch(&B->air, t);
 }
 
-/* One phase of `air`; inlet air above saturation is refused (no such air). */
-static int read_phase(gs_cfg_node *p, const bed_t *B, phase_t *ph, gs_error *err) {
-  int rc = gs_cfg_require_kind(p, GS_CFG_MAP, err);
-  if (!rc) rc = gs_cfg_double_range(p, "start", 1, 0, 0, 0, 1e9, 0, &ph->start, err);
-  if (!rc) rc = gs_cfg_double_range(p, "end", 1, 0, ph->start, 1, HUGE_VAL, 0, &ph->end, err);
-  /* 274.15-473.15 K: liquid water in the bed, and the hottest inlet air of
-   * pharmaceutical fluid beds with margin */
-  if (!rc) rc = gs_cfg_double_range(p, "temperature", 1, 0, 274.15, 0, 473.15, 0, &ph->T, err);
-  if (!rc) rc = gs_cfg_double_range(p, "humidity", 1, 0, 0, 0, 0.5, 0, &ph->x, err);
-  if (!rc) rc = gs_cfg_double_range(p, "air_flow", 1, 0, 0, 0, 1e4, 0, &ph->flow, err);
-  if (!rc) rc = gs_cfg_check_unused(p, err);
-  if (!rc && !(ph->x < x_sat(B, ph->T)))
-    rc = gs_cfg_fail(gs_cfg_get(p, "humidity"), err,
-                     "inlet air at %g K holds at most %.4g kg water / kg dry air (saturation at "
-                     "pressure %g Pa), not %g", ph->T, x_sat(B, ph->T), B->P, ph->x);
-  return rc;
-}
-
-static int read_phases(gs_cfg_node *node, bed_t *B, gs_error *err) {
+/* The inlet air's phases; air above saturation is refused (no such air).
+ * 274.15-473.15 K: liquid water in the bed, and the hottest inlet air of
+ * pharmaceutical fluid beds with margin. */
+static int read_air(gs_cfg_node *node, bed_t *B, gs_error *err) {
+  static const gs_phase_key keys[] = {{"temperature", 1, 0, 274.15, 473.15},
+                                      {"humidity", 1, 0, 0, 0.5},
+                                      {"air_flow", 1, 0, 0, 1e4}};
   gs_cfg_node *list = gs_cfg_get(node, "air");
-  if (!list) return gs_cfg_missing(node, "air", "a list of inlet air phases {start, end, temperature, humidity, air_flow}", err);
-  int rc = gs_cfg_require_kind(list, GS_CFG_SEQ, err);
-  B->nphase = rc ? 0 : gs_cfg_size(list);
-  if (!rc && !B->nphase) rc = gs_cfg_fail(list, err, "expected at least one phase {start, end, temperature, humidity, air_flow}");
-  if (!rc && !(B->phase = gs_calloc(B->nphase, sizeof *B->phase, err))) rc = GS_ENOMEM;
-  for (size_t i = 0; !rc && i < B->nphase; i++) {
-    rc = read_phase(gs_cfg_item(list, i), B, &B->phase[i], err);
-    if (!rc && i > 0 && B->phase[i].start < B->phase[i - 1].end)
-      rc = gs_cfg_fail(gs_cfg_get(gs_cfg_item(list, i), "start"), err,
-                       "phase %zu begins at %g s, before phase %zu ends (%g s): phases are given in "
-                       "time order and may not overlap", i + 1, B->phase[i].start, i, B->phase[i - 1].end);
+  if (!list)
+    return gs_cfg_missing(node, "air", "(a list of inlet air phases {start, end, temperature, humidity, air_flow})", err);
+  int rc = gs_schedule_read(list, keys, 3, &B->air, err);
+  for (size_t i = 0; !rc && i < B->air.n; i++) {
+    const double *v = B->air.phase[i].value;
+    if (!(v[P_X] < x_sat(B, v[P_T])))
+      rc = gs_cfg_fail(gs_cfg_get(gs_cfg_item(list, i), "humidity"), err,
+                       "inlet air at %g K holds at most %.4g kg water / kg dry air (saturation at "
+                       "pressure %g Pa), not %g", v[P_T], x_sat(B, v[P_T]), B->P, v[P_X]);
   }
   return rc;
 }
@@ -270,9 +241,9 @@ static int bed_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   if (!rc) rc = gs_cfg_double_range(node, "heat_loss", 0, 0, 0, 0, 1e9, 0, &B->loss, err);
   if (!rc) rc = gs_cfg_double_range(node, "wall_coefficient", 0, 0, 0, 0, 1e9, 0, &B->UA, err);
   if (!rc) rc = gs_cfg_double_range(node, "ambient_temperature", 0, 293.15, 200, 0, 473.15, 0, &B->Tamb, err);
-  if (!rc) rc = read_phases(node, B, err);
-  if (!rc) rc = gs_cfg_double_range(node, "initial_temperature", 0, B->phase[0].T, 274.15, 0, 473.15, 0, &B->T0, err);
-  if (!rc) rc = gs_cfg_double_range(node, "initial_humidity", 0, B->phase[0].x, 0, 0, 0.5, 0, &B->x0, err);
+  if (!rc) rc = read_air(node, B, err);
+  if (!rc) rc = gs_cfg_double_range(node, "initial_temperature", 0, B->air.phase[0].value[P_T], 274.15, 0, 473.15, 0, &B->T0, err);
+  if (!rc) rc = gs_cfg_double_range(node, "initial_humidity", 0, B->air.phase[0].value[P_X], 0, 0, 0.5, 0, &B->x0, err);
   if (!rc && !(B->x0 < x_sat(B, B->T0)))
     rc = gs_cfg_fail(gs_cfg_get(node, "initial_humidity") ? gs_cfg_get(node, "initial_humidity") : node, err,
                      "initial_humidity %g is at or above saturation (%.4g kg/kg at initial_temperature %g K)",
