@@ -353,7 +353,17 @@ typedef struct gs_summary {
   double d10, d50, d90;       /* volume-weighted percentiles of the volume-equivalent diameter */
   double mean[GS_MAX_VOL];    /* number-mean of each volume coordinate (axes, carried) */
   double total[GS_MAX_VOL];   /* total volume of each: sum N x_k, or the carried total */
+  /* Number-means of each particle's porosity (l + g)/(s + l + g) and liquid
+   * content l/(s + l + g) (Chaudhury 2015, eqs. 2.38-2.39), l and g the
+   * coordinates named liquid and gas (axis or carried), s the others; NaN
+   * when the compartment is empty or the model has neither. */
+  double porosity, liquid_content;
 } gs_summary;
+
+/* The volume coordinates (gs_model_vol_name) named liquid and gas, -1 for
+ * none; returns 1 when the model has either (then porosity and liquid
+ * content are reported). */
+int gs_model_pore_coordinates(const gs_model *m, int *liquid, int *gas);
 
 /* Statistics of compartment comp of state y. */
 void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s);

@@ -61,7 +61,7 @@
 #define JOURNAL_NEW ".result.journal.new"
 #define NCOL_FIXED 8                           /* time .. d90 */
 #define NCOL_MECH 16                           /* the mechanisms' columns (gs_mech_type.columns), at most */
-#define NCOL_MAX (NCOL_FIXED + 2 * GS_MAX_VOL + NCOL_MECH) /* + mean_<coordinate>, total_<coordinate>, mechanisms' */
+#define NCOL_MAX (NCOL_FIXED + 2 * GS_MAX_VOL + 2 + NCOL_MECH) /* + mean_<coordinate>, total_<coordinate>, porosity, liquid_content, mechanisms' */
 #define NSERIES_MAX (4 + NCOL_MAX)             /* /time, /number, /ledger, /summary/<col>, /carried */
 #define RANK_MAX (3 + GS_MAX_DIM)              /* /carried: time, comp, quantity, axes */
 #define CHUNK_ROWS 64                          /* time rows per chunk of the small series */
@@ -79,6 +79,7 @@ struct gs_output {
   int published;       /* the open file is .result.h5.partial (no longer .new) */
   hid_t file;
   int nseries, ncol, nmech_col; /* nmech_col: the mechanisms' columns, the last ones */
+  int npore_col;                /* 2 (porosity, liquid_content) when there are liquid or gas, else 0 */
   const char *unit[NCOL_MAX];   /* of each summary column (NULL: an index, no unit) */
   hid_t ds[NSERIES_MAX];
   char sname[NSERIES_MAX][GS_NAME_LEN + 24]; /* "/summary/total_<axis>" */
@@ -215,18 +216,22 @@ static void describe_series(gs_output *o, const gs_model *m) {
   set_series(o, S_NUMBER, "/number", 2 + g->dim, rest);
   set_series(o, S_LEDGER, "/ledger", 3, lrest);
   char name[sizeof o->sname[0]];
+  int liquid, gas;
+  o->npore_col = gs_model_pore_coordinates(m, &liquid, &gas) ? 2 : 0;
   o->nmech_col = gs_model_ncolumns(m);
-  o->ncol = NCOL_FIXED + 2 * nvol + o->nmech_col;
+  const int mech0 = NCOL_FIXED + 2 * nvol + o->npore_col; /* the first mechanism column */
+  o->ncol = mech0 + o->nmech_col;
   for (int c = 0; c < o->ncol; c++) {
     if (c < NCOL_FIXED) snprintf(name, sizeof name, "/summary/%s", fixed[c]);
     else if (c < NCOL_FIXED + nvol)
       snprintf(name, sizeof name, "/summary/mean_%s", gs_model_vol_name(m, c - NCOL_FIXED));
     else if (c < NCOL_FIXED + 2 * nvol)
       snprintf(name, sizeof name, "/summary/total_%s", gs_model_vol_name(m, c - NCOL_FIXED - nvol));
-    else snprintf(name, sizeof name, "/summary/%s", gs_model_column(m, c - NCOL_FIXED - 2 * nvol)->name);
+    else if (c < mech0)
+      snprintf(name, sizeof name, "/summary/%s", c == NCOL_FIXED + 2 * nvol ? "porosity" : "liquid_content");
+    else snprintf(name, sizeof name, "/summary/%s", gs_model_column(m, c - mech0)->name);
     set_series(o, S_SUMMARY + c, name, 2, rest);
-    o->unit[c] = c < NCOL_FIXED + 2 * nvol ? gs_summary_unit(colname(o, c))
-                                           : gs_model_column(m, c - NCOL_FIXED - 2 * nvol)->unit;
+    o->unit[c] = c < mech0 ? gs_summary_unit(colname(o, c)) : gs_model_column(m, c - mech0)->unit;
   }
   o->nseries = S_SUMMARY + o->ncol;
   o->s_carried = -1;
@@ -703,11 +708,15 @@ static void summarize(gs_output *o, const gs_model *m, double t, const double *y
     o->sbuf[(size_t)(NCOL_FIXED + k) * nc + j] = s.mean[k];
     o->sbuf[(size_t)(NCOL_FIXED + nvol + k) * nc + j] = s.total[k];
   }
+  const int pore0 = NCOL_FIXED + 2 * nvol, mech0 = pore0 + o->npore_col;
+  if (o->npore_col) {
+    o->sbuf[(size_t)pore0 * nc + j] = s.porosity;
+    o->sbuf[(size_t)(pore0 + 1) * nc + j] = s.liquid_content;
+  }
   if (o->nmech_col) {
     double v[NCOL_MECH];
     gs_model_report(m, j, t, y, v);
-    for (int k = 0; k < o->nmech_col; k++)
-      o->sbuf[(size_t)(NCOL_FIXED + 2 * nvol + k) * nc + j] = v[k];
+    for (int k = 0; k < o->nmech_col; k++) o->sbuf[(size_t)(mech0 + k) * nc + j] = v[k];
   }
 }
 
