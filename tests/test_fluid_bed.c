@@ -181,6 +181,10 @@ static void test_errors(void) {
   EXPECT_INPUT(FGRID "    initial_humidity: 0.3\n    air:\n" PHASE1, "initial_humidity", "saturation");
   EXPECT_INPUT(FGRID "    aer:\n" PHASE1, "aer", "did you mean 'air'");
   EXPECT_INPUT(FGRID "    air:\n" PHASE1 "solver: {steps: per_compartment}\n", "steps", "shared");
+  EXPECT_INPUT(FGRID "    air:\n" PHASE1 "  - {type: drying, bed_temperature: 333, air_humidity: 0.005}\n",
+               "drying cannot join fluid_bed");
+  EXPECT_INPUT(FGRID "    air:\n" PHASE1 "  - {type: fluid_bed, solid_density: 2700, air_mass: 0.01, air: [{start: 0, "
+               "end: 1, temperature: 333, humidity: 0.005, air_flow: 0.067}]}\n", "one fluid_bed", "mechanisms[0]");
 }
 
 int main(void) {

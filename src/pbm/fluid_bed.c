@@ -225,7 +225,13 @@ static int bed_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
   bed_t *B = gs_calloc(1, sizeof *B, err);
   if (!B) return GS_ENOMEM;
   B->first = m->nscalar;
-  int rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &B->liquid, err);
+  int rc = GS_OK;
+  /* one bed per compartment, and it does the evaporation itself */
+  for (size_t i = 0; !rc && i < m->nmech; i++)
+    if (!strcmp(m->mech[i].type->name, "fluid_bed") || !strcmp(m->mech[i].type->name, "drying"))
+      rc = gs_cfg_fail(node, err, "a case takes one fluid_bed, which evaporates the granules' liquid "
+                                  "itself: not with %s (%s)", m->mech[i].type->name, m->mech[i].label);
+  if (!rc) rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &B->liquid, err);
   if (!rc && m->ncarried > 0)
     rc = gs_cfg_fail(node, err, "fluid_bed dries the liquid along a grid axis; it cannot be combined "
                                 "with carried quantities (grid.carried)");

@@ -125,7 +125,11 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
     }
     if (!rc) rc = solid_axes(node, g, G, err);
   } else if (!rc && kind == KIND_DRYING) {
-    rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
+    for (size_t i = 0; !rc && i < m->nmech; i++) /* fluid_bed evaporates the liquid itself */
+      if (!strcmp(m->mech[i].type->name, "fluid_bed"))
+        rc = gs_cfg_fail(node, err, "drying cannot join fluid_bed (%s), which evaporates the granules' "
+                                    "liquid itself", m->mech[i].label);
+    if (!rc) rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
     G->axis = G->liquid;
     if (!rc) rc = gs_drying_read(node, m, G->liquid, G->G, &G->bed, err);
     if (!rc && G->bed && !(G->drive = gs_malloc(g->ncomp * sizeof(double), err))) rc = GS_ENOMEM;
