@@ -33,7 +33,6 @@ enum { P_T, P_X, P_FLOW }; /* a phase's values: inlet temperature, humidity, dry
 
 typedef struct {
   int liquid;
-  int solid[GS_MAX_DIM];
   double rho_s, rho_l, cs, cl, ca, cv, dH, Tref, P, k0;
   double Mair, loss, UA, Tamb, T0, x0;
   gs_schedule air; /* inlet air phases */
