@@ -29,13 +29,13 @@ done
 ntimes=5 ncomp=2
 csv=$out/summary.csv
 header=$(head -n 1 "$csv")
-want="time [s],compartment,M0 [1],M1 [m^3],M2 [m^6],d10 [m],d50 [m],d90 [m],mean_solid [m^3],mean_liquid [m^3],total_solid [m^3],total_liquid [m^3]"
+want="time [s],compartment,M0 [1],M1 [m^3],M2 [m^6],d10 [m],d50 [m],d90 [m],mean_solid [m^3],mean_liquid [m^3],total_solid [m^3],total_liquid [m^3],porosity [1],liquid_content [1]"
 [ "$header" = "$want" ] || fail "summary.csv header is '$header', expected '$want'"
 rows=$(($(wc -l <"$csv") - 1))
 [ "$rows" -eq $((ntimes * ncomp)) ] ||
   fail "summary.csv has $rows rows, expected $((ntimes * ncomp)) (output times x compartments)"
 # every row has every column; time-major order; compartments 1-based
-awk -F, -v n=12 'NR > 1 && NF != n { exit 1 }' "$csv" || fail "a summary.csv row does not have 12 columns"
+awk -F, -v n=14 'NR > 1 && NF != n { exit 1 }' "$csv" || fail "a summary.csv row does not have 14 columns"
 times=$(awk -F, 'NR > 1 { printf "%s/%s ", $1, $2 }' "$csv")
 want_times="0/1 0/2 0.5/1 0.5/2 1/1 1/2 1.5/1 1.5/2 2/1 2/2 "
 [ "$times" = "$want_times" ] || fail "summary.csv (time/compartment) columns are '$times', expected '$want_times'"
@@ -66,7 +66,7 @@ if command -v h5ls >/dev/null 2>&1; then
   h5_has '^/grid/solid/pivots +Dataset \{16\}' "/grid/solid/pivots (16)"
   h5_has '^/grid/liquid/edges +Dataset \{9\}' "/grid/liquid/edges (9)"
   h5_has '^/case +Group' "the group /case"
-  for col in time compartment M0 M1 M2 d10 d50 d90 mean_solid mean_liquid total_solid total_liquid; do
+  for col in time compartment M0 M1 M2 d10 d50 d90 mean_solid mean_liquid total_solid total_liquid porosity liquid_content; do
     h5_has "^/summary/$col +Dataset \\{5(/Inf)?, 2\\}" "/summary/$col (5, 2)"
   done
   if command -v h5dump >/dev/null 2>&1; then

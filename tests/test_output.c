@@ -125,6 +125,8 @@ static void expected_header(const gs_model *m, char *buf, size_t n) {
     len += (size_t)snprintf(buf + len, n - len, ",mean_%s [m^3]", m->grid.axis[k].name);
   for (int k = 0; k < m->grid.dim; k++)
     len += (size_t)snprintf(buf + len, n - len, ",total_%s [m^3]", m->grid.axis[k].name);
+  if (m->grid.dim > 1) /* a liquid axis: porosity and liquid content */
+    len += (size_t)snprintf(buf + len, n - len, ",porosity [1],liquid_content [1]");
   snprintf(buf + len, n - len, "\n");
 }
 

@@ -103,8 +103,8 @@ static void test_same_as_file(void) {
   CHECK(gs_case_run(&c, &opt, yc, &rep, &e) == GS_OK);
   CHECK(gs_case_run(&f, &opt, yf, &rep, &e) == GS_OK);
   CHECK(memcmp(yc, yf, n * sizeof *yc) == 0);
-  gs_study_outputs_eval(&o, &c.model, yc, vc);
-  gs_study_outputs_eval(&o, &f.model, yf, vf);
+  gs_study_outputs_eval(&o, &c.model, c.times[c.ntimes - 1], yc, vc);
+  gs_study_outputs_eval(&o, &f.model, f.times[f.ntimes - 1], yf, vf);
   CHECK(memcmp(vc, vf, o.ncol * sizeof *vc) == 0);
   gs_summary s;
   gs_summarize(&f.model, yf, 0, &s);

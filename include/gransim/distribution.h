@@ -6,6 +6,10 @@
  *   cell         index: [i per axis] (1-based)    all particles in one cell
  *   exponential  mean: [m per axis]               product of exponentials
  *   gamma        mean: [m per axis], shape: [k per axis]   product of Gamma(k, m/k)
+ *   lognormal, normal, table   a mass of solid with a size distribution by
+ *                mass over the diameter (d50 and gsd or sigma; or class
+ *                edges and mass fractions), `mass` instead of `number`
+ *                (src/pbm/distribution_mass.c)
  * Continuous distributions are discretised axis by axis so that, per cell,
  * number and first moment are conserved (each cell's content is placed on
  * the neighbouring pivots by the lever rule).  The spec must be covered by

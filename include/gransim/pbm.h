@@ -78,12 +78,39 @@ typedef struct gs_mech_type {
   /* Pages (GS_APART) it keeps per compartment, for the memory a case is
    * estimated to need before it is built (limits.memory_gb). */
   int pages_per_compartment;
+  /* ---- scalar state (optional) ----
+   * A mechanism may carry scalars per compartment in the ODE state (a fluid
+   * bed's enthalpy and vapour, and the integrals of its flows, which make
+   * its balances checkable like the volume ledger).  Its scalars are
+   * m->nscalar as create sees it, onwards (gs_eval_scalars); nscalars says
+   * how many it took (called once after create). */
+  int (*nscalars)(void *self);
+  /* Compartment comp's scalars s at the start, from the initial state y
+   * (full layout), and the absolute accuracy each is integrated to (its
+   * absolute tolerance, in its own unit). */
+  void (*initial)(void *self, const gs_model *m, size_t comp, const double *y, double *s,
+                  double *accuracy);
+  /* Summary columns it adds (summary.csv, result.h5 /summary), ended by
+   * {NULL}, and their values for compartment comp of the full state y. */
+  const struct gs_mech_column *columns;
+  void (*report)(void *self, const gs_model *m, size_t comp, double t, const double *y,
+                 double *values);
+  /* Its own balances in compartment comp of the full state y: the largest
+   * relative error, and in msg (n bytes) what it is. */
+  double (*balance)(void *self, const gs_model *m, size_t comp, const double *y, char *msg,
+                    size_t n);
 } gs_mech_type;
+
+typedef struct gs_mech_column {
+  const char *name, *unit; /* a summary column: name, SI unit ("1": dimensionless) */
+} gs_mech_column;
 
 typedef struct gs_mechanism {
   const gs_mech_type *type;
   void *self;
   char label[64]; /* "mechanisms[i] (type)" for messages */
+  size_t scalar_first; /* its first scalar in a compartment's (m->nscalar at create) */
+  int nscalar;         /* how many */
 } gs_mechanism;
 
 const gs_mech_type *gs_mech_lookup(const char *name);
@@ -108,6 +135,12 @@ struct gs_model {
   /* Volume coordinates: the dim axes, then the carried quantities.  The
    * ledger holds per compartment nvol exchanged volumes, then nvol lost. */
   int nvol;
+  /* Scalars per compartment that mechanisms carry (gs_mech_type.nscalars),
+   * in the state after the carried totals: y[scalar_at + comp * nscalar + i]
+   * (scalar_at = nnum (1 + ncarried); nstate includes them).  They run with
+   * shared steps on one process only (the other strategies pack
+   * compartments without them). */
+  size_t nscalar, scalar_at;
   gs_mechanism *mech;
   size_t nmech;
   int size_axes;  /* bitmask of axes summed into the granule volume for sizes (d10/d50/d90) */
@@ -139,6 +172,7 @@ struct gs_eval {
    * the compartment before it, which transfer reads, in `halo` (numbers,
    * then carried). */
   size_t view_lo, view_carried;
+  size_t view_scalars; /* where compartment view_lo's scalars begin */
   const double *halo;
   /* The interval [switch_lo, switch_hi] being integrated, which holds no
    * switch (gs_model_next_switch) inside it, or switch_lo > switch_hi for
@@ -236,6 +270,19 @@ static inline const double *gs_eval_upstream_c(const gs_model *m, const gs_eval 
     return ev->halo + (q < 0 ? 0 : (1 + (size_t)q) * m->grid.ncells);
   return q < 0 ? gs_eval_numbers_c(m, ev, y, comp - 1) : gs_eval_carried_c(m, ev, y, comp - 1, q);
 }
+/* Compartment comp's scalars (gs_model.nscalar of them) in an evaluation's vectors. */
+static inline double *gs_eval_scalars(const gs_model *m, const gs_eval *ev, double *y,
+                                      size_t comp) {
+  return y + ev->view_scalars + (comp - ev->view_lo) * m->nscalar;
+}
+static inline const double *gs_eval_scalars_c(const gs_model *m, const gs_eval *ev,
+                                              const double *y, size_t comp) {
+  return y + ev->view_scalars + (comp - ev->view_lo) * m->nscalar;
+}
+/* The same in a full state y. */
+static inline const double *gs_model_scalars_c(const gs_model *m, const double *y, size_t comp) {
+  return y + m->scalar_at + comp * m->nscalar;
+}
 static inline double *gs_eval_ledger(const gs_model *m, const gs_eval *ev, double *ledger,
                                      size_t comp) {
   return ledger + (comp - ev->view_lo) * 2 * (size_t)m->nvol;
@@ -269,6 +316,19 @@ int gs_mech_number_rates(const gs_model *m, const gs_mechanism *mech, const gs_e
 /* Mechanism `mech`'s rates alone, added to dydt and dledger. */
 void gs_mech_rhs(const gs_model *m, const gs_mechanism *mech, const gs_eval *ev, double t,
                  const double *y, double *dydt, double *dledger);
+/* Summary columns of the mechanisms (gs_mech_type.columns), in the order of
+ * the case: how many, the i-th, and their values for compartment comp of
+ * the full state y (values: gs_model_ncolumns entries). */
+int gs_model_ncolumns(const gs_model *m);
+const gs_mech_column *gs_model_column(const gs_model *m, int i);
+void gs_model_report(const gs_model *m, size_t comp, double t, const double *y, double *values);
+/* Set every mechanism's initial scalars in the full state y (numbers and
+ * carried already there) and their absolute accuracies (nscalar per
+ * compartment, ncomp compartments, into accuracy). */
+void gs_model_initial_scalars(const gs_model *m, double *y, double *accuracy);
+/* The worst of the mechanisms' own balances over all compartments of y
+ * (0 without any); msg says which. */
+double gs_model_balance(const gs_model *m, const double *y, char *msg, size_t n);
 /* The first time > t at which some mechanism's rate jumps, or INFINITY. */
 double gs_model_next_switch(const gs_model *m, double t);
 /* Helper for mechanisms active in [start, end). */
@@ -293,7 +353,17 @@ typedef struct gs_summary {
   double d10, d50, d90;       /* volume-weighted percentiles of the volume-equivalent diameter */
   double mean[GS_MAX_VOL];    /* number-mean of each volume coordinate (axes, carried) */
   double total[GS_MAX_VOL];   /* total volume of each: sum N x_k, or the carried total */
+  /* Number-means of each particle's porosity (l + g)/(s + l + g) and liquid
+   * content l/(s + l + g) (Chaudhury 2015, eqs. 2.38-2.39), l and g the
+   * coordinates named liquid and gas (axis or carried), s the others; NaN
+   * when the compartment is empty or the model has neither. */
+  double porosity, liquid_content;
 } gs_summary;
+
+/* The volume coordinates (gs_model_vol_name) named liquid and gas, -1 for
+ * none; returns 1 when the model has either (then porosity and liquid
+ * content are reported). */
+int gs_model_pore_coordinates(const gs_model *m, int *liquid, int *gas);
 
 /* Statistics of compartment comp of state y. */
 void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s);

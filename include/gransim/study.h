@@ -73,8 +73,8 @@ int gs_study_case(const gs_cfg *base, const gs_design *d, size_t r, gs_case *c, 
  * compartments), M1_<coordinate> (total volume of each volume coordinate, all
  * compartments), d10_c<j>, d50_c<j>, d90_c<j> per compartment j (1-based, as
  * in summary.csv), then for every extra summary column NAME (M0, M1, M2, d10,
- * d50, d90, mean_<coordinate>, total_<coordinate>) NAME_c<j> per
- * compartment. */
+ * d50, d90, mean_<coordinate>, total_<coordinate>, porosity, liquid_content,
+ * a mechanism's column such as bed_temperature) NAME_c<j> per compartment. */
 typedef struct gs_study_outputs {
   size_t ncol;
   char **names;
@@ -83,6 +83,7 @@ typedef struct gs_study_outputs {
   size_t *comp; /* compartment, where it has one */
   size_t ncomp; /* the shape the columns were made for */
   int nvol;
+  int nmech_col; /* the mechanisms' summary columns (gs_model_ncolumns) */
 } gs_study_outputs;
 
 int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *const *extra,
@@ -90,8 +91,8 @@ int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *co
 /* GS_EINPUT when model m does not have the shape o was made for (a
  * variation that changes the compartments or the volume coordinates). */
 int gs_study_outputs_fit(const gs_study_outputs *o, const gs_model *m, gs_error *err);
-/* values[0..ncol) from the state y (numbers and carried totals) of model m. */
-void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, const double *y,
+/* values[0..ncol) from the state y (full layout) of model m at time t. */
+void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, double t, const double *y,
                            double *values);
 void gs_study_outputs_free(gs_study_outputs *o);
 

@@ -374,7 +374,27 @@ static int case_atol(gs_cfg_node *solver, gs_case *c, double *atol, gs_error *er
   return GS_OK;
 }
 
-static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
+/* The mechanisms' scalars (gs_model.nscalar) join the state after the
+ * initial distributions were read: y0 grows to hold them, they get their
+ * initial values, and accuracy (ncomp * nscalar, allocated) their absolute
+ * accuracies. */
+static int initial_scalars(gs_case *c, double **accuracy, gs_error *err) {
+  gs_model *m = &c->model;
+  *accuracy = NULL;
+  if (!m->nscalar) return GS_OK;
+  const size_t n = m->nstate + m->nledger, ns = m->grid.ncomp * m->nscalar;
+  double *y = realloc(c->y0, n * sizeof *y);
+  if (!y) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  c->y0 = y;
+  /* the ledger was all zero, so the tail from the scalars on is */
+  memset(y + m->scalar_at, 0, (n - m->scalar_at) * sizeof *y);
+  *accuracy = gs_calloc(ns, sizeof **accuracy, err);
+  if (!*accuracy) return GS_ENOMEM;
+  gs_model_initial_scalars(m, y, *accuracy);
+  return GS_OK;
+}
+
+static int setup_ode(gs_cfg_node *root, gs_case *c, const double *accuracy, gs_error *err) {
   gs_model *m = &c->model;
   size_t n = m->nstate + m->nledger;
   const int dim = m->grid.dim;
@@ -389,14 +409,14 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
   for (int q = 0; q < m->ncarried; q++) scale[dim + q] = vtyp;
   for (size_t i = 0; i < n; i++)
     c->abs_scale[i] = i < m->nnum       ? 1.0
-                      : i < m->nstate   ? vtyp
+                      : i < m->nstate   ? vtyp /* scalars: set below */
                                         : scale[(i - m->nstate) % (size_t)m->nvol];
   gs_eval_init(&c->eval, m);
   c->ode = (gs_ode){.n = n,
                     .f = model_ode,
                     .ctx = c,
                     .abs_scale = c->abs_scale,
-                    .npositive = m->nstate,
+                    .npositive = m->scalar_at, /* scalars may be of either sign */
                     .psolve = gs_model_has_preconditioner(m) ? model_psolve : NULL,
                     .hold = model_hold};
   gs_cfg_node *solver = gs_cfg_get(root, "solver");
@@ -412,6 +432,15 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, gs_error *err) {
     return gs_cfg_fail(rb, err, "expected a fraction in [0, 1) or 'none'");
   int rc = gs_integrator_setup_read(solver, &c->integrator_setup, err);
   if (!rc) rc = case_atol(solver, c, &c->atol, err);
+  /* scalars to their own accuracy, whatever the numbers' atol: the
+   * integrator's is solver.atol if given, else GS_INTEGRATOR_ATOL */
+  const double base = solver && gs_cfg_get(solver, "atol") ? c->atol : GS_INTEGRATOR_ATOL;
+  for (size_t i = 0; !rc && i < m->grid.ncomp * m->nscalar; i++)
+    c->abs_scale[m->scalar_at + i] = accuracy[i] / base;
+  if (!rc && c->per_compartment && m->nscalar)
+    return gs_cfg_fail(gs_cfg_get(solver, "steps"), err,
+                       "per_compartment steps cannot carry the mechanisms' scalar state (a fluid "
+                       "bed's balances): use steps: shared");
   if (!rc && solver) rc = gs_cfg_check_unused(solver, err);
   if (!rc) rc = gs_integrator_create(&c->integrator_setup, &c->ode, &c->integrator, err);
   if (!rc && c->per_compartment && !c->integrator.type->per_compartment)
@@ -483,7 +512,10 @@ int gs_case_from_cfg(gs_cfg *cfg, gs_case *c, gs_error *err) {
   if (!rc) rc = read_output(root, c, err);
   if (!rc) rc = gs_limits_check_output(&lim, root, &c->model, c->ntimes, err);
   if (!rc) rc = read_checks(root, &c->checks, err);
-  if (!rc) rc = setup_ode(root, c, err);
+  double *accuracy = NULL;
+  if (!rc) rc = initial_scalars(c, &accuracy, err);
+  if (!rc) rc = setup_ode(root, c, accuracy, err);
+  free(accuracy);
   if (!rc) implicit_mass_tolerance(root, c);
   if (!rc) negative_floor(c);
   if (!rc) rc = gs_cfg_check_unused(root, err);

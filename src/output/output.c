@@ -60,7 +60,8 @@
 #define JOURNAL ".result.journal"
 #define JOURNAL_NEW ".result.journal.new"
 #define NCOL_FIXED 8                           /* time .. d90 */
-#define NCOL_MAX (NCOL_FIXED + 2 * GS_MAX_VOL) /* + mean_<coordinate>, total_<coordinate> */
+#define NCOL_MECH 16                           /* the mechanisms' columns (gs_mech_type.columns), at most */
+#define NCOL_MAX (NCOL_FIXED + 2 * GS_MAX_VOL + 2 + NCOL_MECH) /* + mean_<coordinate>, total_<coordinate>, porosity, liquid_content, mechanisms' */
 #define NSERIES_MAX (4 + NCOL_MAX)             /* /time, /number, /ledger, /summary/<col>, /carried */
 #define RANK_MAX (3 + GS_MAX_DIM)              /* /carried: time, comp, quantity, axes */
 #define CHUNK_ROWS 64                          /* time rows per chunk of the small series */
@@ -77,7 +78,9 @@ struct gs_output {
   const char *h5_path; /* the name the open HDF5 file has now, for messages */
   int published;       /* the open file is .result.h5.partial (no longer .new) */
   hid_t file;
-  int nseries, ncol;
+  int nseries, ncol, nmech_col; /* nmech_col: the mechanisms' columns, the last ones */
+  int npore_col;                /* 2 (porosity, liquid_content) when there are liquid or gas, else 0 */
+  const char *unit[NCOL_MAX];   /* of each summary column (NULL: an index, no unit) */
   hid_t ds[NSERIES_MAX];
   char sname[NSERIES_MAX][GS_NAME_LEN + 24]; /* "/summary/total_<axis>" */
   char axis_names[GS_MAX_DIM * GS_NAME_LEN + 8]; /* "a,b": the dimensions of /number */
@@ -213,13 +216,22 @@ static void describe_series(gs_output *o, const gs_model *m) {
   set_series(o, S_NUMBER, "/number", 2 + g->dim, rest);
   set_series(o, S_LEDGER, "/ledger", 3, lrest);
   char name[sizeof o->sname[0]];
-  o->ncol = NCOL_FIXED + 2 * nvol;
+  int liquid, gas;
+  o->npore_col = gs_model_pore_coordinates(m, &liquid, &gas) ? 2 : 0;
+  o->nmech_col = gs_model_ncolumns(m);
+  const int mech0 = NCOL_FIXED + 2 * nvol + o->npore_col; /* the first mechanism column */
+  o->ncol = mech0 + o->nmech_col;
   for (int c = 0; c < o->ncol; c++) {
     if (c < NCOL_FIXED) snprintf(name, sizeof name, "/summary/%s", fixed[c]);
     else if (c < NCOL_FIXED + nvol)
       snprintf(name, sizeof name, "/summary/mean_%s", gs_model_vol_name(m, c - NCOL_FIXED));
-    else snprintf(name, sizeof name, "/summary/total_%s", gs_model_vol_name(m, c - NCOL_FIXED - nvol));
+    else if (c < NCOL_FIXED + 2 * nvol)
+      snprintf(name, sizeof name, "/summary/total_%s", gs_model_vol_name(m, c - NCOL_FIXED - nvol));
+    else if (c < mech0)
+      snprintf(name, sizeof name, "/summary/%s", c == NCOL_FIXED + 2 * nvol ? "porosity" : "liquid_content");
+    else snprintf(name, sizeof name, "/summary/%s", gs_model_column(m, c - mech0)->name);
     set_series(o, S_SUMMARY + c, name, 2, rest);
+    o->unit[c] = c < mech0 ? gs_summary_unit(colname(o, c)) : gs_model_column(m, c - mech0)->unit;
   }
   o->nseries = S_SUMMARY + o->ncol;
   o->s_carried = -1;
@@ -399,7 +411,7 @@ static int describe_dataset(gs_output *o, int i, gs_error *err) {
     snprintf(dims, sizeof dims, "time,compartment%s,%s", i == S_NUMBER ? "" : ",quantity", o->axis_names);
     if (i == S_NUMBER) units = "1";
   } else if (i >= S_SUMMARY && i < S_SUMMARY + o->ncol) {
-    const char *u = gs_summary_unit(colname(o, i - S_SUMMARY));
+    const char *u = o->unit[i - S_SUMMARY];
     units = u ? u : "1";
   }
   if (i == S_TIME) units = "s";
@@ -474,7 +486,8 @@ static int csv_error(gs_output *o, gs_error *err) {
 static int csv_header(gs_output *o, gs_error *err) {
   char name[GS_NAME_LEN + 40];
   for (int c = 0; c < o->ncol; c++) {
-    gs_summary_header(colname(o, c), name, sizeof name);
+    if (o->unit[c]) snprintf(name, sizeof name, "%s [%s]", colname(o, c), o->unit[c]);
+    else snprintf(name, sizeof name, "%s", colname(o, c));
     if (fprintf(o->csv, "%s%s", c ? "," : "", name) < 0) return csv_error(o, err);
   }
   return fputc('\n', o->csv) == EOF ? csv_error(o, err) : GS_OK;
@@ -532,6 +545,9 @@ static gs_output *output_alloc(const char *dir, const gs_model *m, size_t nresum
   for (int q = 0; q < m->ncarried; q++)
     if (strchr(m->carried[q], '/') || strchr(m->carried[q], ','))
       return gs_error_set(err, GS_EINPUT, "carried name '%s' cannot be used in result files", m->carried[q]), NULL;
+  if (gs_model_ncolumns(m) > NCOL_MECH)
+    return gs_error_set(err, GS_EINPUT, "the mechanisms add %d summary columns, at most %d fit",
+                        gs_model_ncolumns(m), NCOL_MECH), NULL;
   gs_output *o = gs_calloc(1, sizeof *o, err);
   if (!o) return NULL;
   o->file = H5I_INVALID_HID;
@@ -691,6 +707,16 @@ static void summarize(gs_output *o, const gs_model *m, double t, const double *y
   for (int k = 0; k < nvol; k++) {
     o->sbuf[(size_t)(NCOL_FIXED + k) * nc + j] = s.mean[k];
     o->sbuf[(size_t)(NCOL_FIXED + nvol + k) * nc + j] = s.total[k];
+  }
+  const int pore0 = NCOL_FIXED + 2 * nvol, mech0 = pore0 + o->npore_col;
+  if (o->npore_col) {
+    o->sbuf[(size_t)pore0 * nc + j] = s.porosity;
+    o->sbuf[(size_t)(pore0 + 1) * nc + j] = s.liquid_content;
+  }
+  if (o->nmech_col) {
+    double v[NCOL_MECH];
+    gs_model_report(m, j, t, y, v);
+    for (int k = 0; k < o->nmech_col; k++) o->sbuf[(size_t)(mech0 + k) * nc + j] = v[k];
   }
 }
 

@@ -8,7 +8,8 @@
 
 const char *gs_summary_unit(const char *column) {
   static const char *const fixed[][2] = {{"time", "s"}, {"M0", "1"},  {"M1", "m^3"}, {"M2", "m^6"},
-                                         {"d10", "m"},  {"d50", "m"}, {"d90", "m"}};
+                                         {"d10", "m"},  {"d50", "m"}, {"d90", "m"},
+                                         {"porosity", "1"}, {"liquid_content", "1"}};
   if (!strncmp(column, "ci_", 3)) column += 3; /* a confidence half-width: the statistic's unit */
   for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
     if (!strcmp(column, fixed[i][0])) return fixed[i][1];

@@ -6,9 +6,10 @@
 #include <string.h>
 
 #include "gransim/distribution.h"
+#include "pbm/distribution_mass.h"
 #include "pbm/lever.h"
 
-enum { D_POINT, D_CELL, D_EXPONENTIAL, D_GAMMA, D_CELLS };
+enum { D_POINT, D_CELL, D_EXPONENTIAL, D_GAMMA, D_CELLS, D_LOGNORMAL, D_NORMAL, D_TABLE };
 
 /* Marginal of one axis: cumulative number F and cumulative first moment M,
  * both normalised to total number 1. */
@@ -261,13 +262,16 @@ static int compare(gs_cfg_node *node, const gs_grid *g, const double *add, gs_di
 
 int gs_distribution_add(gs_cfg_node *node, const gs_grid *g, double *dst, int keep_open,
                         gs_disc_log *log, gs_error *err) {
-  static const char *const types[] = {"point", "cell", "exponential", "gamma", "cells", NULL};
+  static const char *const types[] = {"point", "cell", "exponential", "gamma", "cells",
+                                      "lognormal", "normal", "table", NULL};
   int type = 0;
   double number = 0, coverage = 0;
   int rc = gs_cfg_require_kind(node, GS_CFG_MAP, err);
-  if (!rc && !gs_cfg_get(node, "type")) rc = gs_cfg_missing(node, "type", "(point, cell, cells, exponential or gamma)", err);
+  if (!rc && !gs_cfg_get(node, "type"))
+    rc = gs_cfg_missing(node, "type", "(point, cell, cells, exponential, gamma, lognormal, normal or table)", err);
   if (!rc) rc = gs_cfg_enum_opt(node, "type", types, 0, &type, err);
-  if (!rc) rc = gs_cfg_double_range(node, "number", 1, 0, 0, 1, HUGE_VAL, 0, &number, err);
+  const int by_mass = type >= D_LOGNORMAL; /* a mass, not a number */
+  if (!rc && !by_mass) rc = gs_cfg_double_range(node, "number", 1, 0, 0, 1, HUGE_VAL, 0, &number, err);
   if (!rc) rc = gs_cfg_double_range(node, "coverage", 0, 1e-6, 0, 0, 1, 0, &coverage, err);
   if (rc) return rc;
   /* into a field of its own first, to compare it with what was asked */
@@ -278,6 +282,9 @@ int gs_distribution_add(gs_cfg_node *node, const gs_grid *g, double *dst, int ke
   case D_POINT: rc = add_point(node, g, number, add, &rep, err); break;
   case D_CELL: rc = add_cell(node, g, number, add, &rep, err); break;
   case D_CELLS: rc = add_cells(node, g, number, add, &rep, err); break;
+  case D_LOGNORMAL: case D_NORMAL: case D_TABLE:
+    rc = gs_distribution_by_mass(node, g, types[type], coverage, add, &rep, err);
+    break;
   default: rc = add_product(node, g, number, type, coverage, add, &rep, err); break;
   }
   if (!rc && log) rc = compare(node, g, add, &rep, log, err);

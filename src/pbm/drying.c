@@ -16,11 +16,15 @@
 
 #include "pbm/drying.h"
 
-double gs_saturation_humidity(double T, double P) {
+double gs_vapour_pressure(double T) {
   /* Buck (1996) over liquid water: p = 611.21 exp((18.678 - theta/234.5) theta/(257.14 + theta)) Pa,
    * theta in C; within 0.05 % of the steam tables from 0 to 100 C */
   const double theta = T - 273.15;
-  const double p = 611.21 * exp((18.678 - theta / 234.5) * theta / (257.14 + theta));
+  return 611.21 * exp((18.678 - theta / 234.5) * theta / (257.14 + theta));
+}
+
+double gs_saturation_humidity(double T, double P) {
+  const double p = gs_vapour_pressure(T);
   return 0.621945 * p / (P - p); /* 0.621945 = M_water / M_air */
 }
 
@@ -79,8 +83,31 @@ void gs_bed_free(gs_bed *b) {
   free(b);
 }
 
-static int read_bed(gs_cfg_node *node, const gs_model *m, int liquid, gs_bed *b, gs_error *err) {
+int gs_drying_transfer_read(gs_cfg_node *node, double *k0, double *rho_l, double *P, gs_error *err) {
+  double gamma, eta, Dw, rho_air;
+  int rc = gs_cfg_double_range(node, "correction", 0, 1, 0, 1, 1e3, 0, &gamma, err);
+  if (!rc) rc = gs_cfg_double_range(node, "wetted_fraction", 0, 1, 0, 1, 1, 0, &eta, err);
+  if (!rc) rc = gs_cfg_double_range(node, "diffusivity", 0, 2.6e-5, 0, 1, 1e-3, 0, &Dw, err);
+  if (!rc) rc = gs_cfg_double_range(node, "air_density", 0, 1.18, 0, 1, 100, 0, &rho_air, err);
+  if (!rc) rc = gs_cfg_double_range(node, "liquid_density", 0, 1000, 0, 1, 1e5, 0, rho_l, err);
+  if (!rc) rc = gs_cfg_double_range(node, "pressure", 0, 101325, 1e3, 0, 1e7, 0, P, err);
+  *k0 = gamma * eta * 2 * M_PI * Dw * rho_air;
+  return rc;
+}
+
+double *gs_drying_diameters(const gs_model *m, int liquid, gs_error *err) {
   const gs_grid *g = &m->grid;
+  double *d = gs_malloc(g->ncells * sizeof(double), err);
+  if (!d) return NULL;
+  /* granules at the first liquid pivot cannot lose liquid in the upwind
+   * scheme: they take no part in the bed's evaporation either */
+  const size_t n = g->axis[liquid].n, stride = g->stride[liquid];
+  for (size_t c = 0; c < g->ncells; c++)
+    d[c] = (c / stride) % n == 0 ? 0.0 : cbrt(6 * m->size_volume[c] / M_PI);
+  return d;
+}
+
+static int read_bed(gs_cfg_node *node, const gs_model *m, int liquid, gs_bed *b, gs_error *err) {
   int rc = gs_cfg_double_range(node, "inlet_temperature", 1, 0, 274.15, 0, 473.15, 0, &b->Tin, err);
   if (!rc) rc = gs_cfg_double_range(node, "inlet_humidity", 1, 0, 0, 0, 0.5, 0, &b->xin, err);
   if (!rc) rc = gs_cfg_double_range(node, "air_flow", 1, 0, 0, 1, 1e4, 0, &b->air, err);
@@ -91,19 +118,13 @@ static int read_bed(gs_cfg_node *node, const gs_model *m, int liquid, gs_bed *b,
   if (!rc) rc = gs_cfg_double_range(node, "vapour_heat_capacity", 0, 1996, 0, 1, 1e5, 0, &b->cpv, err);
   if (!rc) rc = gs_cfg_check_unused(node, err);
   if (rc) return rc;
-  b->d = gs_malloc(g->ncells * sizeof(double), err);
-  if (!b->d) return GS_ENOMEM;
-  /* granules at the first liquid pivot cannot lose liquid in the upwind
-   * scheme: they take no part in the bed's evaporation either */
-  const size_t n = g->axis[liquid].n, stride = g->stride[liquid];
-  for (size_t c = 0; c < g->ncells; c++)
-    b->d[c] = (c / stride) % n == 0 ? 0.0 : cbrt(6 * m->size_volume[c] / M_PI);
-  return GS_OK;
+  b->d = gs_drying_diameters(m, liquid, err);
+  return b->d ? GS_OK : GS_ENOMEM;
 }
 
 int gs_drying_read(gs_cfg_node *node, const gs_model *m, int liquid, double *G, gs_bed **bed,
                    gs_error *err) {
-  double T = 0, x = 0, gamma, eta, Dw, rho_air, rho_l, P;
+  double T = 0, x = 0, rho_l, P;
   gs_cfg_node *bn = gs_cfg_get(node, "bed");
   *bed = NULL;
   int rc = GS_OK;
@@ -114,14 +135,9 @@ int gs_drying_read(gs_cfg_node *node, const gs_model *m, int liquid, double *G, 
     rc = gs_cfg_double_range(node, "bed_temperature", 1, 0, 274.15, 0, 373.15, 0, &T, err);
     if (!rc) rc = gs_cfg_double_range(node, "air_humidity", 1, 0, 0, 0, 0.5, 0, &x, err);
   }
-  if (!rc) rc = gs_cfg_double_range(node, "correction", 0, 1, 0, 1, 1e3, 0, &gamma, err);
-  if (!rc) rc = gs_cfg_double_range(node, "wetted_fraction", 0, 1, 0, 1, 1, 0, &eta, err);
-  if (!rc) rc = gs_cfg_double_range(node, "diffusivity", 0, 2.6e-5, 0, 1, 1e-3, 0, &Dw, err);
-  if (!rc) rc = gs_cfg_double_range(node, "air_density", 0, 1.18, 0, 1, 100, 0, &rho_air, err);
-  if (!rc) rc = gs_cfg_double_range(node, "liquid_density", 0, 1000, 0, 1, 1e5, 0, &rho_l, err);
-  if (!rc) rc = gs_cfg_double_range(node, "pressure", 0, 101325, 1e3, 0, 1e7, 0, &P, err);
+  double k0;
+  if (!rc) rc = gs_drying_transfer_read(node, &k0, &rho_l, &P, err);
   if (rc) return rc;
-  const double k0 = gamma * eta * 2 * M_PI * Dw * rho_air;
   if (bn) {
     gs_bed *b = gs_calloc(1, sizeof *b, err);
     if (!b) return GS_ENOMEM;

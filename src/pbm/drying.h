@@ -12,6 +12,8 @@
  * pressure P (Pa): x = 0.622 p / (P - p), p the vapour pressure of water from
  * Buck's (1996) equation (0-100 C). */
 double gs_saturation_humidity(double T, double P);
+/* The vapour pressure of water (Pa) at T (K), Buck (1996). */
+double gs_vapour_pressure(double T);
 
 /* The bed of `drying` with key `bed`: inlet air of a given temperature,
  * humidity and flow; the outlet humidity and the bed temperature (= the
@@ -32,6 +34,14 @@ typedef struct gs_bed {
 int gs_drying_read(gs_cfg_node *node, const gs_model *m, int liquid, double *G, gs_bed **bed,
                    gs_error *err);
 void gs_bed_free(gs_bed *b);
+/* The mass-transfer keys shared by `drying` and `fluid_bed` (correction,
+ * wetted_fraction, diffusivity, air_density, liquid_density, pressure):
+ * *k0 = gamma eta 2 pi D rho_air (kg/(m s)), so that a granule of diameter d
+ * evaporates k0 d (x_sat - x_air) kg/s. */
+int gs_drying_transfer_read(gs_cfg_node *node, double *k0, double *rho_l, double *P, gs_error *err);
+/* Per cell (ncells, allocated): the diameter of the granules that dry, 0 at
+ * the first pivot of the liquid axis. */
+double *gs_drying_diameters(const gs_model *m, int liquid, gs_error *err);
 /* Bed temperature *T and outlet humidity *x for wet = sum N d over the
  * granules that dry; returns the evaporation (kg/s). */
 double gs_bed_solve(const gs_bed *b, double wet, double *T, double *x);

@@ -14,6 +14,7 @@
 #include "gransim/pbm.h"
 #include "pbm/drying.h"
 #include "pbm/growth_scheme.h"
+#include "pbm/schedule.h"
 
 enum { KIND_GROWTH, KIND_LIQUID, KIND_CONSOLIDATION, KIND_DRYING };
 
@@ -30,6 +31,7 @@ typedef struct {
   double *work;          /* preconditioner: 2 * cells along the axis */
   gs_bed *bed;           /* drying with the bed's balances (NULL: fixed conditions) */
   double *drive;         /* bed: per compartment, the humidity difference of the last evaluation */
+  gs_schedule sched;     /* liquid_addition: phases scaling the rates (none: [start, end) at 1) */
 } grow_t;
 
 static void grow_free(void *self) {
@@ -41,6 +43,7 @@ static void grow_free(void *self) {
   free(G->work);
   gs_bed_free(G->bed);
   free(G->drive);
+  gs_schedule_free(&G->sched);
   free(G);
 }
 
@@ -101,7 +104,8 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
     rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
     G->axis = G->liquid;
     G->gas = gs_grid_axis_by_name(g, "gas");
-    if (!rc) rc = gs_cfg_doubles_req(node, "rate", 1, &G->q, &nq, err);
+    if (!rc && gs_cfg_get(node, "schedule")) rc = gs_spray_schedule(node, g, &G->q, &nq, &G->sched, err);
+    else if (!rc) rc = gs_cfg_doubles_req(node, "rate", 1, &G->q, &nq, err);
     if (!rc && nq != 1 && nq != g->ncomp)
       rc = gs_cfg_fail(gs_cfg_get(node, "rate"), err, "expected one rate or one per compartment (%zu)", g->ncomp);
     for (size_t i = 0; !rc && i < nq; i++)
@@ -114,10 +118,18 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
         for (size_t i = 1; i < g->ncomp; i++) G->q[i] = G->q[0];
       }
     }
-    if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
+    if (!rc && !G->sched.n) rc = gs_mech_read_window(node, &G->start, &G->end, err);
+    if (!rc && G->sched.n) { /* the schedule's phases switch it */
+      G->start = G->sched.phase[0].start;
+      G->end = G->sched.phase[G->sched.n - 1].end;
+    }
     if (!rc) rc = solid_axes(node, g, G, err);
   } else if (!rc && kind == KIND_DRYING) {
-    rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
+    for (size_t i = 0; !rc && i < m->nmech; i++) /* fluid_bed evaporates the liquid itself */
+      if (!strcmp(m->mech[i].type->name, "fluid_bed"))
+        rc = gs_cfg_fail(node, err, "drying cannot join fluid_bed (%s), which evaporates the granules' "
+                                    "liquid itself", m->mech[i].label);
+    if (!rc) rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
     G->axis = G->liquid;
     if (!rc) rc = gs_drying_read(node, m, G->liquid, G->G, &G->bed, err);
     if (!rc && G->bed && !(G->drive = gs_malloc(g->ncomp * sizeof(double), err))) rc = GS_ENOMEM;
@@ -151,10 +163,10 @@ static int active(const grow_t *G, const gs_eval *ev, double t) {
   return G->kind == KIND_CONSOLIDATION || gs_window_on(ev, G->start, G->end, t);
 }
 
-/* Rates of compartment comp (in this caller's row of G->G), or NULL when
- * nothing grows there. */
+/* Rates of compartment comp at t (in this caller's row of G->G), or NULL
+ * when nothing grows there. */
 static const double *compartment_rates(grow_t *G, const gs_model *m, const gs_eval *ev,
-                                       size_t comp, const double *N) {
+                                       size_t comp, double t, const double *N) {
   const gs_grid *g = &m->grid;
   if (G->kind != KIND_LIQUID && !G->bed) return G->G; /* precomputed */
   double *rates = G->G + (ev->slot > 0 ? (size_t)ev->slot : 0) * G->row_len;
@@ -162,8 +174,9 @@ static const double *compartment_rates(grow_t *G, const gs_model *m, const gs_ev
   /* share the spray in proportion to solid volume */
   double solid = 0;
   for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
-  if (!(solid > 0) || G->q[comp] == 0.0) return NULL;
-  double per = G->q[comp] / solid;
+  const double q = G->q[comp] * (G->sched.n ? gs_schedule_value(&G->sched, ev, t) : 1.0);
+  if (!(solid > 0) || q == 0.0) return NULL;
+  double per = q / solid;
   for (size_t c = 0; c < g->ncells; c++) rates[c] = per * G->solid_vol[c];
   return rates;
 }
@@ -173,7 +186,7 @@ static void grow_rates(void *self, const gs_model *m, const gs_eval *ev, size_t 
   grow_t *G = self;
   if (!active(G, ev, t)) return;
   const double *N = gs_eval_numbers_c(m, ev, y, comp);
-  const double *rates = compartment_rates(G, m, ev, comp, N);
+  const double *rates = compartment_rates(G, m, ev, comp, t, N);
   double *ledger = gs_eval_ledger(m, ev, dledger, comp);
   if (rates)
     gs_growth_apply(&m->grid, G->axis, rates, N, gs_eval_numbers(m, ev, dydt, comp), ledger,
@@ -187,12 +200,13 @@ static void grow_precondition(void *self, const gs_model *m, const gs_eval *ev, 
                               double t, const double *y, double gamma, double *z) {
   grow_t *G = self;
   if (!active(G, ev, t)) return;
-  const double *rates = compartment_rates(G, m, ev, comp, gs_eval_numbers_c(m, ev, y, comp));
+  const double *rates = compartment_rates(G, m, ev, comp, t, gs_eval_numbers_c(m, ev, y, comp));
   if (rates) gs_growth_solve(&m->grid, G->axis, rates, gamma, gs_eval_numbers(m, ev, z, comp), G->work);
 }
 
 static double grow_switch(void *self, double t) {
   const grow_t *G = self;
+  if (G->sched.n) return gs_schedule_next_switch(&G->sched, t);
   return G->kind == KIND_CONSOLIDATION ? INFINITY : gs_window_next_switch(G->start, G->end, t);
 }
 

@@ -13,13 +13,15 @@
 
 extern const gs_mech_type gs_mech_aggregation, gs_mech_breakage, gs_mech_growth,
     gs_mech_liquid_addition, gs_mech_consolidation, gs_mech_feed, gs_mech_transfer, gs_mech_spray,
-    gs_mech_pore_consolidation, gs_mech_layering, gs_mech_nucleation, gs_mech_drying;
+    gs_mech_pore_consolidation, gs_mech_layering, gs_mech_nucleation, gs_mech_drying,
+    gs_mech_fluid_bed;
 
 /* Adding a mechanism is one file and one line here. */
 static const gs_mech_type *const registry[] = {
     &gs_mech_aggregation, &gs_mech_breakage, &gs_mech_growth, &gs_mech_liquid_addition,
     &gs_mech_consolidation, &gs_mech_feed, &gs_mech_transfer, &gs_mech_spray,
-    &gs_mech_pore_consolidation, &gs_mech_layering, &gs_mech_nucleation, &gs_mech_drying, NULL};
+    &gs_mech_pore_consolidation, &gs_mech_layering, &gs_mech_nucleation, &gs_mech_drying,
+    &gs_mech_fluid_bed, NULL};
 
 const gs_mech_type *const *gs_mech_types(void) { return registry; }
 
@@ -32,7 +34,7 @@ int gs_model_init(gs_model *m, gs_grid *grid, gs_error *err) {
   m->nslots = omp_get_max_threads();
   m->grid = *grid;
   memset(grid, 0, sizeof *grid);
-  m->nnum = m->nstate = m->grid.ncomp * m->grid.ncells;
+  m->nnum = m->nstate = m->scalar_at = m->grid.ncomp * m->grid.ncells;
   m->nvol = m->grid.dim;
   m->nledger = m->grid.ncomp * 2 * (size_t)m->nvol;
   m->size_axes = (1 << m->grid.dim) - 1;
@@ -58,7 +60,7 @@ int gs_model_set_carried(gs_model *m, const char *const *names, int n, gs_error 
     m->ncarried = q + 1;
   }
   m->nvol = m->grid.dim + m->ncarried;
-  m->nstate = m->nnum * (1 + (size_t)m->ncarried);
+  m->nstate = m->scalar_at = m->nnum * (1 + (size_t)m->ncarried);
   m->nledger = m->grid.ncomp * 2 * (size_t)m->nvol;
   return GS_OK;
 }
@@ -96,10 +98,66 @@ int gs_model_add_mechanism(gs_model *m, const char *type, gs_cfg_node *node, con
   memset(mech, 0, sizeof *mech);
   mech->type = t;
   snprintf(mech->label, sizeof mech->label, "%s", label ? label : type);
+  mech->scalar_first = m->nscalar;
   int rc = t->create(node, m, &mech->self, err);
   if (rc) return rc;
   m->nmech++;
+  if (t->nscalars) { /* its scalars join the state, after the carried totals */
+    mech->nscalar = t->nscalars(mech->self);
+    m->nscalar += (size_t)mech->nscalar;
+    m->nstate = m->scalar_at + m->grid.ncomp * m->nscalar;
+  }
   return GS_OK;
+}
+
+int gs_model_ncolumns(const gs_model *m) {
+  int n = 0;
+  for (size_t i = 0; i < m->nmech; i++)
+    for (const gs_mech_column *c = m->mech[i].type->columns; c && c->name; c++) n++;
+  return n;
+}
+
+const gs_mech_column *gs_model_column(const gs_model *m, int k) {
+  for (size_t i = 0; i < m->nmech; i++)
+    for (const gs_mech_column *c = m->mech[i].type->columns; c && c->name; c++)
+      if (k-- == 0) return c;
+  return NULL;
+}
+
+void gs_model_report(const gs_model *m, size_t comp, double t, const double *y, double *values) {
+  for (size_t i = 0; i < m->nmech; i++) {
+    const gs_mech_type *ty = m->mech[i].type;
+    if (!ty->columns) continue;
+    ty->report(m->mech[i].self, m, comp, t, y, values);
+    for (const gs_mech_column *c = ty->columns; c->name; c++) values++;
+  }
+}
+
+void gs_model_initial_scalars(const gs_model *m, double *y, double *accuracy) {
+  for (size_t i = 0; i < m->nmech; i++) {
+    const gs_mechanism *mech = &m->mech[i];
+    if (!mech->nscalar) continue;
+    for (size_t comp = 0; comp < m->grid.ncomp; comp++) {
+      const size_t at = comp * m->nscalar + mech->scalar_first;
+      mech->type->initial(mech->self, m, comp, y, y + m->scalar_at + at, accuracy + at);
+    }
+  }
+}
+
+double gs_model_balance(const gs_model *m, const double *y, char *msg, size_t n) {
+  double worst = 0;
+  char one[256];
+  for (size_t i = 0; i < m->nmech; i++) {
+    if (!m->mech[i].type->balance) continue;
+    for (size_t comp = 0; comp < m->grid.ncomp; comp++) {
+      const double e = m->mech[i].type->balance(m->mech[i].self, m, comp, y, one, sizeof one);
+      if (!(e <= worst) && !isnan(worst)) { /* NaN is the worst, and stays */
+        worst = e;
+        snprintf(msg, n, "%s, compartment %zu: %s", m->mech[i].label, comp + 1, one);
+      }
+    }
+  }
+  return worst;
 }
 
 void gs_model_free(gs_model *m) {
@@ -153,6 +211,7 @@ void gs_eval_init(gs_eval *ev, const gs_model *m) {
                   .comp_hi = m->grid.ncomp,
                   .view_lo = 0,
                   .view_carried = m->nnum,
+                  .view_scalars = m->scalar_at,
                   .switch_lo = 1, /* no interval: windows decide at t */
                   .switch_hi = 0,
                   .slot = -1};

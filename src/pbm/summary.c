@@ -61,6 +61,45 @@ static void percentiles(const gs_model *m, const double *vol, const double *N, c
   free(scratch);
 }
 
+int gs_model_pore_coordinates(const gs_model *m, int *liquid, int *gas) {
+  *liquid = *gas = -1;
+  for (int k = 0; k < m->nvol; k++) {
+    if (!strcmp(gs_model_vol_name(m, k), "liquid")) *liquid = k;
+    if (!strcmp(gs_model_vol_name(m, k), "gas")) *gas = k;
+  }
+  return *liquid >= 0 || *gas >= 0;
+}
+
+/* Number-means of porosity and liquid content (gs_summary). */
+static void pores(const gs_model *m, const double *y, size_t comp, gs_summary *s) {
+  const gs_grid *g = &m->grid;
+  const double *N = gs_model_numbers_c(m, y, comp);
+  int liquid, gas;
+  s->porosity = s->liquid_content = NAN;
+  if (!gs_model_pore_coordinates(m, &liquid, &gas) || !(s->m0 > 0)) return;
+  const double *L = liquid >= g->dim ? gs_model_carried_c(m, y, comp, liquid - g->dim) : NULL;
+  const double *G = gas >= g->dim ? gs_model_carried_c(m, y, comp, gas - g->dim) : NULL;
+  double por = 0, liq = 0;
+  for (size_t c = 0; c < g->ncells; c++) {
+    if (!(N[c] > 0)) continue;
+    const double *x = g->x + c * (size_t)g->dim;
+    double sol = 0, l = 0, gv = 0;
+    for (int k = 0; k < g->dim; k++) {
+      if (k == liquid) l = x[k];
+      else if (k == gas) gv = x[k];
+      else sol += x[k];
+    }
+    if (L) l = L[c] / N[c];
+    if (G) gv = G[c] / N[c];
+    const double v = sol + l + gv;
+    if (!(v > 0)) continue;
+    por += N[c] * (l + gv) / v;
+    liq += N[c] * l / v;
+  }
+  s->porosity = por / s->m0;
+  s->liquid_content = liq / s->m0;
+}
+
 void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s) {
   const gs_grid *g = &m->grid;
   const double *N = gs_model_numbers_c(m, y, comp);
@@ -90,4 +129,5 @@ void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s
   s->d10 = d[0];
   s->d50 = d[1];
   s->d90 = d[2];
+  pores(m, y, comp, s);
 }

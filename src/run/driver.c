@@ -42,7 +42,10 @@ int gs_run_rate_failure(const gs_model *m, double t, size_t idx, gs_error *err) 
   const gs_grid *g = &m->grid;
   char where[512];
   if (idx < m->nnum) gs_run_describe_cell(m, idx / g->ncells, idx % g->ncells, where, sizeof where);
-  else if (idx < m->nstate) snprintf(where, sizeof where, "carried volume entry %zu", idx - m->nnum);
+  else if (idx < m->scalar_at) snprintf(where, sizeof where, "carried volume entry %zu", idx - m->nnum);
+  else if (idx < m->nstate)
+    snprintf(where, sizeof where, "scalar %zu of compartment %zu (a mechanism's state)",
+             (idx - m->scalar_at) % m->nscalar + 1, (idx - m->scalar_at) / m->nscalar + 1);
   else snprintf(where, sizeof where, "volume ledger entry %zu", idx - m->nstate);
   return gs_error_set(err, GS_ENUMERIC,
                       "numerical failure at t = %g: %s: the rate of change is not finite (NaN or "
@@ -207,6 +210,10 @@ int gs_case_run(gs_case *c, const gs_run_options *opt_in, double *yout, gs_run_r
   if (!rc) memcpy(run.Y, c->y0, n * sizeof(double));
   /* under MPI each rank evaluates its own block of compartments */
   if (!rc) rc = gs_dist_init(&run.dist, &c->model, opt.one_process, err);
+  /* the ranks' blocks hold numbers, carried totals and ledger, not scalars */
+  if (!rc && run.dist.size > 1 && c->model.nscalar)
+    rc = gs_error_set(err, GS_EINPUT, "this case's mechanisms carry scalar state (a fluid bed's "
+                                      "balances), which runs on one process: run it without mpirun");
   if (rc) {
     free(run.Y);
     free(run.resume_state);

@@ -28,7 +28,12 @@ static int check_state(const checks_t *k, const double *Y, double t, gs_error *e
   /* the vectorised test, and the search for the culprit only when it fails
    * (a scan with isfinite and fmax per value costs more than the rest) */
   const int finite = gs_all_finite(Y, m->nstate);
-  for (size_t i = 0; !finite && i < m->nstate; i++)
+  for (size_t i = m->scalar_at; !finite && i < m->nstate; i++)
+    if (!isfinite(Y[i]))
+      return gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: scalar %zu of compartment "
+                          "%zu (a mechanism's state) is %g", t, (i - m->scalar_at) % m->nscalar + 1,
+                          (i - m->scalar_at) / m->nscalar + 1, Y[i]);
+  for (size_t i = 0; !finite && i < m->scalar_at; i++)
     if (!isfinite(Y[i])) {
       size_t j = i < m->nnum ? i : (i - m->nnum) % m->nnum;
       gs_run_describe_cell(m, (i < m->nnum ? i : (i - m->nnum) / g->ncells / (size_t)m->ncarried) % g->ncomp,
@@ -110,6 +115,13 @@ static int check_state(const checks_t *k, const double *Y, double t, gs_error *e
       worst_sign = lost > 0;
     }
   }
+  /* the mechanisms' own balances (a fluid bed's water and energy) */
+  char what[512];
+  const double own = m->nscalar ? gs_model_balance(m, Y, what, sizeof what) : 0;
+  if (own > rep->max_balance_error) rep->max_balance_error = own;
+  if (!(own <= c->checks.mass_tolerance))
+    return gs_error_set(err, GS_ENUMERIC, "numerical failure at t = %g: %s; relative error %.3g > "
+                        "checks.mass_tolerance = %g", t, what, own, c->checks.mass_tolerance);
   if (worst_frac > rep->max_loss) rep->max_loss = worst_frac;
   if (worst_k >= 0 && worst_frac > c->checks.max_loss) {
     /* carried volumes are lost with the particles beyond the grid: name the axes */

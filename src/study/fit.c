@@ -122,7 +122,7 @@ static int fit_obs_output(void *self, const gs_run_view *run, double t, const do
   const gs_fit_data *d = o->fc->data;
   for (size_t i = 0; i < d->ntimes; i++)
     if (fabs(t - d->times[i]) <= 1e-12 * fmax(1, fabs(t))) {
-      gs_study_outputs_eval(&o->fc->out, &o->c->model, Y, o->rows + i * o->fc->out.ncol);
+      gs_study_outputs_eval(&o->fc->out, &o->c->model, t, Y, o->rows + i * o->fc->out.ncol);
       o->seen[i] = 1;
     }
   return GS_OK;

@@ -9,7 +9,8 @@
 #include <string.h>
 
 /* Statistics of a column; the per-compartment ones are summary.csv's. */
-enum { W_M0_ALL, W_M1_ALL, W_M0, W_M1, W_M2, W_D10, W_D50, W_D90, W_MEAN, W_TOTAL };
+enum { W_M0_ALL, W_M1_ALL, W_M0, W_M1, W_M2, W_D10, W_D50, W_D90, W_MEAN, W_TOTAL, W_POROSITY,
+       W_LIQUID_CONTENT, W_MECH };
 
 static const char *const fixed_names[] = {"M0", "M1", "M2", "d10", "d50", "d90"};
 
@@ -59,6 +60,7 @@ int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *co
   o->comp = gs_calloc(cap, sizeof *o->comp, err);
   o->ncomp = nc;
   o->nvol = nvol;
+  o->nmech_col = gs_model_ncolumns(m);
   if (!o->names || !o->what || !o->index || !o->comp) {
     gs_study_outputs_free(o);
     return GS_ENOMEM;
@@ -83,12 +85,21 @@ int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *co
       snprintf(name, sizeof name, "total_%s", gs_model_vol_name(m, k));
       if (!strcmp(extra[e], name)) what = W_TOTAL, index = k;
     }
+    int liquid, gas;
+    const int pores = gs_model_pore_coordinates(m, &liquid, &gas);
+    if (what < 0 && pores && !strcmp(extra[e], "porosity")) what = W_POROSITY;
+    if (what < 0 && pores && !strcmp(extra[e], "liquid_content")) what = W_LIQUID_CONTENT;
+    for (int k = 0; k < gs_model_ncolumns(m) && what < 0; k++)
+      if (!strcmp(extra[e], gs_model_column(m, k)->name)) what = W_MECH, index = k;
     if (what < 0) {
-      char known[512] = "M0, M1, M2, d10, d50, d90";
+      char known[1024] = "M0, M1, M2, d10, d50, d90";
       size_t at = strlen(known);
       for (int k = 0; k < nvol && at < sizeof known; k++)
         at += (size_t)snprintf(known + at, sizeof known - at, ", mean_%s, total_%s",
                                gs_model_vol_name(m, k), gs_model_vol_name(m, k));
+      if (pores && at < sizeof known) at += (size_t)snprintf(known + at, sizeof known - at, ", porosity, liquid_content");
+      for (int k = 0; k < gs_model_ncolumns(m) && at < sizeof known; k++)
+        at += (size_t)snprintf(known + at, sizeof known - at, ", %s", gs_model_column(m, k)->name);
       rc = gs_error_set(err, GS_EINPUT, "--outputs: unknown summary column '%s'; known: %s",
                         extra[e], known);
     }
@@ -109,18 +120,27 @@ int gs_study_outputs_fit(const gs_study_outputs *o, const gs_model *m, gs_error 
                         "the variation changes the volume coordinates (%d, the case has %d): the "
                         "runs of a study must share the outputs' columns",
                         m->nvol, o->nvol);
+  if (gs_model_ncolumns(m) != o->nmech_col)
+    return gs_error_set(err, GS_EINPUT,
+                        "the variation changes the mechanisms' summary columns (%d, the case has %d): "
+                        "the runs of a study must share the outputs' columns",
+                        gs_model_ncolumns(m), o->nmech_col);
   return GS_OK;
 }
 
-void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, const double *y,
+void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, double t, const double *y,
                            double *values) {
-  const size_t nc = m->grid.ncomp;
+  const size_t nc = m->grid.ncomp, nm = (size_t)o->nmech_col;
   gs_summary *s = calloc(nc, sizeof *s);
-  if (!s) { /* no memory for the statistics: the row says so, the run still counts */
+  double *mech = calloc(nc * nm + 1, sizeof *mech);
+  if (!s || !mech) { /* no memory for the statistics: the row says so, the run still counts */
     for (size_t i = 0; i < o->ncol; i++) values[i] = NAN;
+    free(s);
+    free(mech);
     return;
   }
   for (size_t j = 0; j < nc; j++) gs_summarize(m, y, j, &s[j]);
+  for (size_t j = 0; nm && j < nc; j++) gs_model_report(m, j, t, y, mech + j * nm);
   for (size_t i = 0; i < o->ncol; i++) {
     const gs_summary *c = &s[o->comp[i] < nc ? o->comp[i] : 0];
     double v = 0;
@@ -138,11 +158,15 @@ void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, const d
     case W_D50: v = c->d50; break;
     case W_D90: v = c->d90; break;
     case W_MEAN: v = c->mean[o->index[i]]; break;
+    case W_POROSITY: v = c->porosity; break;
+    case W_LIQUID_CONTENT: v = c->liquid_content; break;
+    case W_MECH: v = mech[(o->comp[i] < nc ? o->comp[i] : 0) * nm + (size_t)o->index[i]]; break;
     default: v = c->total[o->index[i]]; break;
     }
     values[i] = v;
   }
   free(s);
+  free(mech);
 }
 
 void gs_study_outputs_free(gs_study_outputs *o) {

@@ -145,7 +145,7 @@ static void run_one(const gs_cfg *base, const gs_design *d, size_t r, const gs_s
   gs_run_options ropt = {.out_dir = NULL, .progress = 0, .one_process = 1};
   gs_run_report rep;
   if (!rc) rc = gs_case_run(&c, &ropt, y, &rep, &err);
-  if (!rc) gs_study_outputs_eval(o, &c.model, y, v);
+  if (!rc) gs_study_outputs_eval(o, &c.model, c.times[c.ntimes - 1], y, v);
   buf_add(row, "%zu,%s", r + 1, rc ? "error" : "ok");
   for (size_t k = 0; k < d->nkeys; k++) buf_add(row, ",%s", d->values[r * d->nkeys + k]);
   for (size_t i = 0; i < o->ncol; i++) {
