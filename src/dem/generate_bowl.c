@@ -52,8 +52,8 @@ static int build(gs_cfg_node *n, gs_dem_tris *out, gs_dem_gen_motion *motion, gs
   else if (!rc) h = 0;
   if (!rc && !dished && gs_cfg_get(n, "dish_depth"))
     rc = gs_cfg_fail(gs_cfg_get(n, "dish_depth"), err, "only a dished bottom has a depth (bottom: dished)");
-  if (!rc) rc = gs_cfg_long_range(n, "segments", 0, 48, 8, 4096, &seg, err);
-  if (!rc) rc = gs_cfg_long_range(n, "dish_rings", 0, 8, 2, 256, &rings, err);
+  if (!rc) rc = gs_cfg_long_range(n, "segments", 0, 48, 8, 1024, &seg, err);
+  if (!rc) rc = gs_cfg_long_range(n, "dish_rings", 0, 8, 2, 64, &rings, err);
   if (!rc) rc = gs_dem_case_vec3(n, "origin", 0, zero, origin, err);
   if (rc) return rc;
   const double R = 0.5 * D, Ro = R + t;

@@ -50,7 +50,7 @@ static int build(gs_cfg_node *n, gs_dem_tris *out, gs_dem_gen_motion *motion, gs
   if (!rc) rc = gs_cfg_double_range(n, "hub_diameter", 1, 0, 0, 1, HUGE_VAL, 0, &dh, err);
   if (!rc) rc = gs_cfg_double_range(n, "clearance", 1, 0, 0, 0, HUGE_VAL, 0, &c, err);
   if (!rc) rc = gs_cfg_double_opt(n, "rpm", 0, &rpm, err);
-  if (!rc) rc = gs_cfg_long_range(n, "segments", 0, 24, 6, 4096, &seg, err);
+  if (!rc) rc = gs_cfg_long_range(n, "segments", 0, 24, 6, 1024, &seg, err);
   if (!rc) rc = gs_dem_case_vec3(n, "origin", 0, zero, origin, err);
   if (rc) return rc;
   const double a = pitch * M_PI / 180, rh = 0.5 * dh;
