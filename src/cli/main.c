@@ -202,6 +202,9 @@ static int cmd_check(int argc, char **argv) {
 static int cmd_list(void) {
   printf("mechanisms:\n");
   for (const gs_mech_type *const *t = gs_mech_types(); *t; t++) printf("  %-16s %s\n", (*t)->name, (*t)->summary);
+  printf("liquid sharing rules (share.type of liquid_addition and spray):\n");
+  fflush(stdout);
+  gs_liquid_share_list(stdout);
   printf("aggregation kernels:\n");
   for (const gs_kernel_type *const *t = gs_kernel_types(); *t; t++) printf("  %-16s %s\n", (*t)->name, (*t)->summary);
   printf("breakage selection functions:\n");
