@@ -9,7 +9,10 @@
  *    from `droplets` rate x volume;
  *  - a run: the liquid added over the window equals the liquid sprayed,
  *    LS rho_s/rho_l S, to round-off, while solid and number stay;
- *  - the default rule still shares by solid volume; bad keys are refused. */
+ *  - the default rule still shares by solid volume; bad keys are refused;
+ *  - aggregation's wet switch with liquid as a grid axis (the paper's 3-D
+ *    PBM): a dry cell neither aggregates nor is aggregated with, a wet
+ *    cell's death rate is beta0 N^2 exactly. */
 #include "pbm_testlib.h"
 
 static const char *CARRIED =
@@ -154,7 +157,38 @@ static void bad_input(void) {
   EXPECT_INPUT(tl_fmt(AXIS, "{type: liquid_addition, droplets: {rate: 10}}", 1.0), "volume");
 }
 
+static void wet_axis(void) {
+  gs_case c;
+  const char *yaml = "grid:\n  axes:\n"
+                     "    - {name: solid, type: geometric, min: 1.0e-12, ratio: 2, cells: 8}\n"
+                     "    - {name: liquid, type: linear, min: 0, max: 4.0e-12, cells: 8}\n"
+                     "mechanisms:\n  - {type: aggregation, kernel: {type: constant, beta0: 1.0e-6},\n"
+                     "     wet: {min_content: 0.2, liquid: liquid}}\n"
+                     "output: {end: 1}\n";
+  if (tl_case(yaml, &c)) return;
+  gs_model *m = &c.model;
+  const gs_grid *g = &m->grid;
+  double *y = calloc(m->nstate, sizeof *y), *d = calloc(m->nstate, sizeof *d), *dl = calloc(m->nledger, sizeof *dl);
+  /* wet: solid pivot 0 (1e-12), liquid pivot 3 (content ~ 1.75); dry: solid
+   * pivot 2 (4e-12), liquid pivot 0 (content ~ 0.06) */
+  const size_t wet = 0 * g->stride[0] + 3, dry = 2 * g->stride[0] + 0;
+  const double lw = g->axis[1].pivots[3], ld = g->axis[1].pivots[0];
+  CHECK(lw / g->axis[0].pivots[0] > 0.22 && ld / g->axis[0].pivots[2] < 0.18); /* outside the ramp */
+  y[wet] = 1e3;
+  y[dry] = 2e3;
+  gs_model_rhs(m, &c.eval, 0, y, d, dl);
+  printf("wet switch on a liquid axis: dry cell's rate %g, wet cell's %.15g (want %.15g)\n", d[dry], d[wet],
+         -1.0e-6 * 1e3 * 1e3);
+  CHECK(d[dry] == 0);
+  CHECK_REL(d[wet], -1.0e-6 * 1e3 * 1e3, 1e-12);
+  free(y);
+  free(d);
+  free(dl);
+  gs_case_free(&c);
+}
+
 int main(void) {
+  wet_axis();
   carried();
   axis();
   bad_input();
