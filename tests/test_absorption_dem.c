@@ -145,7 +145,7 @@ int main(void) {
                       "  - {name: d6, radius: 3.0e-3, material: granule}\n"
                       "  - {name: d7, radius: 3.5e-3, material: granule}\n";
     const char *names[] = {"3 mm", "4 mm", "5 mm", "6 mm", "7 mm"};
-    CHECK(run(cls, 1500, 6.5e-4, 0.2, 1.4, 1.5, &r) == 0);
+    CHECK(run(cls, 1100, 6.5e-4, 0.2, 1.4, 1.5, &r) == 0);
     if (r.n != 5) return 1;
     report(&r, names);
     double L = 0;
