@@ -6,8 +6,10 @@
  * on its sphere; the impeller's volume is the hub's prism plus the blades'
  * boxes, its tip where the keys put it, its speed the rpm; bad keys are
  * refused naming them; the STL written beside a run reads back as the same
- * triangles; and a DEM run with the impeller turning in the bowl loses no
- * particle while the blades push the bed. */
+ * triangles; a DEM run with the impeller turning in the bowl loses no
+ * particle while the blades push the bed; and the LIGGGHTS deck of the same
+ * case names the written files (refused before they exist), with the
+ * impeller's rotation. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +21,7 @@
 #include "dem/dem_generate.h"
 #include "dem/dem_internal.h"
 #include "gransim/dem.h"
+#include "gransim/liggghts.h"
 
 /* area of the regular n-gon inscribed in a circle of radius r */
 static double ngon(int n, double r) { return 0.5 * n * r * r * sin(2 * M_PI / n); }
@@ -225,7 +228,50 @@ static void run(void) {
   CHECK(system(cmd) == 0);
 }
 
+static void liggghts_deck(void) {
+  gs_error err = {0};
+  char yaml[4096], dir[] = "/tmp/gransim_generate_lig_XXXXXX";
+  CHECK(mkdtemp(dir) != NULL);
+  /* the run's case on the LIGGGHTS engine */
+  const char *at = strstr(RUN, "seed: 3,");
+  snprintf(yaml, sizeof yaml, "%.*sengine: liggghts, %s", (int)(at - RUN), RUN, at);
+  gs_cfg *cfg = gs_cfg_load_string(yaml, "bowl.yaml", &err);
+  gs_dem_case *c = cfg ? gs_dem_case_from_cfg(cfg, &err) : NULL;
+  if (!c) {
+    fprintf(stderr, "%s\n", err.msg);
+    CHECK(0);
+    return;
+  }
+  char *buf = NULL;
+  size_t n = 0;
+  FILE *m = open_memstream(&buf, &n);
+  CHECK(gs_lig_write_deck(c, m, NULL, NULL, &err) != 0); /* no file yet */
+  CHECK(strstr(err.msg, "write it first") != NULL);
+  fclose(m);
+  free(buf);
+  size_t nw = 0;
+  CHECK(gs_dem_case_write_geometry(c, dir, &nw, &err) == 0 && nw == 2);
+  m = open_memstream(&buf, &n);
+  CHECK(gs_lig_write_deck(c, m, NULL, NULL, &err) == 0);
+  fclose(m);
+  char want[4300];
+  snprintf(want, sizeof want, "mesh/surface file %s/geometry/bowl.stl", dir);
+  char *real = realpath(dir, NULL);
+  if (real) snprintf(want, sizeof want, "mesh/surface file %s/geometry/bowl.stl", real);
+  free(real);
+  CHECK(buf && strstr(buf, want));
+  CHECK(buf && strstr(buf, "geometry/impeller.stl"));
+  CHECK(buf && strstr(buf, "move/mesh mesh wall1 rotate origin 0 0 0 axis 0 0 1 period 0.3"));
+  if (buf && !strstr(buf, "geometry/impeller.stl")) fprintf(stderr, "%s\n", buf);
+  free(buf);
+  gs_dem_case_free(c);
+  char cmd[4300];
+  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+  CHECK(system(cmd) == 0);
+}
+
 int main(void) {
+  liggghts_deck();
   bowls();
   impeller();
   bad_keys();
