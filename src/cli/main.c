@@ -294,7 +294,8 @@ int main(int argc, char **argv) {
     return 0;
   }
   /* the commands that run threads */
-  if (!strcmp(argv[1], "run") || !strcmp(argv[1], "validate") || !strcmp(argv[1], "dem")) wait_passively(argc, argv);
+  if (!strcmp(argv[1], "run") || !strcmp(argv[1], "validate") || !strcmp(argv[1], "dem") || !strcmp(argv[1], "couple"))
+    wait_passively(argc, argv);
   if (!strcmp(argv[1], "run")) {
     keep_freed_memory();
     /* MPI only for runs, and only when launched by mpirun (gransim/parallel.h) */
