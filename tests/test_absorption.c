@@ -79,6 +79,13 @@ static const char *AXIS =
     "mechanisms:\n  - %s\n"
     "output: {end: %g}\n";
 
+/* The AXIS case with mechanism mech, to t = end (a static buffer: one at a time). */
+static const char *axis_case(const char *mech, double end) {
+  static char buf[4096];
+  snprintf(buf, sizeof buf, AXIS, mech, end);
+  return buf;
+}
+
 /* rates at the start: per solid column, the liquid gained */
 static void axis_rates(const char *mech, double Q, int absorb) {
   gs_case c;
@@ -108,7 +115,7 @@ static void axis_rates(const char *mech, double Q, int absorb) {
 static void axis(void) {
   /* the batch's solid volume S: the initial distribution's */
   gs_case c;
-  if (tl_case(tl_fmt(AXIS, "{type: liquid_addition, rate: 1.0e-6}", 1.0), &c)) return;
+  if (tl_case(axis_case("{type: liquid_addition, rate: 1.0e-6}", 1.0), &c)) return;
   const double S = tl_mom(&c, c.y0, 0, 1, 0, 0);
   gs_case_free(&c);
   char mech[512];
@@ -143,18 +150,18 @@ static void axis(void) {
 }
 
 static void bad_input(void) {
-  EXPECT_INPUT(tl_fmt(AXIS, "{type: liquid_addition, rate: 1.0e-6, share: {type: absorbtion}}", 1.0),
+  EXPECT_INPUT(axis_case("{type: liquid_addition, rate: 1.0e-6, share: {type: absorbtion}}", 1.0),
                "did you mean 'absorption'");
-  EXPECT_INPUT(tl_fmt(AXIS, "{type: liquid_addition, liquid_solid_ratio: 0.1, solid_density: 1668}", 1.0),
+  EXPECT_INPUT(axis_case("{type: liquid_addition, liquid_solid_ratio: 0.1, solid_density: 1668}", 1.0),
                "give 'end'");
-  EXPECT_INPUT(tl_fmt(AXIS, "{type: liquid_addition, liquid_solid_ratio: 0.1, end: 2}", 1.0), "solid_density");
-  EXPECT_INPUT(tl_fmt(AXIS, "{type: liquid_addition, rate: 1.0e-6, liquid_solid_ratio: 0.1, end: 2}", 1.0),
+  EXPECT_INPUT(axis_case("{type: liquid_addition, liquid_solid_ratio: 0.1, end: 2}", 1.0), "solid_density");
+  EXPECT_INPUT(axis_case("{type: liquid_addition, rate: 1.0e-6, liquid_solid_ratio: 0.1, end: 2}", 1.0),
                "expected one of 'rate'");
-  EXPECT_INPUT(tl_fmt(AXIS, "{type: liquid_addition, rate: 1.0e-6, share: {type: absorption, probability: 1.5}}", 1.0),
+  EXPECT_INPUT(axis_case("{type: liquid_addition, rate: 1.0e-6, share: {type: absorption, probability: 1.5}}", 1.0),
                "probability");
-  EXPECT_INPUT(tl_fmt(AXIS, "{type: liquid_addition, rate: 1.0e-6, share: {type: absorption, "
+  EXPECT_INPUT(axis_case("{type: liquid_addition, rate: 1.0e-6, share: {type: absorption, "
                             "probability: {diameters: [0, 1], values: [0.5, 0.5]}}}", 1.0), "n + 1 diameters");
-  EXPECT_INPUT(tl_fmt(AXIS, "{type: liquid_addition, droplets: {rate: 10}}", 1.0), "volume");
+  EXPECT_INPUT(axis_case("{type: liquid_addition, droplets: {rate: 10}}", 1.0), "volume");
 }
 
 static void wet_axis(void) {
