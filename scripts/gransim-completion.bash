@@ -11,7 +11,7 @@ _gransim() {
     words=("${COMP_WORDS[@]}")
     cword=$COMP_CWORD
   fi
-  local commands="run check list validate validate-cfd plot sweep fit sensitivity optimise dem dem-reduce couple"
+  local commands="run check list validate validate-cfd plot sweep fit sensitivity optimise dem dem-reduce couple geometry"
   if [ "$cword" -eq 1 ]; then
     COMPREPLY=($(compgen -W "$commands --help --version" -- "$cur"))
     return
@@ -31,6 +31,7 @@ _gransim() {
     dem) opts="--out --check --quiet --threads --ranks --launcher --help" ;;
     dem-reduce) opts="--out --impacts --E --nu --rho --e --wall-E --wall-nu --contact-time --min-speed --edges --measure --prefix --contacts --help" ;;
     couple) opts="--out --check --resume --quiet --threads --help" ;;
+    geometry) opts="--out --help" ;;
     *) return ;;
   esac
   # --key=value: complete the value part

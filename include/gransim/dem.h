@@ -21,6 +21,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "gransim/cfg.h"
 #include "gransim/dem_data.h"
@@ -251,6 +252,20 @@ gs_dem_case *gs_dem_case_load(const char *path, gs_error *err);
 gs_dem_case *gs_dem_case_from_cfg(gs_cfg *cfg, gs_error *err);
 /* One line describing the case (for `gransim dem --check`). */
 void gs_dem_case_describe(const gs_dem_case *c, char *buf, size_t n);
+/* Write the case's generated walls (walls[].generate) as STL files into
+ * out_dir/geometry/NAME.stl (metres), and have the LIGGGHTS deck refer to
+ * them; *nwritten (may be NULL): how many.  gs_dem_case_run and the LIGGGHTS
+ * engine call it; `gransim geometry` alone. */
+int gs_dem_case_write_geometry(gs_dem_case *c, const char *out_dir, size_t *nwritten, gs_error *err);
+/* The generated walls of a `walls` list (a DEM case's, or a coupled case's
+ * dem.walls) built and written as out_dir/NAME.stl, without the rest of the
+ * case; report (may be NULL): one line per mesh (facets, volume, area,
+ * bounds).  For `gransim geometry`. */
+int gs_dem_generate_walls(struct gs_cfg_node *walls, const char *out_dir, FILE *report, size_t *nwritten,
+                          gs_error *err);
+/* The generator types of walls[].generate, one "  name  summary" line each
+ * (for `gransim list`). */
+void gs_dem_list_generators(FILE *fp);
 /* Run it, writing the tables, time series and VTK files into out_dir. */
 int gs_dem_case_run(gs_dem_case *c, const char *out_dir, int progress, gs_error *err);
 void gs_dem_case_free(gs_dem_case *c);

@@ -33,6 +33,10 @@ extern "C" {
 
 typedef struct gs_output gs_output;
 
+/* mkdir -p DIR: every missing folder of the path, then insist on a folder
+ * (GS_EIO naming it otherwise).  For the commands that write into DIR. */
+int gs_output_mkdir_p(const char *dir, gs_error *err);
+
 /* Create DIR if needed and open the partial files.  case_text/case_name are
  * stored as the case echo. */
 gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_text,

@@ -25,6 +25,7 @@
 
 #include <assert.h>
 #include <stddef.h>
+#include <stdio.h>
 #include "gransim/cfg.h"
 #include "gransim/grid.h"
 
@@ -116,6 +117,9 @@ typedef struct gs_mechanism {
 const gs_mech_type *gs_mech_lookup(const char *name);
 /* NULL-terminated list of all registered mechanism types. */
 const gs_mech_type *const *gs_mech_types(void);
+/* The sharing rules of sprayed liquid (share.type of liquid_addition and
+ * spray), one "  name  summary" line each (for `gransim list`). */
+void gs_liquid_share_list(FILE *fp);
 
 /* ---- the model ----------------------------------------------------------- */
 /* Carried quantities: besides the number N of every cell, the state may hold

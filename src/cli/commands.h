@@ -15,6 +15,7 @@ int gs_cmd_couple_check(const char *path);
 int gs_cmd_sensitivity(int argc, char **argv); /* src/cli/sensitivity.c */
 int gs_cmd_optimise(int argc, char **argv);   /* src/cli/optimise.c */
 int gs_cmd_plot(int argc, char **argv);       /* src/cli/plot.c */
+int gs_cmd_geometry(int argc, char **argv);   /* src/cli/geometry.c */
 /* Cases with solver.method = swa (src/cli/swa_cmd.c); both take over cfg. */
 typedef struct gs_cfg gs_cfg;
 int gs_cmd_run_swa(gs_cfg *cfg, const char *path, const char *out, int progress, int resume);

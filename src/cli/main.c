@@ -1,4 +1,4 @@
-/* The gransim command: subcommands run, check, list, validate, validate-cfd, sweep, fit, sensitivity, optimise, dem, dem-reduce. */
+/* The gransim command: subcommands run, check, list, validate, validate-cfd, sweep, fit, sensitivity, optimise, dem, dem-reduce, geometry, ... */
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,6 +22,7 @@
 #include "gransim/distribution.h"
 #include "gransim/run.h"
 #include "gransim/kernel.h"
+#include "gransim/dem.h"
 #include "gransim/parallel.h"
 #include "gransim/swa.h"
 #include "gransim/version.h"
@@ -55,6 +56,7 @@ static void usage(FILE *fp) {
           "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM);\n"
           "                         with a `gas` section, a CFD-DEM run of a fluid bed\n"
           "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n"
+          "  geometry CASE --out DIR  write a case's generated walls (bowl, impeller) as STL\n"
           "  couple CASE --out DIR  run a coupled PBM-DEM case (coupling: {mode: one_way}): the DEM\n"
           "                         with classes from the PBM grid, then the PBM with its tables\n\n"
           "options: --help, --version; `gransim <command> --help` for details.\n"
@@ -206,6 +208,9 @@ static int cmd_check(int argc, char **argv) {
 static int cmd_list(void) {
   printf("mechanisms:\n");
   for (const gs_mech_type *const *t = gs_mech_types(); *t; t++) printf("  %-16s %s\n", (*t)->name, (*t)->summary);
+  printf("liquid sharing rules (share.type of liquid_addition and spray):\n");
+  fflush(stdout);
+  gs_liquid_share_list(stdout);
   printf("aggregation kernels:\n");
   for (const gs_kernel_type *const *t = gs_kernel_types(); *t; t++) printf("  %-16s %s\n", (*t)->name, (*t)->summary);
   printf("breakage selection functions:\n");
@@ -218,6 +223,9 @@ static int cmd_list(void) {
   for (const gs_swa_process_type *const *t = gs_swa_process_types(); *t; t++) printf("  %-20s %s\n", (*t)->name, (*t)->summary);
   printf("drag laws (gas.drag of a DEM case's gas phase):\n");
   for (const gs_cfd_drag_type *const *t = gs_cfd_drags; *t; t++) printf("  %-16s %s\n", (*t)->name, (*t)->summary);
+  printf("generated walls (walls[].generate of a DEM case):\n");
+  fflush(stdout);
+  gs_dem_list_generators(stdout);
   return 0;
 }
 
@@ -292,7 +300,8 @@ int main(int argc, char **argv) {
     return 0;
   }
   /* the commands that run threads */
-  if (!strcmp(argv[1], "run") || !strcmp(argv[1], "validate") || !strcmp(argv[1], "dem")) wait_passively(argc, argv);
+  if (!strcmp(argv[1], "run") || !strcmp(argv[1], "validate") || !strcmp(argv[1], "dem") || !strcmp(argv[1], "couple"))
+    wait_passively(argc, argv);
   if (!strcmp(argv[1], "run")) {
     keep_freed_memory();
     /* MPI only for runs, and only when launched by mpirun (gransim/parallel.h) */
@@ -307,6 +316,7 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "validate-cfd")) return gs_cmd_validate_cfd(argc - 1, argv + 1);
   if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 1, argv + 1);
   if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "geometry")) return gs_cmd_geometry(argc - 1, argv + 1);
   if (!strcmp(argv[1], "sweep")) { /* under mpirun the ranks share the runs */
     gs_parallel_init(&argc, &argv);
     int rc = gs_cmd_sweep(argc - 1, argv + 1);

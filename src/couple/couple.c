@@ -21,6 +21,7 @@
 #include "gransim/case.h"
 #include "gransim/couple.h"
 #include "gransim/dem.h"
+#include "gransim/output.h"
 #include "gransim/run.h"
 
 typedef struct {
@@ -326,8 +327,7 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
   char dem[4200], part[4200], kt[4400], it[4400], dcase[4400];
   snprintf(dem, sizeof dem, "%s/dem", out);
   snprintf(part, sizeof part, "%s/dem.partial", out);
-  if (!rc && mkdir(out, 0777) && errno != EEXIST)
-    rc = gs_error_set(err, GS_EIO, "%s: cannot create output folder: %s", out, strerror(errno));
+  if (!rc) rc = gs_output_mkdir_p(out, err);
   char impname[300] = "impact_table.csv";
   if (k.s.wall) snprintf(impname, sizeof impname, "impact_table_%s.csv", k.s.wall);
   int have = !rc && opt->resume && exists(dem, "collision_kernel.csv") && exists(dem, impname) && exists(dem, "steady.csv");

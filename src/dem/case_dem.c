@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "dem/dem_case.h"
+#include "dem/dem_generate.h"
 #include "dem/dem_internal.h"
 
 typedef struct {
@@ -151,8 +152,11 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   if (!rc) rc = find_mat(n, mats, nm, &m, err);
   if (rc) return rc;
   gs_cfg_node *mesh = gs_cfg_get(n, "mesh"), *pl = gs_cfg_get(n, "plane"), *cy = gs_cfg_get(n, "cylinder");
-  if ((mesh != NULL) + (pl != NULL) + (cy != NULL) != 1)
-    return gs_cfg_fail(n, err, "expected exactly one of 'mesh' (an STL file), 'plane' or 'cylinder'");
+  gs_cfg_node *gen = gs_cfg_get(n, "generate");
+  if ((mesh != NULL) + (pl != NULL) + (cy != NULL) + (gen != NULL) != 1)
+    return gs_cfg_fail(n, err, "expected exactly one of 'mesh' (an STL file), 'plane', 'cylinder' or 'generate' "
+                       "(a bowl or impeller)");
+  gs_dem_gen_motion gm = {0};
   int w = -1;
   if (c->nwall_src >= GS_DEM_CASE_MAX_WALLS)
     return gs_cfg_fail(n, err, "at most %d walls", GS_DEM_CASE_MAX_WALLS);
@@ -160,8 +164,21 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   snprintf(src->name, sizeof src->name, "%s", name);
   src->mat = *m;
   src->scale = 1;
-  src->kind = mesh ? GS_DEM_SRC_MESH : pl ? GS_DEM_SRC_PLANE : GS_DEM_SRC_CYLINDER;
-  if (mesh) {
+  src->kind = mesh || gen ? GS_DEM_SRC_MESH : pl ? GS_DEM_SRC_PLANE : GS_DEM_SRC_CYLINDER;
+  if (gen) {
+    /* generated: the triangles go to the engine now and to an STL file in
+     * the output folder when the case runs (gs_dem_case_write_geometry) */
+    gs_dem_tris tr = {0};
+    gs_dem_mesh *me = NULL;
+    rc = gs_cfg_require_kind(gen, GS_CFG_MAP, err);
+    if (!rc) rc = gs_dem_generate(gen, &tr, &gm, err);
+    if (!rc && !(me = gs_dem_mesh_from_triangles(tr.v, tr.ntri, err))) rc = err->code;
+    gs_dem_tris_free(&tr);
+    if (rc) return rc;
+    src->generated = 1;
+    src->mesh[0] = '\0';
+    w = gs_dem_add_mesh(c->dem, name, me, m, err);
+  } else if (mesh) {
     const char *file;
     double scale;
     if ((rc = gs_cfg_string_req(n, "mesh", &file, err)) ||
@@ -203,6 +220,14 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   /* motion: rotation {origin, axis, rpm | rad_per_s}, velocity */
   double origin[3] = {0, 0, 0}, axis[3] = {1, 0, 0}, omega = 0, vel[3] = {0, 0, 0};
   gs_cfg_node *rot = gs_cfg_get(n, "rotation");
+  if (rot && gm.rotating)
+    return gs_cfg_fail(rot, err, "the generated wall turns at its own 'rpm' about the bowl's axis; give one or "
+                       "the other");
+  if (gm.rotating) {
+    memcpy(origin, gm.origin, sizeof origin);
+    memcpy(axis, gm.axis, sizeof axis);
+    omega = gm.omega;
+  }
   if (rot) {
     if ((rc = gs_cfg_require_kind(rot, GS_CFG_MAP, err)) || (rc = vec3(rot, "origin", 1, NULL, origin, err)) ||
         (rc = unit_vec(rot, "axis", axis, err)))
@@ -219,12 +244,13 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   }
   const double zero[3] = {0, 0, 0};
   if ((rc = vec3(n, "velocity", 0, zero, vel, err))) return rc;
-  src->rotating = rot != NULL;
+  src->rotating = rot != NULL || gm.rotating;
+  src->wall = w;
   memcpy(src->origin, origin, sizeof origin);
   memcpy(src->axis, axis, sizeof axis);
   src->omega = omega;
   memcpy(src->velocity, vel, sizeof vel);
-  if (rot || vel[0] != 0 || vel[1] != 0 || vel[2] != 0)
+  if (src->rotating || vel[0] != 0 || vel[1] != 0 || vel[2] != 0)
     if ((rc = gs_dem_wall_set_motion(c->dem, w, origin, axis, omega, vel, err))) return rc;
   return gs_cfg_check_unused(n, err);
 }

@@ -27,6 +27,8 @@ typedef struct {
   int rotating;
   double origin[3], axis[3], omega; /* rotation (omega rad/s about the unit axis) */
   double velocity[3];
+  int generated;         /* generate: mesh is empty until gs_dem_case_write_geometry */
+  int wall;              /* the engine's wall index */
 } gs_dem_wall_src;
 
 typedef struct {

@@ -154,6 +154,21 @@ typedef struct gs_dem_wet {
   FILE *f_ledger;
   char path_ledger[4200];
   double tol;               /* relative tolerance of the liquid ledger */
+  char dir[4096];           /* the run's output folder (spray_classes.csv) */
 } gs_dem_wet;
+
+/* spray_classes.c: the liquid the particles of each size class absorbed,
+ * against the shares of the absorption law (De et al. 2025: in proportion to
+ * granule volume) and of a law in proportion to surface, written to
+ * DIR/spray_classes.csv at the end of a run with a spray. */
+typedef struct {
+  double particles;  /* live particles of the class */
+  double solid;      /* their solid volume [m^3] */
+  double area;       /* their surface, 4 pi r^2 each [m^2] */
+  double liquid;     /* the liquid they hold [m^3] */
+} gs_dem_spray_class;
+/* The per-class sums of the live particles (out: nclass entries). */
+void gs_dem_spray_classes(const gs_dem *d, int nclass, gs_dem_spray_class *out);
+int gs_dem_spray_classes_write(const gs_dem_case *c, const char *dir, gs_error *err);
 
 #endif

@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "core/progress.h"
+#include "gransim/output.h"
 #include "dem/dem_internal.h"
 #include "dem/dem_stats.h"
 #include "dem/dem_vtk.h"
@@ -84,16 +85,16 @@ static double wall_seconds(void) {
 }
 
 int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err) {
-  if (mkdir(dir, 0777) && errno != EEXIST)
-    return gs_error_set(err, GS_EIO, "%s: cannot create output folder: %s", dir, strerror(errno));
+  if (gs_output_mkdir_p(dir, err)) return err->code;
   char path[8400], vdir[4200];
   snprintf(vdir, sizeof vdir, "%s/vtk", dir);
   if (c->vtk_every > 0 && mkdir(vdir, 0777) && errno != EEXIST)
     return gs_error_set(err, GS_EIO, "%s: cannot create: %s", vdir, strerror(errno));
+  int rc = gs_dem_case_write_geometry(c, dir, NULL, err);
+  if (rc) return rc;
   gs_dem *d = c->dem;
   const double dt = c->prm.dt;
   uint64_t rng = c->seed;
-  int rc = GS_OK;
   gs_dem_stats st;
   if ((rc = gs_dem_stats_init(&st, c, err))) return rc;
   gs_dem_health health;

@@ -2,7 +2,8 @@
  * every DEM step, the granulation updates every Delta t_PBM, and at every
  * output the liquid ledger is written to spray.csv and checked: injected =
  * on particles + airborne + on walls + left (through outlets or the box,
- * as droplets or on particles), to round-off. */
+ * as droplets or on particles), to round-off; at the end the liquid per
+ * size class goes to spray_classes.csv (spray_classes.c). */
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -16,6 +17,7 @@ int gs_dem_wet_start(gs_dem_case *c, const char *dir, gs_error *err) {
   if (!w) return GS_OK;
   gs_dem *d = c->dem;
   int rc = GS_OK;
+  snprintf(w->dir, sizeof w->dir, "%s", dir);
   if (w->has_spray) {
     if ((rc = gs_dem_spray_init(&w->spray, &w->noz, c->seed, err))) return rc;
     /* the wall bins must reach a droplet as far as a particle */
@@ -81,6 +83,7 @@ int gs_dem_wet_finish(gs_dem_case *c, gs_error *err) {
   if (w->f_ledger) {
     rc = gs_dem_table_close(w->f_ledger, w->path_ledger, err);
     w->f_ledger = NULL;
+    if (!rc) rc = gs_dem_spray_classes_write(c, w->dir, err);
   }
   if (w->has_gran) {
     int r = gs_dem_granulation_finish(&w->gran, err);

@@ -177,6 +177,10 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
                       gs_error *err) {
   int rc = gs_lig_check(c, err);
   if (rc) return rc;
+  for (size_t w = 0; w < c->nwall_src; w++)
+    if (!c->wall_src[w].mesh[0])
+      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): the generated mesh has no file yet; write it first "
+                          "(gs_dem_case_write_geometry)", w, c->wall_src[w].name);
   const gs_dem_params *p = &c->prm;
   const size_t ncl = c->nclass;
   const double dt = p->dt;

@@ -162,6 +162,7 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
                 ranks);
   int progress = opt ? opt->progress : 0;
 
+  if ((rc = gs_dem_case_write_geometry(c, out, NULL, err))) return rc;
   size_t nbed = 0;
   if (c->nfill) {
     snprintf(path, sizeof path, "%s/bed.data", dir);

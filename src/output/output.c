@@ -122,7 +122,7 @@ static char *path_join(const char *dir, const char *name, gs_error *err) {
 }
 
 /* mkdir -p: create every missing component, then insist on a directory. */
-static int mkdir_p(const char *dir, gs_error *err) {
+int gs_output_mkdir_p(const char *dir, gs_error *err) {
   char *p = path_join(dir, "", err);
   if (!p) return GS_ENOMEM;
   for (char *s = p + 1; *s; s++) {
@@ -681,7 +681,7 @@ static int journal_create(gs_output *o, const gs_model *m, const char *text, con
 gs_output *gs_output_open(const char *dir, const gs_model *m, const char *case_text,
                           const char *case_name, size_t nresume, gs_error *err) {
   gs_h5_setup();
-  if (mkdir_p(dir, err)) return NULL;
+  if (gs_output_mkdir_p(dir, err)) return NULL;
   gs_output *o = output_alloc(dir, m, nresume, err);
   if (!o) return NULL;
   int rc = build_skeleton(o, m, case_text, case_name, err);

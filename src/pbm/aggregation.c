@@ -93,7 +93,8 @@ typedef struct {
   int nc;                /* carried quantities */
   double *pcar;          /* per slot (pcar_len apart) nc * ncells: load per particle in the compartment being evaluated */
   size_t pcar_len, masked_len; /* per-slot strides, whole pages (GS_APART) */
-  int wet, wet_liquid;   /* WET_*; carried index of the liquid */
+  int wet, wet_liquid;   /* WET_*; carried index of the liquid (-1: a grid axis) */
+  int wet_axis;          /* the liquid's grid axis when it is one (De et al. 2025's 3-D grid), else -1 */
   double wet_min;        /* liquid / solid volume ratio that makes a particle wet */
   double wet_ramp;       /* relative width of the switch (0: a step, as in Sampat et al. 2018) */
   double *wet_ok;        /* ncomp * ncells: wetness psi in [0, 1], chosen once per time value */
@@ -206,7 +207,7 @@ static const double *table_row(const agg_t *A, size_t comp, size_t a) {
   return row;
 }
 
-/* wet: {min_content, partners: both | either, liquid: <carried quantity>} */
+/* wet: {min_content, partners: both | either, liquid: <carried quantity or grid axis>} */
 static int read_wet(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_error *err) {
   static const char *const partners[] = {"both", "either", NULL};
   gs_cfg_node *wn = gs_cfg_get(node, "wet");
@@ -218,9 +219,12 @@ static int read_wet(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_error *er
   if (!rc) rc = gs_cfg_enum_opt(wn, "partners", partners, 0, &mode, err);
   if (!rc) rc = gs_cfg_double_range(wn, "ramp", 0, 0.1, 0, 0, 2, 1, &A->wet_ramp, err);
   if (!rc) rc = gs_cfg_string_opt(wn, "liquid", "liquid", &liquid, err);
-  if (!rc && (A->wet_liquid = gs_model_carried_index(m, liquid)) < 0) {
+  A->wet_axis = -1;
+  if (!rc && (A->wet_liquid = gs_model_carried_index(m, liquid)) < 0 &&
+      (A->wet_axis = gs_grid_axis_by_name(&m->grid, liquid)) < 0) {
     gs_cfg_node *ln = gs_cfg_get(wn, "liquid");
-    rc = gs_cfg_fail(ln ? ln : wn, err, "needs a carried quantity named '%s' (grid.carried)", liquid);
+    rc = gs_cfg_fail(ln ? ln : wn, err, "needs a carried quantity or a grid axis named '%s' (grid.carried, "
+                     "grid.axes)", liquid);
   }
   if (!rc) rc = gs_cfg_check_unused(wn, err);
   A->wet = mode == 0 ? WET_BOTH : WET_EITHER;
@@ -728,11 +732,23 @@ static const double *wet_cells(agg_t *A, const gs_model *m, const gs_eval *ev, s
   if (!isnan(A->cs[comp].wet_t) && ev->era == A->cs[comp].wet_era &&
       (ev->hold || (ev->in_integrator && t == A->cs[comp].wet_t)))
     return psi;
-  const double *N = gs_eval_numbers_c(m, ev, y, comp), *L = gs_eval_carried_c(m, ev, y, comp, A->wet_liquid);
+  const double *N = gs_eval_numbers_c(m, ev, y, comp);
   const double lo = A->wet_min * (1 - 0.5 * A->wet_ramp), hi = A->wet_min * (1 + 0.5 * A->wet_ramp);
-  for (size_t c = 0; c < A->ncells; c++) {
-    double content = N[c] > 0 ? L[c] / (N[c] * m->grid.volume[c]) : 0.0;
-    psi[c] = content >= hi ? 1.0 : content < lo ? 0.0 : (content - lo) / (hi - lo);
+  const gs_grid *g = &m->grid;
+  if (A->wet_axis >= 0) {
+    /* liquid as a coordinate: the content of a cell's pivot, liquid over
+     * the rest of the granule (its solid, and gas if an axis holds it) */
+    for (size_t c = 0; c < A->ncells; c++) {
+      const double l = g->x[c * (size_t)g->dim + (size_t)A->wet_axis], s = g->volume[c] - l;
+      const double content = s > 0 ? l / s : 0.0;
+      psi[c] = content >= hi ? 1.0 : content < lo ? 0.0 : (content - lo) / (hi - lo);
+    }
+  } else {
+    const double *L = gs_eval_carried_c(m, ev, y, comp, A->wet_liquid);
+    for (size_t c = 0; c < A->ncells; c++) {
+      double content = N[c] > 0 ? L[c] / (N[c] * g->volume[c]) : 0.0;
+      psi[c] = content >= hi ? 1.0 : content < lo ? 0.0 : (content - lo) / (hi - lo);
+    }
   }
   A->cs[comp].wet_t = t;
   A->cs[comp].wet_era = ev->era;

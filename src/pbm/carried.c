@@ -1,7 +1,9 @@
 /* Mechanisms that act on carried quantities (gs_model.carried), the lumped
  * liquid and gas per solid bin of Sampat et al. (2018):
- *   spray               dL_c/dt = Q(comp) N_c s_c / sum(N s) during [start, end):
- *                       the spray shared in proportion to solid volume (eq. 5)
+ *   spray               dL_c/dt = Q(comp) N_c w_c / sum(N w) during [start, end):
+ *                       the spray shared by a registered rule (liquid_share.h):
+ *                       w = s, solid volume (eq. 5, the default), or w = V psi,
+ *                       V = s + l + g the granule's gross volume (De et al. 2025)
  *   pore_consolidation  per particle dg/dt = -k V (1 - e_min)/s max(0, g + l - s e_min/(1 - e_min))
  *                       (eq. 13 with the sign of a loss; V = s + l + g), so the
  *                       porosity (l + g)/V relaxes to e_min and stops there (the
@@ -13,20 +15,25 @@
 #include <stdlib.h>
 
 #include "gransim/pbm.h"
+#include "pbm/liquid_share.h"
 #include "pbm/sums.h"
 
 enum { SPRAY, PORE_CONSOLIDATION };
 
 typedef struct {
   int kind, liquid, gas; /* carried indices (-1 if absent) */
-  double *q;             /* spray: rate per compartment (m^3/s) */
+  gs_liquid_inflow inflow; /* spray: volume per second */
+  gs_liquid_share share;   /* spray: how it is shared */
   double start, end;
   double k, emin;        /* consolidation */
 } carried_t;
 
 static void carried_free(void *self) {
   carried_t *C = self;
-  if (C) free(C->q);
+  if (C) {
+    gs_liquid_inflow_free(&C->inflow);
+    gs_liquid_share_free(&C->share);
+  }
   free(C);
 }
 
@@ -51,23 +58,10 @@ static int carried_create(gs_cfg_node *node, const gs_model *m, void **self, int
   C->liquid = C->gas = -1;
   int rc = carried_key(node, m, "liquid", "liquid", &C->liquid, err);
   if (!rc && kind == SPRAY) {
-    size_t nq = 0;
-    rc = gs_cfg_doubles_req(node, "rate", 1, &C->q, &nq, err);
-    if (!rc && nq != 1 && nq != m->grid.ncomp)
-      rc = gs_cfg_fail(gs_cfg_get(node, "rate"), err, "expected one rate or one per compartment (%zu)",
-                       m->grid.ncomp);
-    for (size_t i = 0; !rc && i < nq; i++)
-      if (!(C->q[i] >= 0)) rc = gs_cfg_fail(gs_cfg_get(node, "rate"), err, "rates must be >= 0");
-    if (!rc && nq == 1 && m->grid.ncomp > 1) {
-      double *all = realloc(C->q, m->grid.ncomp * sizeof(double));
-      if (!all) rc = GS_ENOMEM;
-      else {
-        C->q = all;
-        for (size_t i = 1; i < m->grid.ncomp; i++) C->q[i] = C->q[0];
-      }
-    }
-    if (!rc) rc = gs_cfg_double_range(node, "start", 0, 0, -HUGE_VAL, 0, HUGE_VAL, 0, &C->start, err);
+    rc = gs_cfg_double_range(node, "start", 0, 0, -HUGE_VAL, 0, HUGE_VAL, 0, &C->start, err);
     if (!rc) rc = gs_cfg_double_range(node, "end", 0, HUGE_VAL, C->start, 1, HUGE_VAL, 0, &C->end, err);
+    if (!rc) rc = gs_liquid_inflow_read(node, m->grid.ncomp, C->start, C->end, &C->inflow, err);
+    if (!rc) rc = gs_liquid_share_read(node, &C->share, err);
   } else if (!rc) {
     rc = carried_key(node, m, "gas", "gas", &C->gas, err);
     if (!rc) rc = gs_cfg_double_range(node, "rate", 1, 0, 0, 0, HUGE_VAL, 0, &C->k, err);
@@ -82,7 +76,20 @@ static int carried_create(gs_cfg_node *node, const gs_model *m, void **self, int
   return GS_OK;
 }
 
-/* Compartment comp's share of the spray, in proportion to solid volume. */
+/* The weight of cell c's granules together, N_c w_c: w of the rule for a
+ * granule of the cell's solid volume and its gross volume with the liquid
+ * and gas it carries (all carried quantities). */
+static double cell_weight(const carried_t *C, const gs_model *m, const gs_eval *ev, const double *y, size_t comp,
+                          const double *N, size_t c) {
+  const double s = m->grid.volume[c];
+  if (!C->share.type->needs_gross) return N[c] * C->share.type->weight(&C->share, s, s);
+  if (!(N[c] > 0)) return 0;
+  double carried = 0;
+  for (int q = 0; q < m->ncarried; q++) carried += gs_eval_carried_c(m, ev, y, comp, q)[c];
+  return N[c] * C->share.type->weight(&C->share, s, s + fmax(carried, 0) / N[c]);
+}
+
+/* Compartment comp's share of the spray, by the sharing rule. */
 static void spray_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
                         const double *y, double *dydt, double *dledger) {
   const carried_t *C = self;
@@ -90,10 +97,13 @@ static void spray_rates(void *self, const gs_model *m, const gs_eval *ev, size_t
   const gs_grid *g = &m->grid;
   const double *N = gs_eval_numbers_c(m, ev, y, comp);
   const double solid = gs_dot_strided(N, g->volume, 1, g->ncells);
-  if (!(solid > 0) || C->q[comp] == 0.0) return;
-  double per = C->q[comp] / solid, *dL = gs_eval_carried(m, ev, dydt, comp, C->liquid);
-  for (size_t c = 0; c < g->ncells; c++) dL[c] += per * N[c] * g->volume[c];
-  gs_eval_ledger(m, ev, dledger, comp)[g->dim + C->liquid] += C->q[comp];
+  const double q = gs_liquid_inflow_rate(&C->inflow, comp, solid);
+  double wsum = 0;
+  for (size_t c = 0; c < g->ncells; c++) wsum += cell_weight(C, m, ev, y, comp, N, c);
+  if (!(wsum > 0) || q == 0.0) return;
+  double per = q / wsum, *dL = gs_eval_carried(m, ev, dydt, comp, C->liquid);
+  for (size_t c = 0; c < g->ncells; c++) dL[c] += per * cell_weight(C, m, ev, y, comp, N, c);
+  gs_eval_ledger(m, ev, dledger, comp)[g->dim + C->liquid] += q;
 }
 
 /* Compartment comp's loss of gas down to the minimum porosity. */
@@ -136,7 +146,7 @@ static double spray_switch(void *self, double t) {
 
 const gs_mech_type gs_mech_spray = {
     .name = "spray",
-    .summary = "liquid sprayed onto the carried liquid, shared in proportion to solid volume (Sampat et al. 2018, eq. 5)",
+    .summary = "liquid sprayed onto the carried liquid, shared by solid volume (Sampat et al. 2018) or absorption (De et al. 2025)",
     .create = spray_create,
     .rates = spray_rates,
     .free = carried_free,

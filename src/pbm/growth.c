@@ -1,8 +1,10 @@
 /* Growth mechanisms along one axis, all using the upwind scheme of
  * growth_scheme.h:
  *   growth          G = G0 + sigma * x_axis                (keys axis, constant, linear)
- *   liquid_addition G_l = Q(comp) s / sum(N s)             spray shared in proportion to solid
- *                                                          volume (Sampat et al. 2018, eq. 5), in [start, end)
+ *   liquid_addition G_l = Q(comp) w / sum(N w)             spray shared by a registered rule: w = s,
+ *                                                          solid volume (Sampat et al. 2018, eq. 5), or
+ *                                                          w = V psi (De et al. 2025, eqs. 7-9), in
+ *                                                          [start, end) (liquid_share.h)
  *   consolidation   G_g = -c (s+l+g)(1-e_min)/s * max(0, l + g - e_min s/(1-e_min))
  *                   (Chaudhury 2015, eq. 2.12 with the sign of "negative growth"; see docs/models.md)
  *   drying          G_l = -E(d) per granule, evaporation driven by the humidity difference
@@ -14,6 +16,7 @@
 #include "gransim/pbm.h"
 #include "pbm/drying.h"
 #include "pbm/growth_scheme.h"
+#include "pbm/liquid_share.h"
 #include "pbm/schedule.h"
 
 enum { KIND_GROWTH, KIND_LIQUID, KIND_CONSOLIDATION, KIND_DRYING };
@@ -22,7 +25,9 @@ typedef struct {
   int kind, axis, liquid, gas;
   int solid[GS_MAX_DIM]; /* 1 for axes that are solid */
   double g0, sigma;      /* growth */
-  double *q;             /* liquid_addition: rate per compartment */
+  gs_liquid_inflow inflow; /* liquid_addition: the sprayed volume per second */
+  gs_liquid_share share;   /* liquid_addition: how it is shared */
+  double *weight;          /* liquid_addition: per cell, the share rule's weight of one granule */
   double start, end;
   double c, emin;        /* consolidation */
   double *G;             /* per cell rates (workspace / precomputed) */
@@ -37,7 +42,9 @@ typedef struct {
 static void grow_free(void *self) {
   grow_t *G = self;
   if (!G) return;
-  free(G->q);
+  gs_liquid_inflow_free(&G->inflow);
+  gs_liquid_share_free(&G->share);
+  free(G->weight);
   free(G->G);
   free(G->solid_vol);
   free(G->work);
@@ -100,30 +107,40 @@ static int grow_create_kind(gs_cfg_node *node, const gs_model *m, void **self, i
     for (size_t c = 0; !rc && c < g->ncells; c++)
       G->G[c] = G->g0 + G->sigma * g->x[c * (size_t)g->dim + (size_t)G->axis];
   } else if (!rc && kind == KIND_LIQUID) {
-    size_t nq = 0;
     rc = gs_growth_axis_key(node, g, "liquid_axis", "liquid", &G->liquid, err);
     G->axis = G->liquid;
     G->gas = gs_grid_axis_by_name(g, "gas");
-    if (!rc && gs_cfg_get(node, "schedule")) rc = gs_spray_schedule(node, g, &G->q, &nq, &G->sched, err);
-    else if (!rc) rc = gs_cfg_doubles_req(node, "rate", 1, &G->q, &nq, err);
-    if (!rc && nq != 1 && nq != g->ncomp)
-      rc = gs_cfg_fail(gs_cfg_get(node, "rate"), err, "expected one rate or one per compartment (%zu)", g->ncomp);
-    for (size_t i = 0; !rc && i < nq; i++)
-      if (G->q[i] < 0) rc = gs_cfg_fail(gs_cfg_get(node, "rate"), err, "rates must be >= 0");
-    if (!rc && nq == 1 && g->ncomp > 1) {
-      double *all = realloc(G->q, g->ncomp * sizeof(double));
-      if (!all) rc = GS_ENOMEM;
-      else {
-        G->q = all;
-        for (size_t i = 1; i < g->ncomp; i++) G->q[i] = G->q[0];
+    if (!rc && gs_cfg_get(node, "schedule")) { /* phases scale per-compartment rates */
+      size_t nq = 0;
+      rc = gs_spray_schedule(node, g, &G->inflow.q, &nq, &G->sched, err);
+      if (!rc && nq != 1 && nq != g->ncomp)
+        rc = gs_cfg_fail(gs_cfg_get(node, "schedule"), err, "expected one rate or one per compartment (%zu)",
+                         g->ncomp);
+      for (size_t i = 0; !rc && i < nq; i++)
+        if (G->inflow.q[i] < 0) rc = gs_cfg_fail(gs_cfg_get(node, "schedule"), err, "rates must be >= 0");
+      if (!rc && nq == 1 && g->ncomp > 1) {
+        double *all = realloc(G->inflow.q, g->ncomp * sizeof(double));
+        if (!all) rc = GS_ENOMEM;
+        else {
+          G->inflow.q = all;
+          for (size_t i = 1; i < g->ncomp; i++) G->inflow.q[i] = G->inflow.q[0];
+        }
       }
+      if (!rc) { /* the schedule's phases switch it */
+        G->start = G->sched.phase[0].start;
+        G->end = G->sched.phase[G->sched.n - 1].end;
+      }
+    } else {
+      if (!rc) rc = gs_mech_read_window(node, &G->start, &G->end, err);
+      if (!rc) rc = gs_liquid_inflow_read(node, g->ncomp, G->start, G->end, &G->inflow, err);
     }
-    if (!rc && !G->sched.n) rc = gs_mech_read_window(node, &G->start, &G->end, err);
-    if (!rc && G->sched.n) { /* the schedule's phases switch it */
-      G->start = G->sched.phase[0].start;
-      G->end = G->sched.phase[G->sched.n - 1].end;
-    }
+    if (!rc) rc = gs_liquid_share_read(node, &G->share, err);
     if (!rc) rc = solid_axes(node, g, G, err);
+    /* a granule's gross volume is the sum of all its coordinates (solid,
+     * liquid, gas): the envelope a droplet hits */
+    if (!rc && !(G->weight = gs_malloc(g->ncells * sizeof(double), err))) rc = GS_ENOMEM;
+    for (size_t c = 0; !rc && c < g->ncells; c++)
+      G->weight[c] = G->share.type->weight(&G->share, G->solid_vol[c], g->volume[c]);
   } else if (!rc && kind == KIND_DRYING) {
     for (size_t i = 0; !rc && i < m->nmech; i++) /* fluid_bed evaporates the liquid itself */
       if (!strcmp(m->mech[i].type->name, "fluid_bed"))
@@ -171,13 +188,17 @@ static const double *compartment_rates(grow_t *G, const gs_model *m, const gs_ev
   if (G->kind != KIND_LIQUID && !G->bed) return G->G; /* precomputed */
   double *rates = G->G + (ev->slot > 0 ? (size_t)ev->slot : 0) * G->row_len;
   if (G->bed) return gs_bed_rates(G->bed, g->ncells, N, ev->hold, &G->drive[comp], rates) ? rates : NULL;
-  /* share the spray in proportion to solid volume */
-  double solid = 0;
-  for (size_t c = 0; c < g->ncells; c++) solid += N[c] * G->solid_vol[c];
-  const double q = G->q[comp] * (G->sched.n ? gs_schedule_value(&G->sched, ev, t) : 1.0);
-  if (!(solid > 0) || q == 0.0) return NULL;
-  double per = q / solid;
-  for (size_t c = 0; c < g->ncells; c++) rates[c] = per * G->solid_vol[c];
+  /* share the spray by the rule's weights */
+  double solid = 0, wsum = 0;
+  for (size_t c = 0; c < g->ncells; c++) {
+    solid += N[c] * G->solid_vol[c];
+    wsum += N[c] * G->weight[c];
+  }
+  const double q =
+      gs_liquid_inflow_rate(&G->inflow, comp, solid) * (G->sched.n ? gs_schedule_value(&G->sched, ev, t) : 1.0);
+  if (!(wsum > 0) || q == 0.0) return NULL;
+  double per = q / wsum;
+  for (size_t c = 0; c < g->ncells; c++) rates[c] = per * G->weight[c];
   return rates;
 }
 
@@ -234,7 +255,7 @@ const gs_mech_type gs_mech_growth = {
 };
 const gs_mech_type gs_mech_liquid_addition = {
     .name = "liquid_addition",
-    .summary = "liquid spray shared in proportion to solid volume (Sampat et al. 2018, eq. 5)",
+    .summary = "liquid spray along a liquid axis, shared by solid volume (Sampat et al. 2018) or absorption (De et al. 2025)",
     .create = liquid_create,
     .rates = grow_rates,
     .free = grow_free,
