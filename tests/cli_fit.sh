@@ -20,9 +20,9 @@ start=$(write_case start.yaml "$(case_at 3 0.4)")
 P=(--params mechanisms.0.kernel.beta0=0.01:100:log --params initial.number=0.1:10)
 
 run_rc 0 "$BIN" fit --help
-stdout_has "usage: gransim fit CASE --data MEASURED.csv --params KEY=LO:HI"
+stdout_has "usage: gransim fit CASE (--data MEASURED.csv | --batches BATCHES.yaml)"
 run_rc 2 "$BIN" fit "$start" --data "$WORK/none.csv"
-stderr_has "needs CASE, --data FILE and --params KEY=LO:HI"
+stderr_has "needs CASE, --data FILE (or --batches FILE) and --params KEY=LO:HI"
 run_rc 2 "$BIN" fit "$start" --data "$WORK/none.csv" --params a=2:1
 stderr_has "LO must be below HI"
 run_rc 1 "$BIN" fit "$start" --data "$WORK/none.csv" "${P[@]}"
@@ -43,5 +43,108 @@ rel_close "$n" 1.3 1e-6 || { show_output; fail "initial.number = $n, expected 1.
 # a data time the case does not output
 sed 's/^1,/1.5,/' "$WORK/data.csv" >"$WORK/shifted.csv"
 run_rc 1 "$BIN" fit "$start" --data "$WORK/shifted.csv" "${P[@]}"
-stderr_has "data time 1.5 is not an output time of the case"
+stderr_has "shifted.csv:3: column 1 (time) = 1.5 is not an output time of the case"
+
+# ---- several batches, each with its own recipe (the binder rate) ----------
+# a 2-D case (solid, liquid); the data per batch: d50 and the moisture and
+# porosity (liquid-to-solid ratio, liquid over granule volume) from
+# summary.csv's totals
+case2_at() { # case2_at BETA0 NUMBER RATE
+  printf '%s\n' "title: batches test
+grid:
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-3, ratio: 2, cells: 14, zero_first: true}
+    - {name: liquid, type: geometric, min: 1.0e-4, ratio: 3, cells: 14, zero_first: true}
+initial: {type: point, number: $2, at: [0.01, 0.001]}
+mechanisms:
+  - type: aggregation
+    kernel: {type: constant, beta0: $1}
+  - type: liquid_addition
+    rate: $3
+    start: 0
+    end: 4
+solver: {rtol: 1.0e-9, atol: 1.0e-20}
+output: {times: [0.5, 1, 2, 4]}"
+}
+start2=$(write_case start2.yaml "$(case2_at 1.5 0.6 0.003)")
+for b in a:0.01 b:0.03; do
+  name=${b%%:*} rate=${b#*:}
+  t=$(write_case "truth-$name.yaml" "$(case2_at 0.7 1.0 "$rate")")
+  run_rc 0 "$BIN" run "$t" --out "$WORK/truth-$name" --quiet --threads 1
+  # time [s],compartment,M0,M1,M2,d10,d50,d90,mean_solid,mean_liquid,total_solid,total_liquid
+  awk -F, 'NR == 1 { print "time [s],d50 [m],moisture [1],porosity [1]" }
+           NR > 2 { printf "%s,%s,%.10g,%.10g\n", $1, $7, $12 / $11, $12 / ($11 + $12) }' \
+    "$WORK/truth-$name/summary.csv" >"$WORK/batch-$name.csv"
+done
+printf '%s\n' "# two recipes of one formulation
+batches:
+  - name: low
+    data: batch-a.csv
+    set: {mechanisms.1.rate: 0.01}
+  - name: high
+    data: batch-b.csv
+    set: {mechanisms.1.rate: 0.03}" >"$WORK/batches.yaml"
+P2=(--params mechanisms.0.kernel.beta0=0.1:3:log --params initial.number=0.1:10)
+run_rc 0 "$BIN" fit "$start2" --batches "$WORK/batches.yaml" "${P2[@]}"
+stdout_has "24 values in 2 batches" "singular values"
+stdout_lacks() { ! grep -qF "$1" "$WORK/stdout" || { show_output; fail "stdout has '$1'"; }; }
+stdout_lacks "NOT IDENTIFIABLE"
+b=$(awk '$1 == "mechanisms.0.kernel.beta0" && NF >= 4 { print $2; exit }' "$WORK/stdout")
+n=$(awk '$1 == "initial.number" && NF >= 4 { print $2; exit }' "$WORK/stdout")
+rel_close "$b" 0.7 1e-6 || { show_output; fail "batches: beta0 = $b, expected 0.7"; }
+rel_close "$n" 1.0 1e-6 || { show_output; fail "batches: initial.number = $n, expected 1"; }
+
+# one batch alone with the moisture only: beta0 does not change it
+awk -F, '{ print $1 "," $3 }' "$WORK/batch-a.csv" >"$WORK/moisture.csv"
+printf 'batches:\n  - {name: low, data: moisture.csv, set: {mechanisms.1.rate: 0.01}}\n' \
+  >"$WORK/moist.yaml"
+run_rc 0 "$BIN" fit "$start2" --batches "$WORK/moist.yaml" "${P2[@]}"
+stdout_has "NOT IDENTIFIABLE from these data" "mechanisms.0.kernel.beta0"
+grep -q "^NOT IDENTIFIABLE.*beta0" "$WORK/stdout" || { show_output; fail "beta0 not reported"; }
+grep -q "^NOT IDENTIFIABLE.*initial.number" "$WORK/stdout" && { show_output; fail "initial.number reported"; }
+
+# bad batches and data: the file, line and column
+bad_batches() { printf '%s\n' "$1" >"$WORK/bad.yaml"; }
+bad_batches "batches:
+  - name: low
+    data: batch-a.csv
+    set: {mechanisms.1.rat: 0.01}"
+run_rc 1 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" "${P2[@]}"
+stderr_has "bad.yaml:4: batch 'low': unknown key 'mechanisms.1.rat'"
+bad_batches "batches:
+  - name: low
+    data: batch-a.csv
+    set: {mechanisms.0.kernel.beta0: 1}"
+run_rc 1 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" "${P2[@]}"
+stderr_has "bad.yaml:2: batch 'low' sets 'mechanisms.0.kernel.beta0', which the fit estimates"
+bad_batches "sievs: [0, 1.0e-4]
+batches: [{name: low, data: batch-a.csv}]"
+run_rc 1 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" "${P2[@]}"
+stderr_has "bad.yaml:1: unknown key 'sievs'" "did you mean 'sieves'?"
+bad_batches "batches: []"
+run_rc 1 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" "${P2[@]}"
+stderr_has "bad.yaml:1: " "expected at least one batch"
+bad_batches "batches: [{name: low, data: nan.csv}]"
+sed '3s/,[^,]*$/,nan/' "$WORK/batch-a.csv" >"$WORK/nan.csv"
+run_rc 1 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" "${P2[@]}"
+stderr_has "nan.csv:3: column 4 (porosity) = 'nan': expected a finite number"
+bad_batches "batches: [{name: low, data: late.csv}]"
+sed '$s/^4,/5,/' "$WORK/batch-a.csv" >"$WORK/late.csv"
+run_rc 1 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" "${P2[@]}"
+stderr_has "late.csv:5: column 1 (time) = 5 is outside the run of batch 'low' (0 to 4)"
+printf 'time,sieve_0_100,sieve_100_inf\n4,0.5,0.5\n' >"$WORK/sieve.csv"
+bad_batches "sieves: [0, 150.0e-6, .inf]
+batches: [{name: low, data: sieve.csv}]"
+run_rc 1 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" "${P2[@]}"
+stderr_has "sieve.csv:1: column 2 'sieve_0_100' is not a class of the sieves (" \
+  "their classes in micrometres: 0_150, 150_inf"
+printf 'time,sieve_0_100,sieve_50_inf\n4,0.5,0.5\n' >"$WORK/sieve.csv"
+bad_batches "batches: [{name: low, data: sieve.csv}]"
+run_rc 1 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" "${P2[@]}"
+stderr_has "sieve.csv:1: column 3 'sieve_50_inf' overlaps column 2 'sieve_0_100'"
+printf 'time,sieve_0_x\n4,0.5\n' >"$WORK/sieve.csv"
+run_rc 1 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" "${P2[@]}"
+stderr_has "sieve.csv:1: column 2 'sieve_0_x': expected a sieve class sieve_<LO>_<HI>"
+run_rc 2 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" --data "$WORK/sieve.csv" "${P2[@]}"
+stderr_has "--data and --batches exclude each other"
 echo "cli_fit: ok"

@@ -126,25 +126,68 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
                  gs_sweep_report *rep, gs_error *err);
 
 /* ---- fitting ------------------------------------------------------------
- * Measured summary quantities: a CSV with a header "time,NAME,..." and one
- * row per time; NAME is an output column as above (M0, M1_<coordinate>,
- * d50_c1, M2_c1, mean_liquid_c2, ...; in a case of one compartment also
- * without the _c1); every data time must be an output time of the case
- * (list them in output.times). */
+ * Measured data of one batch: a CSV with a header "time,NAME,..." (units in
+ * brackets after a name are dropped: "d50 [m]") and one row per time, the
+ * times increasing; NAME is an output column as above (M0, M1_<coordinate>,
+ * d50_c1, M2_c1, mean_liquid_c2, porosity_c1, ...; in a case of one
+ * compartment also without the _c1) or a sieve class sieve_<LO>_<HI>[_c<j>]
+ * (edges in micrometres, HI may be inf: the volume fraction of the
+ * compartment's granules in [LO, HI), gs_sieve_fractions).  Every data time
+ * must be an output time of the case (list them in output.times).  Errors
+ * name the file, line and column. */
 typedef struct gs_fit_data {
   size_t ntimes, ncols;
   double *times;  /* ntimes */
   char **names;   /* ncols */
   double *values; /* values[time * ncols + col] */
+  char *path;     /* for messages */
+  size_t header_line;
+  size_t *lines; /* the file's line of each time */
 } gs_fit_data;
 int gs_fit_data_read(const char *path, gs_fit_data *d, gs_error *err);
 void gs_fit_data_free(gs_fit_data *d);
+
+/* 1 when name is a sieve column sieve_<LO>_<HI>[_c<j>] with 0 <= LO < HI
+ * (micrometres): *lo, *hi in metres, *comp j (0 when not given); 0 when
+ * name is no sieve column; -1 when it starts so but is malformed. */
+int gs_fit_sieve_column(const char *name, double *lo, double *hi, size_t *comp);
+
+/* A batch: key overrides of the case (its recipe) and its measured data. */
+typedef struct gs_fit_batch {
+  char *name;
+  char *where; /* "FILE:LINE" of its entry, for messages */
+  size_t nset;
+  char **keys, **values; /* dotted keys and their values (text, set as written) */
+  int *key_lines;
+  gs_fit_data data;
+} gs_fit_batch;
+
+/* The batches of a fit (a YAML file):
+ *   sieves: [0, 53.0e-6, 106.0e-6, ..., .inf]   # optional, metres
+ *   batches:
+ *     - {name: B3, data: b3.csv, set: {KEY: VALUE, ...}}
+ * data paths relative to the file.  With sieves, every sieve column must
+ * be one of their classes. */
+typedef struct gs_fit_batches {
+  char *path;
+  size_t n;
+  gs_fit_batch *batch;
+  double *sieves; /* nsieves edges [m], or NULL */
+  size_t nsieves;
+  int sieves_line;
+} gs_fit_batches;
+int gs_fit_batches_read(const char *path, gs_fit_batches *bs, gs_error *err);
+/* One batch: the case as it is, with the data file path. */
+int gs_fit_batches_single(const char *data_path, gs_fit_batches *bs, gs_error *err);
+void gs_fit_batches_free(gs_fit_batches *bs);
 
 typedef struct gs_fit_result {
   size_t nparams, nresid;
   double *x;        /* the estimates */
   double *stderr_x; /* standard errors from the Jacobian (delta method through the bounds' map) */
   double *corr;     /* correlations, nparams x nparams */
+  double *sv;       /* singular values of the scaled Jacobian (in the mapped variables), descending */
+  int *unidentified; /* per parameter: 1 when it is not identifiable from the data (see gs_fit_run) */
   double chi2;      /* sum of squared scaled residuals */
   double r2;        /* 1 - chi2 / (sum of squared scaled deviations from each column's mean) */
   size_t iterations;
@@ -155,11 +198,18 @@ typedef struct gs_fit_result {
 /* Least squares (GSL multifit_nlinear, trust region, Levenberg-Marquardt)
  * of the case's outputs at the data's times against the data, over the
  * parameters' ranges (axes from gs_study_parse_range; each kept inside its
- * range by a logistic map, in log for log ranges).  Residuals are (model -
- * data) / RMS of the data column, so columns of different units weigh
- * alike.  The start is the case's own value where it lies inside the range,
- * else the range's middle.  The Jacobian is by forward differences, its p
- * runs at once on the threads. */
+ * range by a logistic map, in log for log ranges), all batches' residuals
+ * in one problem, each batch run with its own key overrides.  Residuals are
+ * (model - data) / scale of the column: the RMS of the column's values over
+ * all batches, one scale shared by every sieve column (their sum of
+ * squares is the PSD's), so columns of different units weigh alike.  The
+ * start is the case's own value where it lies inside the range, else the
+ * range's middle.  The Jacobian is by forward differences, its p runs at
+ * once on the threads.  Data, keys and times are checked before the fit
+ * runs: errors name the file, line and column. */
+int gs_fit_run_batches(const gs_cfg *base, const gs_study_axis *params, size_t np,
+                       const gs_fit_batches *bs, gs_fit_result *res, gs_error *err);
+/* The same with one batch: the case as it is. */
 int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
                const gs_fit_data *data, gs_fit_result *res, gs_error *err);
 void gs_fit_result_free(gs_fit_result *r);

@@ -9,7 +9,21 @@
 #include <string.h>
 
 /* Statistics of a column; the per-compartment ones are summary.csv's. */
-enum { W_M0_ALL, W_M1_ALL, W_M0, W_M1, W_M2, W_D10, W_D50, W_D90, W_MEAN, W_TOTAL };
+enum { W_M0_ALL, W_M1_ALL, W_M0, W_M1, W_M2, W_D10, W_D50, W_D90, W_MEAN, W_TOTAL, W_POROSITY,
+       W_MOISTURE };
+
+/* The volume coordinate called name, or -1. */
+static int vol_index(const gs_model *m, const char *name) {
+  for (int k = 0; k < m->nvol; k++)
+    if (!strcmp(gs_model_vol_name(m, k), name)) return k;
+  return -1;
+}
+
+/* Porosity and moisture need coordinates named solid and liquid (gas is
+ * optional: without it the pores hold only liquid). */
+static int has_pores(const gs_model *m) {
+  return vol_index(m, "solid") >= 0 && vol_index(m, "liquid") >= 0;
+}
 
 static const char *const fixed_names[] = {"M0", "M1", "M2", "d10", "d50", "d90"};
 
@@ -83,12 +97,16 @@ int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *co
       snprintf(name, sizeof name, "total_%s", gs_model_vol_name(m, k));
       if (!strcmp(extra[e], name)) what = W_TOTAL, index = k;
     }
+    if (has_pores(m) && !strcmp(extra[e], "porosity")) what = W_POROSITY;
+    if (has_pores(m) && !strcmp(extra[e], "moisture")) what = W_MOISTURE;
     if (what < 0) {
       char known[512] = "M0, M1, M2, d10, d50, d90";
       size_t at = strlen(known);
       for (int k = 0; k < nvol && at < sizeof known; k++)
         at += (size_t)snprintf(known + at, sizeof known - at, ", mean_%s, total_%s",
                                gs_model_vol_name(m, k), gs_model_vol_name(m, k));
+      if (has_pores(m) && at < sizeof known)
+        snprintf(known + at, sizeof known - at, ", porosity, moisture");
       rc = gs_error_set(err, GS_EINPUT, "--outputs: unknown summary column '%s'; known: %s",
                         extra[e], known);
     }
@@ -138,6 +156,15 @@ void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, const d
     case W_D50: v = c->d50; break;
     case W_D90: v = c->d90; break;
     case W_MEAN: v = c->mean[o->index[i]]; break;
+    case W_POROSITY: { /* (l + g) / (s + l + g) of the totals: the granules' volume-weighted porosity */
+      const int gas = vol_index(m, "gas");
+      const double l = c->total[vol_index(m, "liquid")], g = gas >= 0 ? c->total[gas] : 0;
+      v = (l + g) / (c->total[vol_index(m, "solid")] + l + g);
+      break;
+    }
+    case W_MOISTURE: /* liquid-to-solid volume ratio of the totals */
+      v = c->total[vol_index(m, "liquid")] / c->total[vol_index(m, "solid")];
+      break;
     default: v = c->total[o->index[i]]; break;
     }
     values[i] = v;
@@ -163,6 +190,10 @@ void gs_study_extras_all(const gs_model *m, gs_study_extras *x) {
     snprintf(x->buf[2 * k + 1], sizeof x->buf[0], "total_%s", gs_model_vol_name(m, k));
     x->name[x->n++] = x->buf[2 * k];
     x->name[x->n++] = x->buf[2 * k + 1];
+  }
+  if (has_pores(m)) {
+    x->name[x->n++] = "porosity";
+    x->name[x->n++] = "moisture";
   }
 }
 

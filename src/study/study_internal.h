@@ -6,9 +6,10 @@
 #include "gransim/study.h"
 
 /* Every extra statistic a study may name (M0 M1 M2 d10 d50 d90, then
- * mean_<coordinate> and total_<coordinate> per volume coordinate of m):
- * names point into buf; returns how many (at most GS_STUDY_MAX_EXTRA). */
-#define GS_STUDY_MAX_EXTRA 22
+ * mean_<coordinate> and total_<coordinate> per volume coordinate of m, then
+ * porosity and moisture where m has coordinates solid and liquid): names
+ * point into buf; returns how many (at most GS_STUDY_MAX_EXTRA). */
+#define GS_STUDY_MAX_EXTRA 24
 typedef struct {
   const char *name[GS_STUDY_MAX_EXTRA];
   char buf[16][80];
@@ -28,25 +29,38 @@ int gs_study_outputs_find(const gs_study_outputs *o, const char *name, const cha
 double gs_study_to_x(const gs_study_axis *a, double z, double *dxdz);
 double gs_study_to_z(const gs_study_axis *a, double x);
 
-/* Case outputs at measured times as residuals (model - data) / RMS of the
- * data column: fit's least squares and optimise's objective. */
+/* Case outputs at measured times as residuals (model - data) / scale of
+ * the column, batch after batch: fit's least squares and optimise's
+ * objective. */
+#define GS_FIT_SIEVE ((size_t)-1)
+typedef struct {
+  size_t *col;   /* per data column: its output column, or GS_FIT_SIEVE */
+  double *sieve; /* per data column: the class's lo, hi diameters [m] (sieve columns) */
+  size_t *comp;  /* per data column: the compartment of a sieve column (0-based) */
+  double *scale; /* per data column */
+  size_t off;    /* the batch's first residual */
+} gs_fit_map;
+
 typedef struct {
   const gs_cfg *base;
   const gs_study_axis *params;
   size_t np;
-  const gs_fit_data *data;
-  double *scale; /* per data column */
-  size_t *col;   /* data column -> output column */
+  const gs_fit_batches *bs;
+  gs_fit_map *map; /* per batch */
+  size_t nresid;
   gs_study_outputs out;
   long runs;
   gs_error err; /* the first failed model evaluation */
 } gs_fit_problem;
-/* Checks the parameters' keys and the data's columns against the case;
- * x0: the start, the case's own values where they lie inside the ranges,
- * else the ranges' middles. */
+/* Checks the parameters' keys, the batches' keys, times and columns against
+ * the case (errors name the file, line and column); x0: the start, the
+ * case's own values where they lie inside the ranges, else the ranges'
+ * middles. */
 int gs_fit_problem_init(gs_fit_problem *fc, const gs_cfg *base, const gs_study_axis *params,
-                        size_t np, const gs_fit_data *data, double *x0, gs_error *err);
-/* r[ntimes * ncols] at parameter values x[np] (one run of the case). */
-int gs_fit_problem_residuals(gs_fit_problem *fc, const double *x, double *r, gs_error *err);
+                        size_t np, const gs_fit_batches *bs, double *x0, gs_error *err);
+/* r[nresid] at parameter values x[np] (one run of the case per batch);
+ * model (if not NULL) gets the model's values in the same layout. */
+int gs_fit_problem_residuals(gs_fit_problem *fc, const double *x, double *r, double *model,
+                             gs_error *err);
 void gs_fit_problem_free(gs_fit_problem *fc);
 #endif
