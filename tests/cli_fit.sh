@@ -45,6 +45,8 @@ sed 's/^1,/1.5,/' "$WORK/data.csv" >"$WORK/shifted.csv"
 run_rc 1 "$BIN" fit "$start" --data "$WORK/shifted.csv" "${P[@]}"
 stderr_has "shifted.csv:3: column 1 (time) = 1.5 is not an output time of the case"
 
+stdout_lacks() { ! grep -qF "$1" "$WORK/stdout" || { show_output; fail "stdout has '$1'"; }; }
+
 # ---- several batches, each with its own recipe (the binder rate) ----------
 # a 2-D case (solid, liquid); the data per batch: d50 and the moisture and
 # porosity (liquid-to-solid ratio, liquid over granule volume) from
@@ -85,14 +87,34 @@ batches:
     data: batch-b.csv
     set: {mechanisms.1.rate: 0.03}" >"$WORK/batches.yaml"
 P2=(--params mechanisms.0.kernel.beta0=0.1:3:log --params initial.number=0.1:10)
-run_rc 0 "$BIN" fit "$start2" --batches "$WORK/batches.yaml" "${P2[@]}"
-stdout_has "24 values in 2 batches" "singular values"
-stdout_lacks() { ! grep -qF "$1" "$WORK/stdout" || { show_output; fail "stdout has '$1'"; }; }
-stdout_lacks "NOT IDENTIFIABLE"
+# a third recipe held out: predicted at the estimates; the files for plots
+t=$(write_case "truth-c.yaml" "$(case2_at 0.7 1.0 0.02)")
+run_rc 0 "$BIN" run "$t" --out "$WORK/truth-c" --quiet --threads 1
+awk -F, 'NR == 1 { print "time [s],d50 [m],porosity [1]" }
+         NR > 2 { printf "%s,%s,%.10g\n", $1, $7, $12 / ($11 + $12) }' \
+  "$WORK/truth-c/summary.csv" >"$WORK/batch-c.csv"
+printf 'batches: [{name: mid, data: batch-c.csv, set: {mechanisms.1.rate: 0.02}}]\n' >"$WORK/held.yaml"
+run_rc 0 "$BIN" fit "$start2" --batches "$WORK/batches.yaml" "${P2[@]}" --predict "$WORK/held.yaml" \
+  --out "$WORK/fit"
+stdout_has "24 values in 2 batches" "singular values" "held-out batches at the estimates (--predict)"
 b=$(awk '$1 == "mechanisms.0.kernel.beta0" && NF >= 4 { print $2; exit }' "$WORK/stdout")
 n=$(awk '$1 == "initial.number" && NF >= 4 { print $2; exit }' "$WORK/stdout")
 rel_close "$b" 0.7 1e-6 || { show_output; fail "batches: beta0 = $b, expected 0.7"; }
 rel_close "$n" 1.0 1e-6 || { show_output; fail "batches: initial.number = $n, expected 1"; }
+# the held-out batch's errors are those of the true values: ~1e-9 of the data
+awk '$1 == "mid" && $2 == "d50" { exit !($5 < 1e-6) }' "$WORK/stdout" || { show_output; fail "d50 of the held-out batch"; }
+awk '$1 == "mid" && $2 == "porosity" { exit !($5 < 1e-6) }' "$WORK/stdout" || { show_output; fail "porosity of the held-out batch"; }
+head -1 "$WORK/fit/fitted.csv" | grep -qF "role,batch,time [s],column,d_lo [um],d_hi [um],measured,model" ||
+  fail "fitted.csv header"
+[ "$(grep -c '^predict,mid,' "$WORK/fit/fitted.csv")" = 8 ] || fail "fitted.csv: 8 held-out values expected"
+[ "$(grep -c '^fit,' "$WORK/fit/fitted.csv")" = 24 ] || fail "fitted.csv: 24 fitted values expected"
+grep -q '^mechanisms.0.kernel.beta0,0.69999' "$WORK/fit/estimates.csv" || fail "estimates.csv"
+# a held-out batch with a bad key is refused before the fit runs
+printf 'batches: [{name: mid, data: batch-c.csv, set: {mechanisms.9.rate: 0.02}}]\n' >"$WORK/held-bad.yaml"
+run_rc 1 "$BIN" fit "$start2" --batches "$WORK/batches.yaml" "${P2[@]}" --predict "$WORK/held-bad.yaml"
+stderr_has "held-bad.yaml:1: batch 'mid': unknown key 'mechanisms.9.rate'"
+stdout_lacks "parameter"
+stdout_lacks "NOT IDENTIFIABLE"
 
 # one batch alone with the moisture only: beta0 does not change it
 awk -F, '{ print $1 "," $3 }' "$WORK/batch-a.csv" >"$WORK/moisture.csv"
@@ -147,4 +169,19 @@ run_rc 1 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" "${P2[@]}"
 stderr_has "sieve.csv:1: column 2 'sieve_0_x': expected a sieve class sieve_<LO>_<HI>"
 run_rc 2 "$BIN" fit "$start2" --batches "$WORK/bad.yaml" --data "$WORK/sieve.csv" "${P2[@]}"
 stderr_has "--data and --batches exclude each other"
+
+# sieve classes measured (numbers made up: the fit need not match), drawn
+# beside the model by gransim plot
+printf '%s\n' "time [s],sieve_0_200000,sieve_200000_300000,sieve_300000_inf" "1,0.3,0.5,0.2" \
+  "4,0.1,0.4,0.5" >"$WORK/sieves.csv"
+printf 'sieves: [0, 0.2, 0.3, .inf]\nbatches: [{name: S, data: sieves.csv}]\n' >"$WORK/sieves.yaml"
+run_rc 0 "$BIN" fit "$start" --batches "$WORK/sieves.yaml" --params mechanisms.0.kernel.beta0=0.01:100:log \
+  --out "$WORK/sfit"
+grep -q '^fit,S,4,sieve_300000_inf,300000,inf,0.5,' "$WORK/sfit/fitted.csv" || fail "sieve rows of fitted.csv"
+run_rc 0 "$BIN" plot "$WORK/sfit"
+/usr/bin/python3 "$SRC/tests/plot_check.py" "$WORK/sfit/plots" \
+  "fit-psd=sieve size [um]|mass fraction [-]|t = 4 s measured|t = 4 s fitted|S (fitted)" || fail "fit-psd plot"
+run_rc 0 "$BIN" plot "$WORK/fit"
+/usr/bin/python3 "$SRC/tests/plot_check.py" "$WORK/fit/plots" \
+  "fit-parity=porosity (held out)|d50 (fitted)|measured / RMS of the measured column [-]" || fail "fit-parity plot"
 echo "cli_fit: ok"

@@ -184,7 +184,8 @@ void gs_fit_batches_free(gs_fit_batches *bs);
 typedef struct gs_fit_result {
   size_t nparams, nresid;
   double *x;        /* the estimates */
-  double *stderr_x; /* standard errors from the Jacobian (delta method through the bounds' map) */
+  double *stderr_x; /* standard errors from the Jacobian at the estimates (see gs_fit_run_batches) */
+  double *ci_lo, *ci_hi; /* 95 % confidence intervals x -+ t(0.975, n - p) stderr_x */
   double *corr;     /* correlations, nparams x nparams */
   double *sv;       /* singular values of the scaled Jacobian (in the mapped variables), descending */
   int *unidentified; /* per parameter: 1 when it is not identifiable from the data (see gs_fit_run) */
@@ -213,6 +214,28 @@ int gs_fit_run_batches(const gs_cfg *base, const gs_study_axis *params, size_t n
 int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
                const gs_fit_data *data, gs_fit_result *res, gs_error *err);
 void gs_fit_result_free(gs_fit_result *r);
+
+/* The case at parameter values x against batches (fitted or held out):
+ * the model's value of every data value and the scaled residuals, batch
+ * after batch in the data's order ([time][column]), with the same checks
+ * and scales as the fit; x NULL: the checks alone (nothing run). */
+typedef struct gs_fit_eval {
+  size_t nresid;
+  double *model, *resid;
+  double chi2, r2;
+} gs_fit_eval;
+int gs_fit_evaluate(const gs_cfg *base, const gs_study_axis *params, size_t np, const double *x,
+                    const gs_fit_batches *bs, gs_fit_eval *ev, gs_error *err);
+void gs_fit_eval_free(gs_fit_eval *ev);
+
+/* DIR/estimates.csv (a row per parameter: estimate, standard error,
+ * interval, range, identifiable) and DIR/fitted.csv (a row per measured
+ * value of the fitted batches, role fit, and of the held-out ones, role
+ * predict, if pred is not NULL: measured and model value, the sieve class's
+ * edges), each with its JSON sidecar; DIR is made if missing. */
+int gs_fit_write(const char *dir, const gs_study_axis *params, size_t np, const gs_fit_result *res,
+                 const gs_fit_batches *fit, const gs_fit_eval *fit_ev, const gs_fit_batches *pred,
+                 const gs_fit_eval *pred_ev, gs_error *err);
 
 /* ---- optimisation --------------------------------------------------------
  * Controls (dotted keys over ranges) chosen so that the case's outputs at a

@@ -1,5 +1,6 @@
 /* gransim fit: case parameters fitted to measured summary quantities
  * (src/study/fit.c, gransim/study.h). */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,7 +11,8 @@
 
 static const char *const FIT_HELP =
     "usage: gransim fit CASE (--data MEASURED.csv | --batches BATCHES.yaml)\n"
-    "                    --params KEY=LO:HI[:log] [--params ...]\n\n"
+    "                    --params KEY=LO:HI[:log] [--params ...]\n"
+    "                    [--predict HELDOUT.yaml] [--out DIR]\n\n"
     "Fits the values of the case's dotted KEYs (as in gransim sweep, e.g.\n"
     "mechanisms.0.kernel.beta0) within [LO, HI] so that the case's outputs match\n"
     "measured data: a CSV with a header 'time,NAME,...' and a row per time, NAME\n"
@@ -27,14 +29,72 @@ static const char *const FIT_HELP =
     "column's RMS (one RMS for all sieve classes); the parameters are kept in\n"
     "their ranges by a logistic map (in log with :log).  Prints the estimates\n"
     "with standard errors from the Jacobian, their correlations, the\n"
-    "parameters the data cannot identify, and R^2.  docs/studies.md\n";
+    "parameters the data cannot identify, and R^2.  --predict: runs the held-out\n"
+    "batches of HELDOUT.yaml (the --batches format) at the estimates and reports\n"
+    "their errors.  --out DIR: DIR/estimates.csv and DIR/fitted.csv (every\n"
+    "measured value beside the model's), which gransim plot DIR draws.\n"
+    "docs/studies.md\n";
+
+/* Per batch and column of ev: the RMS error in the column's unit and the
+ * data's RMS; per batch chi^2 of the scaled residuals. */
+static void print_errors(const char *what, const gs_fit_batches *bs, const gs_fit_eval *ev) {
+  printf("%s:\n  %-16s %-24s %14s %14s %10s\n", what, "batch", "column", "rms_error", "rms_data",
+         "relative");
+  size_t at = 0;
+  for (size_t b = 0; b < bs->n; b++) {
+    const gs_fit_data *d = &bs->batch[b].data;
+    double chi2 = 0;
+    for (size_t j = 0; j < d->ncols; j++) {
+      double se = 0, sd = 0;
+      for (size_t i = 0; i < d->ntimes; i++) {
+        const size_t q = i * d->ncols + j;
+        se += pow(ev->model[at + q] - d->values[q], 2);
+        sd += pow(d->values[q], 2);
+        chi2 += pow(ev->resid[at + q], 2);
+      }
+      se = sqrt(se / (double)d->ntimes);
+      sd = sqrt(sd / (double)d->ntimes);
+      printf("  %-16s %-24s %14.6g %14.6g %10.4g\n", bs->batch[b].name, d->names[j], se, sd,
+             sd > 0 ? se / sd : NAN);
+    }
+    printf("  %-16s chi^2 = %.6g over %zu values (scaled residuals)\n", bs->batch[b].name, chi2,
+           d->ntimes * d->ncols);
+    at += d->ntimes * d->ncols;
+  }
+}
+
+/* --predict and --out: the batches at the estimates, their errors, the files. */
+static int predict_and_write(const gs_cfg *cfg, const gs_study_axis *params, size_t np,
+                             const gs_fit_result *res, const gs_fit_batches *bs, gs_fit_eval *fit_ev,
+                             const gs_fit_batches *pred, gs_fit_eval *pred_ev, const char *out_dir) {
+  gs_error err = {0};
+  int rc = GS_OK;
+  if (pred) {
+    gs_fit_eval_free(pred_ev);
+    rc = gs_fit_evaluate(cfg, params, np, res->x, pred, pred_ev, &err);
+    if (!rc) {
+      print_errors("held-out batches at the estimates (--predict)", pred, pred_ev);
+      printf("held-out: chi^2 = %.6g over %zu values, R^2 = %.6g\n", pred_ev->chi2,
+             pred_ev->nresid, pred_ev->r2);
+    }
+  }
+  if (!rc && out_dir) {
+    rc = gs_fit_evaluate(cfg, params, np, res->x, bs, fit_ev, &err);
+    if (!rc) rc = gs_fit_write(out_dir, params, np, res, bs, fit_ev, pred, pred_ev, &err);
+    if (!rc) printf("wrote %s/estimates.csv and %s/fitted.csv\n", out_dir, out_dir);
+  }
+  if (rc) fprintf(stderr, "gransim fit: %s\n", err.msg);
+  return rc ? 1 : 0;
+}
 
 int gs_cmd_fit(int argc, char **argv) {
-  const char *path = NULL, *data_path = NULL, *batches_path = NULL;
+  const char *path = NULL, *data_path = NULL, *batches_path = NULL, *predict_path = NULL,
+             *out_dir = NULL;
   gs_study_axis *params = calloc((size_t)argc + 1, sizeof *params);
   size_t np = 0;
   gs_error err = {0};
-  gs_fit_batches bs = {0};
+  gs_fit_batches bs = {0}, pred = {0};
+  gs_fit_eval fit_ev = {0}, pred_ev = {0};
   gs_fit_result res = {0};
   gs_cfg *cfg = NULL;
   int rc = params ? 0 : 1;
@@ -42,6 +102,8 @@ int gs_cmd_fit(int argc, char **argv) {
                                        {"params", required_argument, NULL, 'p'},
                                        {"data", required_argument, NULL, 'd'},
                                        {"batches", required_argument, NULL, 'b'},
+                                       {"predict", required_argument, NULL, 'P'},
+                                       {"out", required_argument, NULL, 'o'},
                                        {0}};
   gs_cli_begin();
   for (int o; !rc && (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
@@ -54,6 +116,8 @@ int gs_cmd_fit(int argc, char **argv) {
       break;
     case 'd': data_path = optarg; break;
     case 'b': batches_path = optarg; break;
+    case 'P': predict_path = optarg; break;
+    case 'o': out_dir = optarg; break;
     default: rc = 2;
     }
   for (int i = optind; !rc && i < argc; i++)
@@ -75,7 +139,10 @@ int gs_cmd_fit(int argc, char **argv) {
   if (rc) goto done;
   if ((data_path ? gs_fit_batches_single(data_path, &bs, &err)
                  : gs_fit_batches_read(batches_path, &bs, &err)) ||
+      (predict_path && gs_fit_batches_read(predict_path, &pred, &err)) ||
       !(cfg = gs_cfg_load_file(path, &err)) ||
+      /* the held-out batches are checked against the case before the fit runs */
+      (predict_path && gs_fit_evaluate(cfg, params, np, NULL, &pred, &pred_ev, &err)) ||
       gs_fit_run_batches(cfg, params, np, &bs, &res, &err)) {
     fprintf(stderr, "gransim fit: %s\n", err.msg);
     rc = 1;
@@ -117,7 +184,12 @@ int gs_cmd_fit(int argc, char **argv) {
          "runs%s\n",
          res.chi2, res.iterations, res.runs,
          res.converged ? "" : "; NOT CONVERGED (iteration limit or no progress)");
+  if (predict_path || out_dir) rc = predict_and_write(cfg, params, np, &res, &bs, &fit_ev,
+                                                      predict_path ? &pred : NULL, &pred_ev, out_dir);
 done:
+  gs_fit_eval_free(&fit_ev);
+  gs_fit_eval_free(&pred_ev);
+  gs_fit_batches_free(&pred);
   for (size_t k = 0; params && k < np; k++) gs_study_axis_free(&params[k]);
   free(params);
   gs_fit_batches_free(&bs);

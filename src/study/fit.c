@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include <gsl/gsl_blas.h>
+#include <gsl/gsl_cdf.h>
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_multifit_nlinear.h>
 
@@ -76,6 +77,8 @@ void gs_fit_result_free(gs_fit_result *r) {
   if (!r) return;
   free(r->x);
   free(r->stderr_x);
+  free(r->ci_lo);
+  free(r->ci_hi);
   free(r->corr);
   free(r->sv);
   free(r->unidentified);
@@ -114,30 +117,6 @@ static int identifiability(const gsl_matrix *Ju, gs_fit_result *res) {
   if (S) gsl_vector_free(S);
   if (work) gsl_vector_free(work);
   return ok ? GS_OK : GS_ENOMEM;
-}
-
-/* R² of the scaled values: 1 - chi² over their sum of squares about the
- * mean of each column name over all batches. */
-static double r_squared(const gs_fit_problem *fc, double chi2) {
-  const gs_fit_batches *bs = fc->bs;
-  double sst = 0;
-  for (size_t b = 0; b < bs->n; b++) {
-    const gs_fit_data *d = &bs->batch[b].data;
-    for (size_t j = 0; j < d->ncols; j++) {
-      double mean = 0;
-      size_t cnt = 0;
-      for (size_t q = 0; q < bs->n; q++) {
-        const gs_fit_data *e = &bs->batch[q].data;
-        for (size_t k = 0; k < e->ncols; k++)
-          if (!strcmp(e->names[k], d->names[j]))
-            for (size_t t = 0; t < e->ntimes; t++, cnt++) mean += e->values[t * e->ncols + k];
-      }
-      mean /= (double)cnt;
-      for (size_t t = 0; t < d->ntimes; t++)
-        sst += pow((d->values[t * d->ncols + j] - mean) / fc->map[b].scale[j], 2);
-    }
-  }
-  return sst > 0 ? 1 - chi2 / sst : NAN;
 }
 
 int gs_fit_run_batches(const gs_cfg *base, const gs_study_axis *params, size_t np,
@@ -190,7 +169,10 @@ int gs_fit_run_batches(const gs_cfg *base, const gs_study_axis *params, size_t n
     res->x = malloc(np * sizeof *res->x);
     res->stderr_x = malloc(np * sizeof *res->stderr_x);
     res->corr = malloc(np * np * sizeof *res->corr);
-    if (!res->x || !res->stderr_x || !res->corr) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+    res->ci_lo = malloc(np * sizeof *res->ci_lo);
+    res->ci_hi = malloc(np * sizeof *res->ci_hi);
+    if (!res->x || !res->stderr_x || !res->corr || !res->ci_lo || !res->ci_hi)
+      rc = gs_error_set(err, GS_ENOMEM, "out of memory");
     for (size_t k = 0; !rc && k < np; k++) {
       res->x[k] = gs_study_to_x(&params[k], gsl_vector_get(z, k), NULL);
       u[k] = to_u(&params[k], res->x[k], &dxdu[k]);
@@ -204,16 +186,18 @@ int gs_fit_run_batches(const gs_cfg *base, const gs_study_axis *params, size_t n
     }
     if (!rc && identifiability(Ju, res)) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
     if (!rc) gsl_multifit_nlinear_covar(Ju, 0.0, covar);
-    const double s2 = chi2 / (double)(n - np);
+    const double s2 = chi2 / (double)(n - np), tq = gsl_cdf_tdist_Pinv(0.975, (double)(n - np));
     for (size_t k = 0; !rc && k < np; k++) {
       /* s² (J_uᵀ J_u)⁻¹ carried to x by dx/du */
       res->stderr_x[k] = dxdu[k] * sqrt(s2 * gsl_matrix_get(covar, k, k));
+      res->ci_lo[k] = res->x[k] - tq * res->stderr_x[k];
+      res->ci_hi[k] = res->x[k] + tq * res->stderr_x[k];
       for (size_t q = 0; q < np; q++)
         res->corr[k * np + q] = gsl_matrix_get(covar, k, q) /
                                 sqrt(gsl_matrix_get(covar, k, k) * gsl_matrix_get(covar, q, q));
     }
     res->chi2 = chi2;
-    res->r2 = r_squared(&fc, chi2);
+    res->r2 = gs_fit_problem_r2(&fc, chi2);
     res->runs = fc.runs;
   }
   if (Ju) gsl_matrix_free(Ju);

@@ -327,3 +327,55 @@ int gs_fit_problem_init(gs_fit_problem *fc, const gs_cfg *base, const gs_study_a
   if (rc) gs_fit_problem_free(fc);
   return rc;
 }
+
+double gs_fit_problem_r2(const gs_fit_problem *fc, double chi2) {
+  const gs_fit_batches *bs = fc->bs;
+  double sst = 0;
+  for (size_t b = 0; b < bs->n; b++) {
+    const gs_fit_data *d = &bs->batch[b].data;
+    for (size_t j = 0; j < d->ncols; j++) {
+      double mean = 0;
+      size_t cnt = 0;
+      for (size_t q = 0; q < bs->n; q++) {
+        const gs_fit_data *e = &bs->batch[q].data;
+        for (size_t k = 0; k < e->ncols; k++)
+          if (!strcmp(e->names[k], d->names[j]))
+            for (size_t t = 0; t < e->ntimes; t++, cnt++) mean += e->values[t * e->ncols + k];
+      }
+      mean /= (double)cnt;
+      for (size_t t = 0; t < d->ntimes; t++)
+        sst += pow((d->values[t * d->ncols + j] - mean) / fc->map[b].scale[j], 2);
+    }
+  }
+  return sst > 0 ? 1 - chi2 / sst : NAN;
+}
+
+void gs_fit_eval_free(gs_fit_eval *ev) {
+  if (!ev) return;
+  free(ev->model);
+  free(ev->resid);
+  memset(ev, 0, sizeof *ev);
+}
+
+int gs_fit_evaluate(const gs_cfg *base, const gs_study_axis *params, size_t np, const double *x,
+                    const gs_fit_batches *bs, gs_fit_eval *ev, gs_error *err) {
+  memset(ev, 0, sizeof *ev);
+  gs_fit_problem fc;
+  double x0[64];
+  if (np > 64) return gs_error_set(err, GS_EINPUT, "at most 64 parameters (got %zu)", np);
+  int rc = gs_fit_problem_init(&fc, base, params, np, bs, x0, err);
+  if (rc || !x) { /* no values: the checks alone */
+    if (!rc) gs_fit_problem_free(&fc);
+    return rc;
+  }
+  ev->nresid = fc.nresid;
+  ev->model = malloc((fc.nresid ? fc.nresid : 1) * sizeof *ev->model);
+  ev->resid = malloc((fc.nresid ? fc.nresid : 1) * sizeof *ev->resid);
+  if (!ev->model || !ev->resid) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  if (!rc) rc = gs_fit_problem_residuals(&fc, x, ev->resid, ev->model, err);
+  for (size_t i = 0; !rc && i < fc.nresid; i++) ev->chi2 += ev->resid[i] * ev->resid[i];
+  if (!rc) ev->r2 = gs_fit_problem_r2(&fc, ev->chi2);
+  gs_fit_problem_free(&fc);
+  if (rc) gs_fit_eval_free(ev);
+  return rc;
+}

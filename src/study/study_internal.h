@@ -63,4 +63,7 @@ int gs_fit_problem_init(gs_fit_problem *fc, const gs_cfg *base, const gs_study_a
 int gs_fit_problem_residuals(gs_fit_problem *fc, const double *x, double *r, double *model,
                              gs_error *err);
 void gs_fit_problem_free(gs_fit_problem *fc);
+/* R² of the scaled values: 1 - chi2 over their sum of squares about the
+ * mean of each column name over all batches. */
+double gs_fit_problem_r2(const gs_fit_problem *fc, double chi2);
 #endif
