@@ -119,7 +119,7 @@ static void sieve_batches(const char *dir) {
   CHECK(!gs_study_parse_range("mechanisms.0.kernel.beta0=0.01:100:log", &p[0], &e));
   CHECK(!gs_study_parse_range("initial.mean=0.002:0.05:log", &p[1], &e));
   gs_fit_result res;
-  CHECK(gs_fit_run_batches(start, p, 2, &bs, &res, &e) == GS_OK);
+  CHECK(gs_fit_run_batches(start, p, 2, &bs, NULL, &res, &e) == GS_OK);
   if (e.code) fprintf(stderr, "%s\n", e.msg);
   if (res.x) {
     printf("sieve batches: beta0 %.10g, initial.mean %.10g; %ld runs\n", res.x[0], res.x[1], res.runs);

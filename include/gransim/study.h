@@ -193,8 +193,22 @@ typedef struct gs_fit_result {
   double r2;        /* 1 - chi2 / (sum of squared scaled deviations from each column's mean) */
   size_t iterations;
   int converged; /* 0: stopped at the iteration limit or without progress */
-  long runs;     /* model runs */
+  long runs;     /* model runs, all phases */
+  long global_runs;    /* of them in the global start */
+  double porosity_rms; /* the porosity columns' RMS error at the estimates (their unit); nan without */
 } gs_fit_result;
+
+/* How a fit searches (NULL or all zero: least squares from the case's values). */
+typedef struct gs_fit_options {
+  const char *global;  /* crs2 | mlsl | isres: a global search over the ranges (NLopt) first,
+                          the least squares (or the constrained fit) from its best point */
+  size_t global_runs;  /* its model runs (0: 50 per parameter) */
+  unsigned long seed;  /* of the global search */
+  double porosity_tol; /* > 0: the epsilon-constraint: the squared scaled residuals of all
+                          columns but porosity least subject to the porosity columns' RMS
+                          error <= porosity_tol (NLopt COBYLA instead of the least squares) */
+  size_t max_runs;     /* of the constrained fit (0: 2000) */
+} gs_fit_options;
 
 /* Least squares (GSL multifit_nlinear, trust region, Levenberg-Marquardt)
  * of the case's outputs at the data's times against the data, over the
@@ -209,11 +223,14 @@ typedef struct gs_fit_result {
  * once on the threads.  Data, keys and times are checked before the fit
  * runs: errors name the file, line and column. */
 int gs_fit_run_batches(const gs_cfg *base, const gs_study_axis *params, size_t np,
-                       const gs_fit_batches *bs, gs_fit_result *res, gs_error *err);
+                       const gs_fit_batches *bs, const gs_fit_options *opt, gs_fit_result *res,
+                       gs_error *err);
 /* The same with one batch: the case as it is. */
 int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
                const gs_fit_data *data, gs_fit_result *res, gs_error *err);
 void gs_fit_result_free(gs_fit_result *r);
+/* GS_EINPUT naming the methods when method is not one of --global's. */
+int gs_fit_global_check(const char *method, gs_error *err);
 
 /* The case at parameter values x against batches (fitted or held out):
  * the model's value of every data value and the scaled residuals, batch

@@ -1,5 +1,6 @@
 /* gransim fit: case parameters fitted to measured summary quantities
  * (src/study/fit.c, gransim/study.h). */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,6 +13,8 @@
 static const char *const FIT_HELP =
     "usage: gransim fit CASE (--data MEASURED.csv | --batches BATCHES.yaml)\n"
     "                    --params KEY=LO:HI[:log] [--params ...]\n"
+    "                    [--global crs2|mlsl|isres[:RUNS]] [--seed S]\n"
+    "                    [--porosity-tol EPS] [--max-runs N]\n"
     "                    [--predict HELDOUT.yaml] [--out DIR]\n\n"
     "Fits the values of the case's dotted KEYs (as in gransim sweep, e.g.\n"
     "mechanisms.0.kernel.beta0) within [LO, HI] so that the case's outputs match\n"
@@ -29,11 +32,49 @@ static const char *const FIT_HELP =
     "column's RMS (one RMS for all sieve classes); the parameters are kept in\n"
     "their ranges by a logistic map (in log with :log).  Prints the estimates\n"
     "with standard errors from the Jacobian, their correlations, the\n"
-    "parameters the data cannot identify, and R^2.  --predict: runs the held-out\n"
+    "parameters the data cannot identify, and R^2.  --global: an NLopt global\n"
+    "search over the ranges (RUNS model runs, default 50 per parameter; --seed)\n"
+    "gives the start.  --porosity-tol EPS: the epsilon-constraint: the other\n"
+    "columns' squared residuals least subject to the porosity columns' RMS error\n"
+    "<= EPS (NLopt COBYLA, at most --max-runs runs, default 2000).  --predict: runs the held-out\n"
     "batches of HELDOUT.yaml (the --batches format) at the estimates and reports\n"
     "their errors.  --out DIR: DIR/estimates.csv and DIR/fitted.csv (every\n"
     "measured value beside the model's), which gransim plot DIR draws.\n"
     "docs/studies.md\n";
+
+/* A non-negative integer option. */
+static int parse_count(const char *name, const char *text, unsigned long *out) {
+  char *end;
+  errno = 0;
+  *out = strtoul(text, &end, 10);
+  if (end == text || *end || errno || text[0] == '-') {
+    fprintf(stderr, "gransim fit: %s needs a whole number >= 0, got '%s'\n", name, text);
+    return 2;
+  }
+  return 0;
+}
+
+/* --global METHOD[:RUNS] */
+static int parse_global(const char *text, char *method, size_t size, gs_fit_options *fo) {
+  snprintf(method, size, "%s", text);
+  char *colon = strchr(method, ':');
+  unsigned long runs = 0;
+  if (colon) {
+    *colon = '\0';
+    if (parse_count("--global's RUNS", colon + 1, &runs) || !runs) {
+      if (!runs) fprintf(stderr, "gransim fit: --global %s: RUNS must be > 0\n", text);
+      return 2;
+    }
+  }
+  gs_error err = {0};
+  if (gs_fit_global_check(method, &err)) {
+    fprintf(stderr, "gransim fit: %s\n", err.msg);
+    return 2;
+  }
+  fo->global = method;
+  fo->global_runs = runs;
+  return 0;
+}
 
 /* Per batch and column of ev: the RMS error in the column's unit and the
  * data's RMS; per batch chi^2 of the scaled residuals. */
@@ -95,6 +136,8 @@ int gs_cmd_fit(int argc, char **argv) {
   gs_error err = {0};
   gs_fit_batches bs = {0}, pred = {0};
   gs_fit_eval fit_ev = {0}, pred_ev = {0};
+  gs_fit_options fo = {0};
+  char global[32];
   gs_fit_result res = {0};
   gs_cfg *cfg = NULL;
   int rc = params ? 0 : 1;
@@ -104,6 +147,10 @@ int gs_cmd_fit(int argc, char **argv) {
                                        {"batches", required_argument, NULL, 'b'},
                                        {"predict", required_argument, NULL, 'P'},
                                        {"out", required_argument, NULL, 'o'},
+                                       {"global", required_argument, NULL, 'g'},
+                                       {"seed", required_argument, NULL, 's'},
+                                       {"porosity-tol", required_argument, NULL, 'e'},
+                                       {"max-runs", required_argument, NULL, 'm'},
                                        {0}};
   gs_cli_begin();
   for (int o; !rc && (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
@@ -118,6 +165,23 @@ int gs_cmd_fit(int argc, char **argv) {
     case 'b': batches_path = optarg; break;
     case 'P': predict_path = optarg; break;
     case 'o': out_dir = optarg; break;
+    case 'g': rc = parse_global(optarg, global, sizeof global, &fo); break;
+    case 's': rc = parse_count("--seed", optarg, &fo.seed); break;
+    case 'm': {
+      unsigned long m;
+      rc = parse_count("--max-runs", optarg, &m);
+      fo.max_runs = m;
+      break;
+    }
+    case 'e': {
+      char *end;
+      fo.porosity_tol = strtod(optarg, &end);
+      if (end == optarg || *end || !(fo.porosity_tol > 0) || !isfinite(fo.porosity_tol)) {
+        fprintf(stderr, "gransim fit: --porosity-tol needs a number > 0, got '%s'\n", optarg);
+        rc = 2;
+      }
+      break;
+    }
     default: rc = 2;
     }
   for (int i = optind; !rc && i < argc; i++)
@@ -143,7 +207,7 @@ int gs_cmd_fit(int argc, char **argv) {
       !(cfg = gs_cfg_load_file(path, &err)) ||
       /* the held-out batches are checked against the case before the fit runs */
       (predict_path && gs_fit_evaluate(cfg, params, np, NULL, &pred, &pred_ev, &err)) ||
-      gs_fit_run_batches(cfg, params, np, &bs, &res, &err)) {
+      gs_fit_run_batches(cfg, params, np, &bs, &fo, &res, &err)) {
     fprintf(stderr, "gransim fit: %s\n", err.msg);
     rc = 1;
     goto done;
@@ -180,10 +244,17 @@ int gs_cmd_fit(int argc, char **argv) {
            bs.batch[0].data.ntimes, bs.batch[0].data.ncols);
   else
     printf("R^2 = %.10g; %zu values in %zu batches", res.r2, res.nresid, bs.n);
-  printf(", chi^2 = %.4g (residuals scaled by each column's RMS); %zu iterations, %ld model "
-         "runs%s\n",
-         res.chi2, res.iterations, res.runs,
-         res.converged ? "" : "; NOT CONVERGED (iteration limit or no progress)");
+  if (fo.porosity_tol > 0)
+    printf(", chi^2 = %.4g (residuals scaled by each column's RMS); epsilon-constrained (COBYLA): "
+           "porosity RMS error %.6g <= %g; %ld model runs",
+           res.chi2, res.porosity_rms, fo.porosity_tol, res.runs);
+  else
+    printf(", chi^2 = %.4g (residuals scaled by each column's RMS); %zu iterations, %ld model "
+           "runs%s",
+           res.chi2, res.iterations, res.runs,
+           res.converged ? "" : "; NOT CONVERGED (iteration limit or no progress)");
+  if (fo.global) printf(" (%ld in the global start, %s)", res.global_runs, fo.global);
+  printf("\n");
   if (predict_path || out_dir) rc = predict_and_write(cfg, params, np, &res, &bs, &fit_ev,
                                                       predict_path ? &pred : NULL, &pred_ev, out_dir);
 done:

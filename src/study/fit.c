@@ -33,7 +33,7 @@ static int fit_f(const gsl_vector *z, void *params, gsl_vector *f) {
  * (each run single-threaded): a Jacobian costs one run's time on p cores.
  * In u the steps go inwards, so that a parameter at its bound still has
  * a column. */
-static int fd_jacobian(gs_fit_problem *fc, const double *v, int in_u, gsl_matrix *J) {
+static int fd_jacobian(gs_fit_problem *fc, const double *v, int in_u, gsl_matrix *J, double *f) {
   const size_t n = J->size1, p = fc->np;
   double *f0 = malloc(n * (p + 1) * sizeof *f0), h[64];
   if (!f0) return GSL_ENOMEM;
@@ -55,12 +55,13 @@ static int fd_jacobian(gs_fit_problem *fc, const double *v, int in_u, gsl_matrix
   fc->runs += (long)p + 1;
   for (size_t j = 1; j <= p && !failed; j++)
     for (size_t i = 0; i < n; i++) gsl_matrix_set(J, i, j - 1, (f0[j * n + i] - f0[i]) / h[j - 1]);
+  if (f && !failed) memcpy(f, f0, n * sizeof *f);
   free(f0);
   return failed ? GSL_EBADFUNC : GSL_SUCCESS;
 }
 
 static int fit_df(const gsl_vector *z, void *params, gsl_matrix *J) {
-  return fd_jacobian(params, z->data, 0, J);
+  return fd_jacobian(params, z->data, 0, J, NULL);
 }
 
 /* u of x: the fraction of the range (of log(value) for log ranges) and dx/du. */
@@ -119,16 +120,118 @@ static int identifiability(const gsl_matrix *Ju, gs_fit_result *res) {
   return ok ? GS_OK : GS_ENOMEM;
 }
 
+/* Levenberg-Marquardt from x (in the logistic map's z), x the solution. */
+static int least_squares(gs_fit_problem *fc, double *x, gs_fit_result *res, gs_error *err) {
+  const size_t n = fc->nresid, np = fc->np;
+  gsl_vector *zv = gsl_vector_alloc(np);
+  gsl_multifit_nlinear_parameters fp = gsl_multifit_nlinear_default_parameters();
+  gsl_multifit_nlinear_workspace *w = gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &fp, n, np);
+  gsl_multifit_nlinear_fdf fdf = {.f = fit_f, .df = fit_df, .n = n, .p = np, .params = fc};
+  for (size_t k = 0; zv && k < np; k++) gsl_vector_set(zv, k, gs_study_to_z(&fc->params[k], x[k]));
+  int rc = GS_OK, info = 0, st = w && zv ? gsl_multifit_nlinear_init(zv, &fdf, w) : GSL_ENOMEM;
+  if (!st) st = gsl_multifit_nlinear_driver(200, 1e-12, 1e-12, 1e-14, NULL, NULL, &info, w);
+  if (fc->err.code) {
+    *err = fc->err;
+    rc = err->code;
+  } else if (st && st != GSL_EMAXITER && st != GSL_ENOPROG) {
+    rc = gs_error_set(err, GS_ENUMERIC, "the fit failed: %s", gsl_strerror(st));
+  } else {
+    res->converged = st == GSL_SUCCESS;
+    res->iterations = gsl_multifit_nlinear_niter(w);
+    const gsl_vector *z = gsl_multifit_nlinear_position(w);
+    for (size_t k = 0; k < np; k++) x[k] = gs_study_to_x(&fc->params[k], gsl_vector_get(z, k), NULL);
+  }
+  if (w) gsl_multifit_nlinear_free(w);
+  if (zv) gsl_vector_free(zv);
+  return rc;
+}
+
+/* The porosity columns' RMS error in their unit from the scaled residuals
+ * r; nan without porosity columns. */
+static double porosity_rms(const gs_fit_problem *fc, const double *r) {
+  double s = 0;
+  size_t cnt = 0;
+  for (size_t b = 0; b < fc->bs->n; b++) {
+    const gs_fit_data *d = &fc->bs->batch[b].data;
+    for (size_t i = 0; i < d->ntimes; i++)
+      for (size_t j = 0; j < d->ncols; j++)
+        if (fc->map[b].porosity[j]) {
+          s += pow(r[fc->map[b].off + i * d->ncols + j] * fc->map[b].scale[j], 2);
+          cnt++;
+        }
+  }
+  return cnt ? sqrt(s / (double)cnt) : NAN;
+}
+
+/* The report at the estimates x: the Jacobian in u (p + 1 runs), chi², the
+ * standard errors, intervals, correlations and identifiability. */
+static int report(gs_fit_problem *fc, const double *x, gs_fit_result *res, gs_error *err) {
+  const size_t n = fc->nresid, np = fc->np;
+  gsl_matrix *Ju = gsl_matrix_alloc(n, np), *covar = gsl_matrix_alloc(np, np);
+  double *f = malloc(n * sizeof *f), u[64], dxdu[64], chi2 = 0;
+  res->nparams = np;
+  res->nresid = n;
+  res->x = malloc(np * sizeof *res->x);
+  res->stderr_x = malloc(np * sizeof *res->stderr_x);
+  res->corr = malloc(np * np * sizeof *res->corr);
+  res->ci_lo = malloc(np * sizeof *res->ci_lo);
+  res->ci_hi = malloc(np * sizeof *res->ci_hi);
+  int rc = GS_OK;
+  if (!Ju || !covar || !f || !res->x || !res->stderr_x || !res->corr || !res->ci_lo || !res->ci_hi)
+    rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  for (size_t k = 0; !rc && k < np; k++) {
+    res->x[k] = x[k];
+    u[k] = to_u(&fc->params[k], x[k], &dxdu[k]);
+  }
+  /* The Jacobian again, in u: the one in z vanishes where the logistic map
+   * saturates (a parameter at its bound), and u is the scale at which
+   * identifiability is judged. */
+  if (!rc && fd_jacobian(fc, u, 1, Ju, f)) {
+    *err = fc->err;
+    rc = gs_error_prefix(err, "the Jacobian at the estimates: ");
+  }
+  if (!rc && identifiability(Ju, res)) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  if (!rc) {
+    for (size_t i = 0; i < n; i++) chi2 += f[i] * f[i];
+    gsl_multifit_nlinear_covar(Ju, 0.0, covar);
+  }
+  const double s2 = chi2 / (double)(n - np), tq = gsl_cdf_tdist_Pinv(0.975, (double)(n - np));
+  for (size_t k = 0; !rc && k < np; k++) {
+    /* s² (J_uᵀ J_u)⁻¹ carried to x by dx/du */
+    res->stderr_x[k] = dxdu[k] * sqrt(s2 * gsl_matrix_get(covar, k, k));
+    res->ci_lo[k] = res->x[k] - tq * res->stderr_x[k];
+    res->ci_hi[k] = res->x[k] + tq * res->stderr_x[k];
+    for (size_t q = 0; q < np; q++)
+      res->corr[k * np + q] = gsl_matrix_get(covar, k, q) /
+                              sqrt(gsl_matrix_get(covar, k, k) * gsl_matrix_get(covar, q, q));
+  }
+  if (!rc) {
+    res->chi2 = chi2;
+    res->r2 = gs_fit_problem_r2(fc, chi2);
+    res->porosity_rms = porosity_rms(fc, f);
+  }
+  if (Ju) gsl_matrix_free(Ju);
+  if (covar) gsl_matrix_free(covar);
+  free(f);
+  return rc;
+}
+
 int gs_fit_run_batches(const gs_cfg *base, const gs_study_axis *params, size_t np,
-                       const gs_fit_batches *bs, gs_fit_result *res, gs_error *err) {
+                       const gs_fit_batches *bs, const gs_fit_options *opt, gs_fit_result *res,
+                       gs_error *err) {
   memset(res, 0, sizeof *res);
+  const gs_fit_options none = {0};
+  if (!opt) opt = &none;
   if (np < 1 || np > 64) return gs_error_set(err, GS_EINPUT, "fit 1 to 64 parameters (got %zu)", np);
   for (size_t k = 0; k < np; k++)
     if (params[k].values)
       return gs_error_set(err, GS_EINPUT, "--params %s: expected a range KEY=LO:HI", params[k].key);
+  if (opt->global && gs_fit_global_check(opt->global, err)) return err->code;
+  if (opt->porosity_tol < 0 || !isfinite(opt->porosity_tol))
+    return gs_error_set(err, GS_EINPUT, "--porosity-tol %g: expected a number > 0", opt->porosity_tol);
   gs_fit_problem fc;
-  double z0[64];
-  int rc = gs_fit_problem_init(&fc, base, params, np, bs, z0, err);
+  double x[64], u[64], dxdu;
+  int rc = gs_fit_problem_init(&fc, base, params, np, bs, x, err);
   if (rc) return rc;
   const size_t n = fc.nresid;
   if (n <= np) {
@@ -136,75 +239,31 @@ int gs_fit_run_batches(const gs_cfg *base, const gs_study_axis *params, size_t n
     return gs_error_set(err, GS_EINPUT, "%zu measured values for %zu parameters: need more values",
                         n, np);
   }
-  for (size_t k = 0; k < np; k++) z0[k] = gs_study_to_z(&params[k], z0[k]);
-
-  gsl_multifit_nlinear_workspace *w = NULL;
-  gsl_vector *zv = gsl_vector_alloc(np);
-  gsl_matrix *covar = gsl_matrix_alloc(np, np);
   gsl_error_handler_t *old = gsl_set_error_handler_off();
   omp_set_max_active_levels(1);
-  gsl_multifit_nlinear_parameters fp = gsl_multifit_nlinear_default_parameters();
-  w = gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &fp, n, np);
-  gsl_multifit_nlinear_fdf fdf = {.f = fit_f, .df = fit_df, .n = n, .p = np, .params = &fc};
-  for (size_t k = 0; zv && k < np; k++) gsl_vector_set(zv, k, z0[k]);
-  int info = 0, st = w && zv && covar ? gsl_multifit_nlinear_init(zv, &fdf, w) : GSL_ENOMEM;
-  if (!st) st = gsl_multifit_nlinear_driver(200, 1e-12, 1e-12, 1e-14, NULL, NULL, &info, w);
-  if (fc.err.code) {
-    *err = fc.err;
-    rc = err->code;
-  } else if (st && st != GSL_EMAXITER && st != GSL_ENOPROG) {
-    rc = gs_error_set(err, GS_ENUMERIC, "the fit failed: %s", gsl_strerror(st));
-  } else {
-    res->converged = st == GSL_SUCCESS;
-    res->iterations = gsl_multifit_nlinear_niter(w);
+  for (size_t k = 0; k < np; k++) u[k] = to_u(&params[k], x[k], &dxdu);
+  if (opt->global) {
+    rc = gs_fit_global_start(&fc, opt->global, opt->global_runs ? opt->global_runs : 50 * np,
+                             opt->seed, u, err);
+    res->global_runs = fc.runs;
+    fc.err = (gs_error){0}; /* its failed runs were points not taken, not the fit's failure */
+    /* the least squares' logistic map cannot start on a bound */
+    for (size_t k = 0; !rc && k < np; k++)
+      x[k] = gs_study_axis_value(&params[k], fmin(fmax(u[k], 1e-6), 1 - 1e-6));
   }
-  gsl_matrix *Ju = rc ? NULL : gsl_matrix_alloc(n, np);
-  if (!rc && !Ju) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-  if (!rc) {
-    const gsl_vector *z = gsl_multifit_nlinear_position(w), *f = gsl_multifit_nlinear_residual(w);
-    double chi2, u[64], dxdu[64];
-    gsl_blas_ddot(f, f, &chi2);
-    res->nparams = np;
-    res->nresid = n;
-    res->x = malloc(np * sizeof *res->x);
-    res->stderr_x = malloc(np * sizeof *res->stderr_x);
-    res->corr = malloc(np * np * sizeof *res->corr);
-    res->ci_lo = malloc(np * sizeof *res->ci_lo);
-    res->ci_hi = malloc(np * sizeof *res->ci_hi);
-    if (!res->x || !res->stderr_x || !res->corr || !res->ci_lo || !res->ci_hi)
-      rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-    for (size_t k = 0; !rc && k < np; k++) {
-      res->x[k] = gs_study_to_x(&params[k], gsl_vector_get(z, k), NULL);
-      u[k] = to_u(&params[k], res->x[k], &dxdu[k]);
-    }
-    /* The Jacobian again, in u: the one in z vanishes where the logistic
-     * map saturates (a parameter at its bound), and u is the scale at which
-     * identifiability is judged. */
-    if (!rc && fd_jacobian(&fc, u, 1, Ju)) {
-      *err = fc.err;
-      rc = gs_error_prefix(err, "the Jacobian at the estimates: ");
-    }
-    if (!rc && identifiability(Ju, res)) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
-    if (!rc) gsl_multifit_nlinear_covar(Ju, 0.0, covar);
-    const double s2 = chi2 / (double)(n - np), tq = gsl_cdf_tdist_Pinv(0.975, (double)(n - np));
-    for (size_t k = 0; !rc && k < np; k++) {
-      /* s² (J_uᵀ J_u)⁻¹ carried to x by dx/du */
-      res->stderr_x[k] = dxdu[k] * sqrt(s2 * gsl_matrix_get(covar, k, k));
-      res->ci_lo[k] = res->x[k] - tq * res->stderr_x[k];
-      res->ci_hi[k] = res->x[k] + tq * res->stderr_x[k];
-      for (size_t q = 0; q < np; q++)
-        res->corr[k * np + q] = gsl_matrix_get(covar, k, q) /
-                                sqrt(gsl_matrix_get(covar, k, k) * gsl_matrix_get(covar, q, q));
-    }
-    res->chi2 = chi2;
-    res->r2 = gs_fit_problem_r2(&fc, chi2);
-    res->runs = fc.runs;
+  if (!rc && opt->porosity_tol > 0) {
+    double rms;
+    rc = gs_fit_eps_constrained(&fc, opt->porosity_tol, opt->max_runs ? opt->max_runs : 2000, u,
+                                &rms, err);
+    for (size_t k = 0; !rc && k < np; k++) x[k] = gs_study_axis_value(&params[k], u[k]);
+    res->converged = !rc;
+    fc.err = (gs_error){0};
+  } else if (!rc) {
+    rc = least_squares(&fc, x, res, err);
   }
-  if (Ju) gsl_matrix_free(Ju);
+  if (!rc) rc = report(&fc, x, res, err);
+  res->runs = fc.runs;
   gsl_set_error_handler(old);
-  if (w) gsl_multifit_nlinear_free(w);
-  if (zv) gsl_vector_free(zv);
-  if (covar) gsl_matrix_free(covar);
   gs_fit_problem_free(&fc);
   return rc;
 }
@@ -214,5 +273,5 @@ int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
   /* one batch borrowing the data: nothing of it is freed here */
   gs_fit_batch b = {.name = "data", .where = data->path ? data->path : "data", .data = *data};
   gs_fit_batches bs = {.n = 1, .batch = &b};
-  return gs_fit_run_batches(base, params, np, &bs, res, err);
+  return gs_fit_run_batches(base, params, np, &bs, NULL, res, err);
 }

@@ -57,8 +57,8 @@ static void batch_design(const gs_fit_problem *fc, const gs_fit_batch *b, const 
 static int batch_run(gs_fit_problem *fc, size_t bi, const double *x, double *model, gs_error *err) {
   const gs_fit_batch *b = &fc->bs->batch[bi];
   const gs_fit_data *data = &b->data;
-  char **keys = malloc((b->nset + fc->np) * sizeof *keys);
-  char **values = malloc((b->nset + fc->np) * sizeof *values);
+  char **keys = malloc((b->nset + fc->np + 1) * sizeof *keys);
+  char **values = malloc((b->nset + fc->np + 1) * sizeof *values);
   char(*text)[40] = malloc((fc->np ? fc->np : 1) * sizeof *text);
   gs_case c;
   fit_obs obs = {.fc = fc, .map = &fc->map[bi], .d = data, .c = &c, .model = model};
@@ -126,6 +126,7 @@ void gs_fit_problem_free(gs_fit_problem *fc) {
     free(fc->map[b].sieve);
     free(fc->map[b].comp);
     free(fc->map[b].scale);
+    free(fc->map[b].porosity);
   }
   free(fc->map);
   gs_study_outputs_free(&fc->out);
@@ -263,7 +264,8 @@ static int map_batch(gs_fit_problem *fc, const gs_fit_data *d, size_t ncomp, gs_
   map->sieve = calloc(2 * n, sizeof *map->sieve);
   map->comp = calloc(n, sizeof *map->comp);
   map->scale = calloc(n, sizeof *map->scale);
-  if (!map->col || !map->sieve || !map->comp || !map->scale)
+  map->porosity = calloc(n, 1);
+  if (!map->col || !map->sieve || !map->comp || !map->scale || !map->porosity)
     return gs_error_set(err, GS_ENOMEM, "out of memory");
   for (size_t j = 0; j < d->ncols; j++) {
     double lo, hi;
@@ -273,6 +275,7 @@ static int map_batch(gs_fit_problem *fc, const gs_fit_data *d, size_t ncomp, gs_
     else if ((rc = gs_study_outputs_find(&fc->out, d->names[j], "data column", &map->col[j], err)))
       gs_error_prefix(err, "%s:%zu: column %zu: ", d->path, d->header_line, j + 2);
     if (rc) return rc;
+    map->porosity[j] = map->col[j] != GS_FIT_SIEVE && !strncmp(fc->out.names[map->col[j]], "porosity_c", 10);
   }
   return GS_OK;
 }

@@ -38,6 +38,7 @@ typedef struct {
   double *sieve; /* per data column: the class's lo, hi diameters [m] (sieve columns) */
   size_t *comp;  /* per data column: the compartment of a sieve column (0-based) */
   double *scale; /* per data column */
+  char *porosity; /* per data column: 1 for a porosity column (the epsilon-constraint's) */
   size_t off;    /* the batch's first residual */
 } gs_fit_map;
 
@@ -66,4 +67,17 @@ void gs_fit_problem_free(gs_fit_problem *fc);
 /* R² of the scaled values: 1 - chi2 over their sum of squares about the
  * mean of each column name over all batches. */
 double gs_fit_problem_r2(const gs_fit_problem *fc, double chi2);
+
+/* NLopt phases of a fit (fit_nlopt.c), in u, the parameters' fractions of
+ * their ranges.  The global start: method crs2, mlsl or isres over the box
+ * with at most max_runs runs (the seed fixes the search), u set to the
+ * best point; gs_fit_global_check refuses an unknown method.  The
+ * epsilon-constrained fit: COBYLA from u, minimising the squared scaled
+ * residuals of every column but porosity, subject to the RMS error of the
+ * porosity columns (in their unit) at most eps; u set to the best feasible
+ * point, *rms_porosity its porosity error. */
+int gs_fit_global_start(gs_fit_problem *fc, const char *method, size_t max_runs,
+                        unsigned long seed, double *u, gs_error *err);
+int gs_fit_eps_constrained(gs_fit_problem *fc, double eps, size_t max_runs, double *u,
+                           double *rms_porosity, gs_error *err);
 #endif
