@@ -25,7 +25,7 @@ _gransim() {
     validate-cfd) opts="--out --long --help" ;;
     plot) opts="--times --format --out --help" ;;
     sweep) opts="--set --design --range --seed --out --outputs --resume --threads --quiet --progress --help" ;;
-    fit) opts="--data --batches --params --predict --out --help" ;;
+    fit) opts="--data --batches --params --global --seed --porosity-tol --max-runs --predict --out --help" ;;
     sensitivity) opts="--range --outputs --method --levels --bootstrap --conf --seed --out --resume --threads --quiet --progress --help" ;;
     optimise) opts="--target --controls --weights --method --max-runs --tol --help" ;;
     dem) opts="--out --check --quiet --threads --ranks --launcher --help" ;;
