@@ -27,6 +27,14 @@ run_rc 2 "$BIN" fit "$start" --data "$WORK/none.csv" --params a=2:1
 stderr_has "LO must be below HI"
 run_rc 1 "$BIN" fit "$start" --data "$WORK/none.csv" "${P[@]}"
 stderr_has "cannot read data file"
+run_rc 2 "$BIN" fit "$start" --data "$WORK/none.csv" "${P[@]}" --global pso
+stderr_has "--global pso: unknown method; expected one of crs2, mlsl, isres"
+run_rc 2 "$BIN" fit "$start" --data "$WORK/none.csv" "${P[@]}" --global crs2:0
+stderr_has "--global crs2:0: RUNS must be > 0"
+run_rc 2 "$BIN" fit "$start" --data "$WORK/none.csv" "${P[@]}" --porosity-tol -1
+stderr_has "--porosity-tol needs a number > 0, got '-1'"
+run_rc 2 "$BIN" fit "$start" --data "$WORK/none.csv" "${P[@]}" --seed x
+stderr_has "--seed needs a whole number >= 0, got 'x'"
 
 run_rc 0 "$BIN" run "$truth" --out "$WORK/truth" --quiet --threads 1
 # summary.csv: time [s],compartment,M0 [1],M1 [m^3],M2 [m^6],d10 [m],d50 [m],...; the data: M0
@@ -39,6 +47,12 @@ b=$(awk '$1 == "mechanisms.0.kernel.beta0" && NF >= 4 { print $2; exit }' "$WORK
 n=$(awk '$1 == "initial.number" && NF >= 4 { print $2; exit }' "$WORK/stdout")
 rel_close "$b" 0.7 1e-6 || { show_output; fail "beta0 = $b, expected 0.7"; }
 rel_close "$n" 1.3 1e-6 || { show_output; fail "initial.number = $n, expected 1.3"; }
+
+# the same with a global start: the search's runs are reported
+run_rc 0 "$BIN" fit "$start" --data "$WORK/data.csv" "${P[@]}" --global mlsl:12 --seed 2
+stdout_has "(12 in the global start, mlsl)"
+b=$(awk '$1 == "mechanisms.0.kernel.beta0" && NF >= 4 { print $2; exit }' "$WORK/stdout")
+rel_close "$b" 0.7 1e-6 || { show_output; fail "--global: beta0 = $b, expected 0.7"; }
 
 # a data time the case does not output
 sed 's/^1,/1.5,/' "$WORK/data.csv" >"$WORK/shifted.csv"
