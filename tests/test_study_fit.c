@@ -173,6 +173,15 @@ int main(void) {
   gs_study_axis_free(&end);
   gs_cfg_free(truth);
 
+  char sweep_path[300]; /* a copy of the good data */
+  snprintf(sweep_path, sizeof sweep_path, "%s/good.csv", dir);
+  {
+    FILE *in = fopen(data_path, "r"), *out = fopen(sweep_path, "w");
+    int ch;
+    while (in && out && (ch = fgetc(in)) != EOF) fputc(ch, out);
+    if (in) fclose(in);
+    if (out) fclose(out);
+  }
   gs_fit_data data;
   CHECK(gs_fit_data_read(data_path, &data, &e) == GS_OK);
   CHECK(data.ntimes == 4 && data.ncols == 2);
@@ -223,6 +232,38 @@ int main(void) {
   CHECK(gs_fit_data_read(data_path, &data, &e) == GS_EINPUT && has(&e, "data.csv:2: column 2 (M0) = 'abc': expected a finite number"));
   write_file(data_path, "time,M0\n");
   CHECK(gs_fit_data_read(data_path, &data, &e) == GS_EINPUT && has(&e, "no data rows"));
+  write_file(data_path, "time,M0\n1,2\nend,3\n4,5\n");
+  CHECK(gs_fit_data_read(data_path, &data, &e) == GS_EINPUT &&
+        has(&e, "data.csv:4: a row after the time 'end' (line 3): end is the last"));
+  write_file(data_path, "time,M0\n1,end\n");
+  CHECK(gs_fit_data_read(data_path, &data, &e) == GS_EINPUT &&
+        has(&e, "data.csv:2: column 2 (M0) = 'end': expected a finite number"));
+
+  /* the time 'end': the run's last output time (4 here) */
+  {
+    FILE *in = fopen(sweep_path, "r"), *out = fopen(data_path, "w");
+    char row[512];
+    int k = 0;
+    while (in && out && fgets(row, sizeof row, in)) {
+      if (k++ == 4) { /* the row at t = 4 */
+        char *comma = strchr(row, ',');
+        fprintf(out, "end%s", comma ? comma : "\n");
+      } else {
+        fputs(row, out);
+      }
+    }
+    if (in) fclose(in);
+    if (out) fclose(out);
+    CHECK(gs_fit_data_read(data_path, &data, &e) == GS_OK && isinf(data.times[3]));
+    gs_fit_result res_end;
+    CHECK(gs_fit_run(start, p, 2, &data, &res_end, &e) == GS_OK);
+    if (res_end.x) {
+      CHECK_REL(res_end.x[0], 0.7, 1e-4);
+      CHECK_REL(res_end.x[1], 1.3, 1e-4);
+    }
+    gs_fit_result_free(&res_end);
+    gs_fit_data_free(&data);
+  }
 
   for (int i = 0; i < 2; i++) gs_study_axis_free(&p[i]);
   gs_cfg_free(start);

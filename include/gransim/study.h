@@ -133,8 +133,10 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
  * compartment also without the _c1) or a sieve class sieve_<LO>_<HI>[_c<j>]
  * (edges in micrometres, HI may be inf: the volume fraction of the
  * compartment's granules in [LO, HI), gs_sieve_fractions).  Every data time
- * must be an output time of the case (list them in output.times).  Errors
- * name the file, line and column. */
+ * must be an output time of the case (list them in output.times); the
+ * time of the last row may be "end", the run's last output time whatever
+ * it is (times[] holds INFINITY), so that a control may move the end.
+ * Errors name the file, line and column. */
 typedef struct gs_fit_data {
   size_t ntimes, ncols;
   double *times;  /* ntimes */

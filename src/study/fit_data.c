@@ -82,12 +82,17 @@ static int read_row(gs_fit_data *d, char **field, size_t nf, const char *path, s
   size_t *l = realloc(d->lines, (d->ntimes + 1) * sizeof *l);
   if (l) d->lines = l;
   if (!t || !v || !l) return gs_error_set(err, GS_ENOMEM, "out of memory");
+  if (d->ntimes && isinf(d->times[d->ntimes - 1]))
+    return gs_error_set(err, GS_EINPUT, "%s:%zu: a row after the time 'end' (line %zu): end is the last",
+                        path, lineno, d->lines[d->ntimes - 1]);
   for (size_t j = 0; j <= d->ncols; j++) {
     char *end;
     errno = 0;
     double x = strtod(field[j], &end);
+    if (j == 0 && !strcmp(field[j], "end")) /* the run's last output time, whatever it is */
+      x = INFINITY, end = field[j] + 3;
     while (end != field[j] && (*end == ' ' || *end == '\t')) end++;
-    if (end == field[j] || *end || !isfinite(x))
+    if (end == field[j] || *end || !(isfinite(x) || (j == 0 && x == INFINITY && !strcmp(field[j], "end"))))
       return gs_error_set(err, GS_EINPUT, "%s:%zu: column %zu (%s) = '%s': expected a finite number",
                           path, lineno, j + 1, j ? d->names[j - 1] : "time", field[j]);
     if (j == 0 && d->ntimes && !(x > d->times[d->ntimes - 1]))

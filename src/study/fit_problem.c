@@ -25,8 +25,10 @@ static int fit_obs_output(void *self, const gs_run_view *run, double t, const do
   fit_obs *o = self;
   const gs_fit_data *d = o->d;
   const gs_model *m = &o->c->model;
+  const double last = o->c->times[o->c->ntimes - 1];
   for (size_t i = 0; i < d->ntimes; i++) {
-    if (!(fabs(t - d->times[i]) <= 1e-12 * fmax(1, fabs(t)))) continue;
+    const double ti = isinf(d->times[i]) ? last : d->times[i];
+    if (!(fabs(t - ti) <= 1e-12 * fmax(1, fabs(t)))) continue;
     gs_study_outputs_eval(&o->fc->out, m, Y, o->row);
     for (size_t j = 0; j < d->ncols; j++) {
       double *v = &o->model[i * d->ncols + j];
@@ -191,7 +193,7 @@ static int check_batch(const gs_fit_problem *fc, const gs_fit_batch *b, gs_case 
   if (fc->bs->path) snprintf(whose, sizeof whose, "batch '%s'", b->name);
   for (size_t i = 0; i < data->ntimes && !rc; i++) {
     const double t = data->times[i];
-    int found = 0;
+    int found = isinf(t); /* end: the run's last output time */
     for (size_t q = 0; q < c->ntimes && !found; q++)
       found = fabs(t - c->times[q]) <= 1e-12 * fmax(1, fabs(t));
     if (found) continue;
