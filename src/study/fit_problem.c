@@ -176,7 +176,8 @@ static int check_batch(const gs_fit_problem *fc, const gs_fit_batch *b, gs_case 
                            b->key_lines ? b->key_lines[k] : 0, b->name, b->keys[k]);
   gs_cfg_free(probe);
   if (rc) return rc;
-  char **keys = malloc((b->nset + 1) * sizeof *keys), **values = malloc((b->nset + 1) * sizeof *values);
+  char **keys = malloc((b->nset + fc->np + 1) * sizeof *keys),
+       **values = malloc((b->nset + fc->np + 1) * sizeof *values);
   gs_design d;
   if (!keys || !values) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   if (!rc) {
