@@ -62,7 +62,7 @@ int gs_cmd_validate_fit(int argc, char **argv) {
              "controls (four spray rates, binder viscosity, impeller speed, end of wet\n"
              "massing) recovered from a start elsewhere by gransim optimise's Nelder-Mead\n"
              "and bounded methods with the thesis's objective 0.65 PSD + 0.35 porosity.\n"
-             "Writes a markdown report (default: stdout).  --quick: 40 runs per method\n"
+             "Writes a markdown report (default: stdout).  --quick: 12 runs per method\n"
              "(a smoke test, not a recovery).\n");
       return 0;
     case 'o': out = optarg; break;
@@ -112,7 +112,7 @@ int gs_cmd_validate_fit(int argc, char **argv) {
   const gs_opt_method methods[2] = {GS_OPT_NELDER_MEAD, GS_OPT_BOUNDED};
   for (int m = 0; m < 2 && !rc; m++) {
     gs_opt_options oo = {.method = methods[m], .weights = weights,
-                         .max_runs = quick ? 40 : (m ? 500 : 1200), .tol = 1e-6};
+                         .max_runs = quick ? 12 : (m ? 500 : 1200), .tol = 1e-6};
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     if (gs_optimise_run(start, ax, NC, &target, &oo, &res[m], &err)) rc = 1;
