@@ -11,7 +11,7 @@ _gransim() {
     words=("${COMP_WORDS[@]}")
     cword=$COMP_CWORD
   fi
-  local commands="run check list validate validate-cfd plot sweep fit sensitivity optimise dem dem-reduce couple geometry"
+  local commands="run check list validate validate-cfd validate-fit plot sweep fit sensitivity optimise dem dem-reduce couple geometry"
   if [ "$cword" -eq 1 ]; then
     COMPREPLY=($(compgen -W "$commands --help --version" -- "$cur"))
     return
@@ -23,9 +23,10 @@ _gransim() {
     list) opts="" ;;
     validate) opts="--out --quick --only --threads --max-loss --help" ;;
     validate-cfd) opts="--out --long --help" ;;
+    validate-fit) opts="--out --quick --help" ;;
     plot) opts="--times --format --out --help" ;;
     sweep) opts="--set --design --range --seed --out --outputs --resume --threads --quiet --progress --help" ;;
-    fit) opts="--data --params --help" ;;
+    fit) opts="--data --batches --params --global --seed --porosity-tol --max-runs --predict --out --help" ;;
     sensitivity) opts="--range --outputs --method --levels --bootstrap --conf --seed --out --resume --threads --quiet --progress --help" ;;
     optimise) opts="--target --controls --weights --method --max-runs --tol --help" ;;
     dem) opts="--out --check --quiet --threads --ranks --launcher --help" ;;
@@ -41,13 +42,14 @@ _gransim() {
   fi
   case $prev in
     --out)
-      if [ "${words[1]}" = validate ] || [ "${words[1]}" = validate-cfd ] || [ "${words[1]}" = dem-reduce ]; then
+      if [ "${words[1]}" = validate ] || [ "${words[1]}" = validate-cfd ] || [ "${words[1]}" = validate-fit ] || [ "${words[1]}" = dem-reduce ]; then
         COMPREPLY=($(compgen -f -- "$cur"))
       else
         COMPREPLY=($(compgen -d -- "$cur"))
       fi
       return ;;
     --data | --target | --impacts) COMPREPLY=($(compgen -f -X '!*.csv' -- "$cur") $(compgen -d -- "$cur")); return ;;
+    --batches | --predict) COMPREPLY=($(compgen -f -X '!*.yaml' -- "$cur") $(compgen -d -- "$cur")); return ;;
     --method)
       case ${words[1]} in
         optimise) COMPREPLY=($(compgen -W "nelder-mead bounded" -- "$cur")) ;;

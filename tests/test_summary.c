@@ -7,7 +7,10 @@
  * occupied cell, and an empty compartment; and continuity: a change of one
  * part in 1e9 in one cell (or a new cell of that weight) moves no
  * percentile by more than a few parts in 1e9 of the diameter (as point
- * masses they jumped by up to a whole cell). */
+ * masses they jumped by up to a whole cell).  Sieve fractions
+ * (gs_sieve_fractions) on the same distribution: classes cut at d10, d50,
+ * d90 hold 0.1, 0.4, 0.4, 0.1; one cell's classes the parts of its volume
+ * range. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -88,7 +91,7 @@ int main(void) {
   const gs_grid *g = &m->grid;
   double *y = calloc(m->nstate + m->nledger, sizeof *y);
   tl_rng r = {2024};
-  double worst = 0, worst_jump = 0;
+  double worst = 0, worst_jump = 0, worst_frac = 0;
   for (int trial = 0; trial < 200; trial++) {
     memset(y, 0, m->nstate * sizeof *y);
     /* compartment 0: a random population, with loads that are the same
@@ -113,6 +116,12 @@ int main(void) {
     reference(m, y, 0, want);
     worst = fmax(worst, worst_rel(got, want));
     CHECK(s.d10 <= s.d50 && s.d50 <= s.d90);
+    /* sieve fractions on the same cumulative distribution: the classes cut
+     * at the percentiles hold 0.1, 0.4, 0.4, 0.1 of the volume */
+    const double cuts[5] = {0, s.d10, s.d50, s.d90, INFINITY}, want_frac[4] = {0.1, 0.4, 0.4, 0.1};
+    double frac[4];
+    gs_sieve_fractions(m, y, 0, cuts, 4, frac);
+    for (int k = 0; k < 4; k++) worst_frac = fmax(worst_frac, fabs(frac[k] - want_frac[k]));
     /* continuity: one cell's number changed by one part in 1e9 (from 0 in
      * an empty cell) */
     size_t moved = (size_t)(tl_uniform(&r) * (double)g->ncells) % g->ncells;
@@ -132,6 +141,18 @@ int main(void) {
     CHECK(fabs(s.d10 / gs_diameter(vlo + 0.1 * (vhi - vlo)) - 1) <= 1e-14);
     CHECK(fabs(s.d50 / gs_diameter(vlo + 0.5 * (vhi - vlo)) - 1) <= 1e-14);
     CHECK(fabs(s.d90 / gs_diameter(vlo + 0.9 * (vhi - vlo)) - 1) <= 1e-14);
+    /* one cell: a class over 0.3 of its volume range holds 0.3; classes
+     * beside it nothing */
+    const double one_cuts[4] = {gs_diameter(0.5 * vlo), gs_diameter(vlo + 0.2 * (vhi - vlo)),
+                                gs_diameter(vlo + 0.5 * (vhi - vlo)), gs_diameter(2 * vhi)};
+    double one_frac[3];
+    gs_sieve_fractions(m, y, 1, one_cuts, 3, one_frac);
+    CHECK(fabs(one_frac[0] - 0.2) <= 1e-12 && fabs(one_frac[1] - 0.3) <= 1e-12 &&
+          fabs(one_frac[2] - 0.5) <= 1e-12);
+    gs_sieve_fractions(m, y, 1, one_cuts + 2, 1, one_frac);
+    CHECK(fabs(one_frac[0] - 0.5) <= 1e-12);
+    gs_sieve_fractions(m, y, 2, cuts, 1, one_frac);
+    CHECK(isnan(one_frac[0]));
     gs_summarize(m, y, 2, &s);
     CHECK(isnan(s.d10) && isnan(s.d50) && isnan(s.d90) && s.m0 == 0);
   }
@@ -140,6 +161,8 @@ int main(void) {
   /* a different algorithm (bisection of the cumulative sum): round-off */
   CHECK(worst < 1e-12);
   CHECK(worst_jump < 1e-7);
+  printf("sieve fractions between the percentiles: worst difference %.3g\n", worst_frac);
+  CHECK(worst_frac < 1e-12);
   free(y);
   gs_case_free(&c);
   TEST_EXIT();

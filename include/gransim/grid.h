@@ -119,6 +119,13 @@ typedef struct gs_size_range {
 void gs_size_percentiles_ranges(const gs_size_range *r, size_t n, gs_size_point *scratch,
                                 const double *p, int np, double *out);
 
+/* The fractions of the ranges' total weight in the granule-volume classes
+ * [v[k], v[k+1]) for k < nclass (v increasing; v[0] may be 0 and
+ * v[nclass] infinite), each range's weight spread evenly as above: weight
+ * outside the classes counts in none.  NaN when there is no weight. */
+void gs_size_fractions_ranges(const gs_size_range *r, size_t n, const double *v, size_t nclass,
+                              double *frac);
+
 #ifdef __cplusplus
 }
 #endif

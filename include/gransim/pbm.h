@@ -371,6 +371,13 @@ int gs_model_pore_coordinates(const gs_model *m, int *liquid, int *gas);
 
 /* Statistics of compartment comp of state y. */
 void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s);
+/* Volume-weighted fractions of compartment comp's granules in the sieve
+ * classes [d[k], d[k+1]) of the volume-equivalent diameter, k < nclass
+ * (d increasing; d[0] may be 0, d[nclass] infinite): each cell's volume
+ * spread over its granule volumes as for d10/d50/d90, fractions of the whole
+ * volume (what lies outside the classes counts in none); NaN when empty. */
+void gs_sieve_fractions(const gs_model *m, const double *y, size_t comp, const double *d,
+                        size_t nclass, double *frac);
 /* Mixed moment sum N x_0^p0 x_1^p1 x_2^p2 over compartment comp. */
 double gs_moment(const gs_model *m, const double *y, size_t comp, const int *powers);
 

@@ -127,43 +127,135 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
                  gs_sweep_report *rep, gs_error *err);
 
 /* ---- fitting ------------------------------------------------------------
- * Measured summary quantities: a CSV with a header "time,NAME,..." and one
- * row per time; NAME is an output column as above (M0, M1_<coordinate>,
- * d50_c1, M2_c1, mean_liquid_c2, ...; in a case of one compartment also
- * without the _c1); every data time must be an output time of the case
- * (list them in output.times). */
+ * Measured data of one batch: a CSV with a header "time,NAME,..." (units in
+ * brackets after a name are dropped: "d50 [m]") and one row per time, the
+ * times increasing; NAME is an output column as above (M0, M1_<coordinate>,
+ * d50_c1, M2_c1, mean_liquid_c2, porosity_c1, ...; in a case of one
+ * compartment also without the _c1) or a sieve class sieve_<LO>_<HI>[_c<j>]
+ * (edges in micrometres, HI may be inf: the volume fraction of the
+ * compartment's granules in [LO, HI), gs_sieve_fractions).  Every data time
+ * must be an output time of the case (list them in output.times); the
+ * time of the last row may be "end", the run's last output time whatever
+ * it is (times[] holds INFINITY), so that a control may move the end.
+ * Errors name the file, line and column. */
 typedef struct gs_fit_data {
   size_t ntimes, ncols;
   double *times;  /* ntimes */
   char **names;   /* ncols */
   double *values; /* values[time * ncols + col] */
+  char *path;     /* for messages */
+  size_t header_line;
+  size_t *lines; /* the file's line of each time */
 } gs_fit_data;
 int gs_fit_data_read(const char *path, gs_fit_data *d, gs_error *err);
 void gs_fit_data_free(gs_fit_data *d);
 
+/* 1 when name is a sieve column sieve_<LO>_<HI>[_c<j>] with 0 <= LO < HI
+ * (micrometres): *lo, *hi in metres, *comp j (0 when not given); 0 when
+ * name is no sieve column; -1 when it starts so but is malformed. */
+int gs_fit_sieve_column(const char *name, double *lo, double *hi, size_t *comp);
+
+/* A batch: key overrides of the case (its recipe) and its measured data. */
+typedef struct gs_fit_batch {
+  char *name;
+  char *where; /* "FILE:LINE" of its entry, for messages */
+  size_t nset;
+  char **keys, **values; /* dotted keys and their values (text, set as written) */
+  int *key_lines;
+  gs_fit_data data;
+} gs_fit_batch;
+
+/* The batches of a fit (a YAML file):
+ *   sieves: [0, 53.0e-6, 106.0e-6, ..., .inf]   # optional, metres
+ *   batches:
+ *     - {name: B3, data: b3.csv, set: {KEY: VALUE, ...}}
+ * data paths relative to the file.  With sieves, every sieve column must
+ * be one of their classes. */
+typedef struct gs_fit_batches {
+  char *path;
+  size_t n;
+  gs_fit_batch *batch;
+  double *sieves; /* nsieves edges [m], or NULL */
+  size_t nsieves;
+  int sieves_line;
+} gs_fit_batches;
+int gs_fit_batches_read(const char *path, gs_fit_batches *bs, gs_error *err);
+/* One batch: the case as it is, with the data file path. */
+int gs_fit_batches_single(const char *data_path, gs_fit_batches *bs, gs_error *err);
+void gs_fit_batches_free(gs_fit_batches *bs);
+
 typedef struct gs_fit_result {
   size_t nparams, nresid;
   double *x;        /* the estimates */
-  double *stderr_x; /* standard errors from the Jacobian (delta method through the bounds' map) */
+  double *stderr_x; /* standard errors from the Jacobian at the estimates (see gs_fit_run_batches) */
+  double *ci_lo, *ci_hi; /* 95 % confidence intervals x -+ t(0.975, n - p) stderr_x */
   double *corr;     /* correlations, nparams x nparams */
+  double *sv;       /* singular values of the scaled Jacobian (in the mapped variables), descending */
+  int *unidentified; /* per parameter: 1 when it is not identifiable from the data (see gs_fit_run) */
   double chi2;      /* sum of squared scaled residuals */
   double r2;        /* 1 - chi2 / (sum of squared scaled deviations from each column's mean) */
   size_t iterations;
   int converged; /* 0: stopped at the iteration limit or without progress */
-  long runs;     /* model runs */
+  long runs;     /* model runs, all phases */
+  long global_runs;    /* of them in the global start */
+  double porosity_rms; /* the porosity columns' RMS error at the estimates (their unit); nan without */
 } gs_fit_result;
+
+/* How a fit searches (NULL or all zero: least squares from the case's values). */
+typedef struct gs_fit_options {
+  const char *global;  /* crs2 | mlsl | isres: a global search over the ranges (NLopt) first,
+                          the least squares (or the constrained fit) from its best point */
+  size_t global_runs;  /* its model runs (0: 50 per parameter) */
+  unsigned long seed;  /* of the global search */
+  double porosity_tol; /* > 0: the epsilon-constraint: the squared scaled residuals of all
+                          columns but porosity least subject to the porosity columns' RMS
+                          error <= porosity_tol (NLopt COBYLA instead of the least squares) */
+  size_t max_runs;     /* of the constrained fit (0: 2000) */
+} gs_fit_options;
 
 /* Least squares (GSL multifit_nlinear, trust region, Levenberg-Marquardt)
  * of the case's outputs at the data's times against the data, over the
  * parameters' ranges (axes from gs_study_parse_range; each kept inside its
- * range by a logistic map, in log for log ranges).  Residuals are (model -
- * data) / RMS of the data column, so columns of different units weigh
- * alike.  The start is the case's own value where it lies inside the range,
- * else the range's middle.  The Jacobian is by forward differences, its p
- * runs at once on the threads. */
+ * range by a logistic map, in log for log ranges), all batches' residuals
+ * in one problem, each batch run with its own key overrides.  Residuals are
+ * (model - data) / scale of the column: the RMS of the column's values over
+ * all batches, one scale shared by every sieve column (their sum of
+ * squares is the PSD's), so columns of different units weigh alike.  The
+ * start is the case's own value where it lies inside the range, else the
+ * range's middle.  The Jacobian is by forward differences, its p runs at
+ * once on the threads.  Data, keys and times are checked before the fit
+ * runs: errors name the file, line and column. */
+int gs_fit_run_batches(const gs_cfg *base, const gs_study_axis *params, size_t np,
+                       const gs_fit_batches *bs, const gs_fit_options *opt, gs_fit_result *res,
+                       gs_error *err);
+/* The same with one batch: the case as it is. */
 int gs_fit_run(const gs_cfg *base, const gs_study_axis *params, size_t np,
                const gs_fit_data *data, gs_fit_result *res, gs_error *err);
 void gs_fit_result_free(gs_fit_result *r);
+/* GS_EINPUT naming the methods when method is not one of --global's. */
+int gs_fit_global_check(const char *method, gs_error *err);
+
+/* The case at parameter values x against batches (fitted or held out):
+ * the model's value of every data value and the scaled residuals, batch
+ * after batch in the data's order ([time][column]), with the same checks
+ * and scales as the fit; x NULL: the checks alone (nothing run). */
+typedef struct gs_fit_eval {
+  size_t nresid;
+  double *model, *resid;
+  double chi2, r2;
+} gs_fit_eval;
+int gs_fit_evaluate(const gs_cfg *base, const gs_study_axis *params, size_t np, const double *x,
+                    const gs_fit_batches *bs, gs_fit_eval *ev, gs_error *err);
+void gs_fit_eval_free(gs_fit_eval *ev);
+
+/* DIR/estimates.csv (a row per parameter: estimate, standard error,
+ * interval, range, identifiable) and DIR/fitted.csv (a row per measured
+ * value of the fitted batches, role fit, and of the held-out ones, role
+ * predict, if pred is not NULL: measured and model value, the sieve class's
+ * edges), each with its JSON sidecar; DIR is made if missing. */
+int gs_fit_write(const char *dir, const gs_study_axis *params, size_t np, const gs_fit_result *res,
+                 const gs_fit_batches *fit, const gs_fit_eval *fit_ev, const gs_fit_batches *pred,
+                 const gs_fit_eval *pred_ev, gs_error *err);
 
 /* ---- optimisation --------------------------------------------------------
  * Controls (dotted keys over ranges) chosen so that the case's outputs at a

@@ -5,6 +5,7 @@
 #define GRANSIM_CLI_COMMANDS_H
 int gs_cmd_validate(int argc, char **argv);
 int gs_cmd_validate_cfd(int argc, char **argv); /* src/cli/validate_cfd.c */
+int gs_cmd_validate_fit(int argc, char **argv); /* src/cli/validate_fit.c */
 int gs_cmd_dem(int argc, char **argv);
 int gs_cmd_dem_reduce(int argc, char **argv); /* src/cli/dem_reduce.c */
 int gs_cmd_sweep(int argc, char **argv);      /* src/cli/sweep.c */

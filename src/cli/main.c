@@ -1,4 +1,4 @@
-/* The gransim command: subcommands run, check, list, validate, validate-cfd, sweep, fit, sensitivity, optimise, dem, dem-reduce, geometry, ... */
+/* The gransim command: subcommands run, check, list, validate, validate-cfd, validate-fit, sweep, fit, sensitivity, optimise, dem, dem-reduce, geometry, ... */
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -44,8 +44,9 @@ static void usage(FILE *fp) {
           "  sweep CASE --set KEY=V1,V2,... | --design lhs:N --range KEY=LO:HI ... --out DIR\n"
           "                         many runs of a case over a grid or a Latin hypercube of\n"
           "                         variations; one row per run in DIR/sweep.csv\n"
-          "  fit CASE --data FILE --params KEY=LO:HI ...\n"
-          "                         fit case parameters to measured d50, M0, ... over time\n"
+          "  fit CASE --data FILE|--batches FILE --params KEY=LO:HI ...\n"
+          "                         fit case parameters to measured sieve fractions, d50,\n"
+          "                         porosity, ... of one or several batches\n"
           "  sensitivity CASE --range KEY=LO:HI ... --outputs COLS --method sobol:N|morris:R --out DIR\n"
           "                         global sensitivity: Sobol' indices or Morris screening\n"
           "  optimise CASE --target FILE --controls KEY=LO:HI ... [--method nelder-mead|bounded]\n"
@@ -53,6 +54,8 @@ static void usage(FILE *fp) {
           "  validate-cfd [--long] [--out FILE]\n"
           "                         the gas phase against Ergun, terminal velocities, Wen & Yu;\n"
           "                         a markdown report (docs/validation-cfd.md)\n"
+          "  validate-fit CASE [--quick] [--out FILE]\n"
+          "                         the thesis's recipe-recovery study (docs/validation-fit.md)\n"
           "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM);\n"
           "                         with a `gas` section, a CFD-DEM run of a fluid bed\n"
           "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n"
@@ -314,6 +317,7 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "list")) return cmd_list();
   if (!strcmp(argv[1], "validate")) return gs_cmd_validate(argc - 1, argv + 1);
   if (!strcmp(argv[1], "validate-cfd")) return gs_cmd_validate_cfd(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "validate-fit")) return gs_cmd_validate_fit(argc - 1, argv + 1);
   if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 1, argv + 1);
   if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 1, argv + 1);
   if (!strcmp(argv[1], "geometry")) return gs_cmd_geometry(argc - 1, argv + 1);

@@ -97,3 +97,19 @@ void gs_size_percentiles_ranges(const gs_size_range *r, size_t n, gs_size_point 
   /* cube roots only for the percentiles (docs/performance.md) */
   for (int i = 0; i < np; i++) out[i] = gs_diameter(out[i]);
 }
+
+void gs_size_fractions_ranges(const gs_size_range *r, size_t n, const double *v, size_t nclass,
+                              double *frac) {
+  double total = 0;
+  for (size_t k = 0; k < nclass; k++) frac[k] = 0;
+  for (size_t i = 0; i < n; i++) {
+    if (!(r[i].w > 0) || !(r[i].hi > r[i].lo)) continue;
+    total += r[i].w;
+    const double density = r[i].w / (r[i].hi - r[i].lo);
+    for (size_t k = 0; k < nclass; k++) {
+      const double a = fmax(r[i].lo, v[k]), b = fmin(r[i].hi, v[k + 1]);
+      if (b > a) frac[k] += density * (b - a);
+    }
+  }
+  for (size_t k = 0; k < nclass; k++) frac[k] = total > 0 ? frac[k] / total : NAN;
+}

@@ -27,24 +27,15 @@ double gs_moment(const gs_model *m, const double *y, size_t comp, const int *pow
   return s;
 }
 
-/* Volume-weighted percentiles p[0..np-1] (fractions) of the diameter, the
- * volume of each occupied cell spread evenly between the granule volumes of
- * its lower and upper edges (the size axes' edges summed, plus the carried
- * volume per particle, which vol holds at the pivot). */
-static void percentiles(const gs_model *m, const double *vol, const double *N, const double *p,
-                        int np, double *out) {
+/* The cells of a compartment as ranges of granule volume (r[ncells]), the
+ * volume N V of each occupied cell spread evenly between the granule
+ * volumes of its lower and upper edges (the size axes' edges summed, plus
+ * the carried volume per particle, which vol holds at the pivot); returns
+ * how many. */
+static size_t cell_ranges(const gs_model *m, const double *vol, const double *N, gs_size_range *r) {
   const gs_grid *g = &m->grid;
-  const size_t n = g->ncells;
-  gs_size_range *r = malloc((n ? n : 1) * sizeof *r);
-  gs_size_point *scratch = malloc(4 * (n ? n : 1) * sizeof *scratch);
-  if (!r || !scratch) {
-    for (int i = 0; i < np; i++) out[i] = NAN;
-    free(r);
-    free(scratch);
-    return;
-  }
   size_t k = 0;
-  for (size_t c = 0; c < n; c++) {
+  for (size_t c = 0; c < g->ncells; c++) {
     if (!(N[c] > 0 && vol[c] > 0)) continue;
     size_t idx[GS_MAX_DIM];
     gs_grid_unindex(g, c, idx);
@@ -56,7 +47,23 @@ static void percentiles(const gs_model *m, const double *vol, const double *N, c
       }
     r[k++] = (gs_size_range){lo, hi, N[c] * vol[c]};
   }
-  gs_size_percentiles_ranges(r, k, scratch, p, np, out);
+  return k;
+}
+
+/* Volume-weighted percentiles p[0..np-1] (fractions) of the diameter over
+ * the cell ranges. */
+static void percentiles(const gs_model *m, const double *vol, const double *N, const double *p,
+                        int np, double *out) {
+  const size_t n = m->grid.ncells;
+  gs_size_range *r = malloc((n ? n : 1) * sizeof *r);
+  gs_size_point *scratch = malloc(4 * (n ? n : 1) * sizeof *scratch);
+  if (!r || !scratch) {
+    for (int i = 0; i < np; i++) out[i] = NAN;
+    free(r);
+    free(scratch);
+    return;
+  }
+  gs_size_percentiles_ranges(r, cell_ranges(m, vol, N, r), scratch, p, np, out);
   free(r);
   free(scratch);
 }
@@ -100,19 +107,50 @@ static void pores(const gs_model *m, const double *y, size_t comp, gs_summary *s
   s->liquid_content = liq / s->m0;
 }
 
-void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s) {
+/* The granule volume per cell: the size axes, plus what a particle carries
+ * (liquid and gas fill the pores of the granule: the external volume of
+ * Sampat et al. (2018)).  Returns m->size_volume when nothing is carried,
+ * else *owned (to be freed), NULL without memory. */
+static const double *granule_volumes(const gs_model *m, const double *y, size_t comp,
+                                     double **owned) {
   const gs_grid *g = &m->grid;
   const double *N = gs_model_numbers_c(m, y, comp);
-  memset(s, 0, sizeof *s);
-  /* granule volume per cell: the size axes, plus what a particle carries
-   * (liquid and gas fill the pores of the granule: the external volume of Sampat et al. (2018)) */
-  double *vol = m->ncarried ? malloc(g->ncells * sizeof *vol) : NULL;
-  const double *size = vol ? vol : m->size_volume;
+  *owned = NULL;
+  if (!m->ncarried) return m->size_volume;
+  double *vol = *owned = malloc((g->ncells ? g->ncells : 1) * sizeof *vol);
   for (size_t c = 0; vol && c < g->ncells; c++) {
     vol[c] = m->size_volume[c];
     for (int q = 0; q < m->ncarried; q++)
       if (N[c] > 0) vol[c] += gs_model_carried_c(m, y, comp, q)[c] / N[c];
   }
+  return vol;
+}
+
+void gs_sieve_fractions(const gs_model *m, const double *y, size_t comp, const double *d,
+                        size_t nclass, double *frac) {
+  const size_t n = m->grid.ncells;
+  double *owned, *v = malloc((nclass + 1) * sizeof *v);
+  const double *vol = granule_volumes(m, y, comp, &owned);
+  gs_size_range *r = malloc((n ? n : 1) * sizeof *r);
+  if (v && vol && r) {
+    for (size_t k = 0; k <= nclass; k++) v[k] = M_PI / 6 * d[k] * d[k] * d[k];
+    gs_size_fractions_ranges(r, cell_ranges(m, vol, gs_model_numbers_c(m, y, comp), r), v, nclass,
+                             frac);
+  } else {
+    for (size_t k = 0; k < nclass; k++) frac[k] = NAN;
+  }
+  free(v);
+  free(owned);
+  free(r);
+}
+
+void gs_summarize(const gs_model *m, const double *y, size_t comp, gs_summary *s) {
+  const gs_grid *g = &m->grid;
+  const double *N = gs_model_numbers_c(m, y, comp);
+  memset(s, 0, sizeof *s);
+  double *vol;
+  const double *size = granule_volumes(m, y, comp, &vol);
+  if (!size) size = m->size_volume; /* no memory: without the carried part */
   for (size_t c = 0; c < g->ncells; c++) {
     double v = size[c];
     s->m0 += N[c];

@@ -16,6 +16,7 @@
 
 typedef struct {
   gs_fit_problem fp;
+  gs_fit_batches bs; /* one batch borrowing the target */
   const double *weights;
   double *r;   /* residuals of one run */
   double best; /* the least objective seen, and where */
@@ -33,12 +34,12 @@ typedef struct {
 static double objective(opt_ctx *oc, const double *x) {
   gs_error e = {0};
   oc->fp.runs++;
-  if (gs_fit_problem_residuals(&oc->fp, x, oc->r, &e)) {
+  if (gs_fit_problem_residuals(&oc->fp, x, oc->r, NULL, &e)) {
     if (!oc->fp.err.code) oc->fp.err = e;
     oc->failed++;
     return NAN;
   }
-  const gs_fit_data *d = oc->fp.data;
+  const gs_fit_data *d = &oc->fp.bs->batch[0].data;
   double sum = 0;
   for (size_t t = 0; t < d->ntimes; t++)
     for (size_t j = 0; j < d->ncols; j++)
@@ -158,7 +159,10 @@ int gs_optimise_run(const gs_cfg *base, const gs_study_axis *controls, size_t nc
   opt_ctx oc = {.weights = opt->weights, .best = INFINITY,
                 .max_runs = opt->max_runs ? (long)opt->max_runs : 4000};
   double x0[64];
-  int rc = gs_fit_problem_init(&oc.fp, base, controls, nc, target, x0, err);
+  gs_fit_batch batch = {.name = "target", .where = target->path ? target->path : "target",
+                        .data = *target};
+  oc.bs = (gs_fit_batches){.n = 1, .batch = &batch};
+  int rc = gs_fit_problem_init(&oc.fp, base, controls, nc, &oc.bs, x0, err);
   if (rc) return rc;
   oc.r = malloc(target->ntimes * target->ncols * sizeof *oc.r);
   oc.best_x = malloc(nc * sizeof *oc.best_x);

@@ -10,7 +10,20 @@
 
 /* Statistics of a column; the per-compartment ones are summary.csv's. */
 enum { W_M0_ALL, W_M1_ALL, W_M0, W_M1, W_M2, W_D10, W_D50, W_D90, W_MEAN, W_TOTAL, W_POROSITY,
-       W_LIQUID_CONTENT, W_MECH };
+       W_LIQUID_CONTENT, W_MECH, W_MOISTURE };
+
+/* The volume coordinate called name, or -1. */
+static int vol_index(const gs_model *m, const char *name) {
+  for (int k = 0; k < m->nvol; k++)
+    if (!strcmp(gs_model_vol_name(m, k), name)) return k;
+  return -1;
+}
+
+/* Porosity and moisture need coordinates named solid and liquid (gas is
+ * optional: without it the pores hold only liquid). */
+static int has_pores(const gs_model *m) {
+  return vol_index(m, "solid") >= 0 && vol_index(m, "liquid") >= 0;
+}
 
 static const char *const fixed_names[] = {"M0", "M1", "M2", "d10", "d50", "d90"};
 
@@ -91,6 +104,7 @@ int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *co
     if (what < 0 && pores && !strcmp(extra[e], "liquid_content")) what = W_LIQUID_CONTENT;
     for (int k = 0; k < gs_model_ncolumns(m) && what < 0; k++)
       if (!strcmp(extra[e], gs_model_column(m, k)->name)) what = W_MECH, index = k;
+    if (what < 0 && has_pores(m) && !strcmp(extra[e], "moisture")) what = W_MOISTURE;
     if (what < 0) {
       char known[1024] = "M0, M1, M2, d10, d50, d90";
       size_t at = strlen(known);
@@ -100,6 +114,7 @@ int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *co
       if (pores && at < sizeof known) at += (size_t)snprintf(known + at, sizeof known - at, ", porosity, liquid_content");
       for (int k = 0; k < gs_model_ncolumns(m) && at < sizeof known; k++)
         at += (size_t)snprintf(known + at, sizeof known - at, ", %s", gs_model_column(m, k)->name);
+      if (has_pores(m) && at < sizeof known) at += (size_t)snprintf(known + at, sizeof known - at, ", moisture");
       rc = gs_error_set(err, GS_EINPUT, "--outputs: unknown summary column '%s'; known: %s",
                         extra[e], known);
     }
@@ -161,6 +176,9 @@ void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, double 
     case W_POROSITY: v = c->porosity; break;
     case W_LIQUID_CONTENT: v = c->liquid_content; break;
     case W_MECH: v = mech[(o->comp[i] < nc ? o->comp[i] : 0) * nm + (size_t)o->index[i]]; break;
+    case W_MOISTURE: /* liquid-to-solid volume ratio of the totals */
+      v = c->total[vol_index(m, "liquid")] / c->total[vol_index(m, "solid")];
+      break;
     default: v = c->total[o->index[i]]; break;
     }
     values[i] = v;
@@ -187,6 +205,10 @@ void gs_study_extras_all(const gs_model *m, gs_study_extras *x) {
     snprintf(x->buf[2 * k + 1], sizeof x->buf[0], "total_%s", gs_model_vol_name(m, k));
     x->name[x->n++] = x->buf[2 * k];
     x->name[x->n++] = x->buf[2 * k + 1];
+  }
+  if (has_pores(m)) {
+    x->name[x->n++] = "porosity";
+    x->name[x->n++] = "moisture";
   }
 }
 
