@@ -12,9 +12,9 @@ install(DIRECTORY include/gransim DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
 # needs them all (Requires.private for those with a .pc file, Libs.private for
 # SUNDIALS, whose Debian package has none, OpenMP and libm).
 # (hypre, Debian's built with MPI, is always linked: so is MPI)
-set(GRANSIM_PC_REQUIRES_PRIVATE "yaml-0.1 gsl hdf5-serial nlopt fftw3 zlib mpi-c")
+set(GRANSIM_PC_REQUIRES_PRIVATE "yaml-0.1 gsl hdf5-serial nlopt fftw3 zlib lapack mpi-c")
 set(GRANSIM_PC_LIBS_PRIVATE "")
-foreach(lib ${HYPRE_LIB} ${CVODE_LIB} ${NVECSERIAL_LIB} ${SUNLINSOLSPGMR_LIB} ${SUNLINSOLDENSE_LIB} ${SUNMATDENSE_LIB})
+foreach(lib ${HYPRE_LIB} ${CVODE_LIB} ${NVECSERIAL_LIB} ${SUNLINSOLSPGMR_LIB} ${SUNMATDENSE_LIB})
   get_filename_component(dir ${lib} DIRECTORY)
   get_filename_component(name ${lib} NAME_WE)
   string(REGEX REPLACE "^lib" "" name ${name})

@@ -59,6 +59,21 @@ run_rc 0 "$BIN" plot "$WORK/cpl"
 "${CHECK[@]}" "$WORK/cpl/plots" "$SIZES|PBM stage" "$PSD" "dem-stage-collisions=C_ij [1/s]|DEM stage" \
   "dem-stage-impacts=normal impact speed [m/s]" "dem-stage-dem-series=steady state at|PBM stage runs" ||
   fail "coupled plots"
+! grep -q 'coupling-cycle' "$WORK/cpl/plots/sizes.svg" || fail "one_way coupling: cycles marked without cycles.csv"
+# two-way coupling writes DIR/cycles.csv: each cycle's start is a dotted line on both time plots
+printf 'cycle,t_start [s],t_end [s],trigger\n1,0,20,start\n2,20,47.5,drift\n3,47.5,85,drift\n' > "$WORK/cpl/cycles.csv"
+run_rc 0 "$BIN" plot "$WORK/cpl"
+"${CHECK[@]}" "$WORK/cpl/plots" "sizes=coupling cycle starts|the starts of 3 coupling cycles" \
+  "volumes=coupling cycle starts|the starts of 3 coupling cycles" || fail "coupling cycles"
+[ "$(grep -c 'id="coupling-cycle-[123]"' "$WORK/cpl/plots/sizes.svg")" = 9 ] || fail "sizes.svg: not 3 cycle lines on each of 3 panels"
+grep -q 'id="coupling-cycle-3"' "$WORK/cpl/plots/volumes.svg" || fail "volumes.svg: no line of cycle 3"
+printf 'cycle,t_start [s]\n1,0\n2,soon\n' > "$WORK/cpl/cycles.csv"
+run_rc 1 "$BIN" plot "$WORK/cpl"
+stderr_has "cycles.csv:3: t_start [s] 'soon' is not a number"
+printf 'cycle,start\n1,0\n' > "$WORK/cpl/cycles.csv"
+run_rc 1 "$BIN" plot "$WORK/cpl"
+stderr_has "no column 't_start [s]'"
+rm "$WORK/cpl/cycles.csv"
 
 # ---- errors
 run_rc 1 "$BIN" plot "$WORK/cm"

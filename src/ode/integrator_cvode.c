@@ -2,7 +2,8 @@
  *
  * Keys (besides the common ones, see integrator.c):
  *   linear_solver  dense | gmres | auto (default auto: dense up to 1000
- *                  components, else matrix-free GMRES without preconditioner)
+ *                  components, else matrix-free GMRES without preconditioner;
+ *                  dense factors with LAPACK, lapack_dense.h)
  *   max_order      BDF order limit 1..5 (default 5)
  *   preconditioner auto | none (default auto: GMRES is left-preconditioned
  *                  with the system's psolve when it has one, i.e. when a
@@ -25,11 +26,11 @@
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include "gransim/integrator.h"
+#include "lapack_dense.h"
 
 int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
                               double *initial_step, double *min_step, double *max_step,
@@ -211,7 +212,7 @@ static int gs_cvode_linear_solver(gs_cvode *self, const gs_ode *ode, gs_error *e
     }
   } else {
     self->jac = SUNDenseMatrix(n, n, self->sunctx);
-    if (self->jac) self->ls = SUNLinSol_Dense(self->y, self->jac, self->sunctx);
+    if (self->jac) self->ls = gs_lapack_dense(self->y, self->jac, self->sunctx);
   }
   if (!self->ls)
     return gs_error_set(err, GS_ENOMEM, "integrator cvode: cannot allocate the %s linear solver",
