@@ -4,7 +4,9 @@
  * (length dt, from t0 to the end):  C_ij = N_coll,ij / (N_i N_j dt), with
  * N_coll,ij the collision events (contacts that began) between the classes
  * and N_i the mean number of class-i particles over the samples, as in
- * Sampat et al. (2018) eq. (9).  collision_kernel.csv holds C in the format of the PBM's
+ * Sampat et al. (2018) eq. (9); on the diagonal C_ii = 2 N_coll,ii / (N_i^2
+ * dt), as the PBM's pair loop counts a like pair once
+ * (gs_dem_collision_frequency).  collision_kernel.csv holds C in the format of the PBM's
  * `table` kernel (src/kernel/kernel_table.c) with class edges in particle
  * diameter (use `measure: diameter` there); impact_table.csv holds the wall
  * impacts in the format of the `dem_impact` breakage selection
@@ -311,7 +313,7 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
     for (int j = i; j < ncl; j++) {
       double ev = (double)k.pair_events[i * ncl + j];
       double Ni = have ? s->num_sum[i] / ns : NAN, Nj = have ? s->num_sum[j] / ns : NAN;
-      double cij = !have ? NAN : Ni > 0 && Nj > 0 ? ev / (Ni * Nj * win) : 0;
+      double cij = !have ? NAN : gs_dem_collision_frequency(ev, Ni, Nj, win, i == j);
       C[i * ncl + j] = C[j * ncl + i] = cij;
       fprintf(fp, "%d,%d,%s,%s,%.0f,%.6g,%.6g,%.9g,%.9g,%.9g\n", i + 1, j + 1, c->cls[i].name,
               c->cls[j].name, ev, Ni, Nj, win, have ? ev / win : NAN, cij);
@@ -320,7 +322,8 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
 
   /* the same as a PBM kernel table: edges in diameter halfway between classes */
   if (!(fp = gs_dem_table_begin(&tab, dir, "collision_kernel.csv", err))) { free(C); free(e); return err->code; }
-  fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt) [1/s], window %.9g s%s;\n"
+  fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt), C_ii = 2 N_coll,ii / (N_i^2 dt) [1/s], "
+          "window %.9g s%s;\n"
           "# edges are particle diameters [m]: use `kernel: {type: table, measure: diameter, ...}`\n"
           "edges", win, note);
   gs_dem_class_edges(c, e);

@@ -400,6 +400,11 @@ static int alloc_out(gs_dem_data *o, size_t n, size_t ns, gs_error *err) {
   return GS_OK;
 }
 
+double gs_dem_collision_frequency(double events, double Ni, double Nj, double window, int same_class) {
+  if (!(Ni > 0 && Nj > 0)) return 0;
+  return (same_class ? 2 : 1) * events / (Ni * Nj * window);
+}
+
 void gs_dem_lognormal_fit(const double *ln_u, size_t n, double *mu, double *sigma) {
   if (n < 2) { *mu = *sigma = NAN; return; }
   *mu = gsl_stats_mean(ln_u, 1, n);
@@ -560,8 +565,8 @@ int gs_dem_data_read(const char *dir, const gs_dem_options *opt_in, gs_dem_data 
     for (size_t i = 0; i < n; i++)
       for (size_t j = 0; j < n; j++) {
         double E = K[i * n + j] / out->pair_contact_time[i * n + j];
-        double pairs = N[i] * N[j];
-        C[i * n + j] = pairs > 0 ? (i == j ? 2 * E : E) / pairs : NAN; /* undefined without particles */
+        /* undefined without particles */
+        C[i * n + j] = N[i] > 0 && N[j] > 0 ? gs_dem_collision_frequency(E, N[i], N[j], 1, i == j) : NAN;
         out->contacts[i * n + j] += K[i * n + j] / (double)ns;
       }
   }

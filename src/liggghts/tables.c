@@ -385,14 +385,14 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
       for (size_t j = i; j < ncl; j++) {
         double Ni = a.num[i] / ns, Nj = a.num[j] / ns;
         double eps = dd.contacts[i * ncl + j] / dd.pair_contact_time[i * ncl + j];
-        fprintf(fp, " %zu-%zu %.6g", i + 1, j + 1, Ni > 0 && Nj > 0 ? eps / (Ni * Nj) : 0);
+        fprintf(fp, " %zu-%zu %.6g", i + 1, j + 1, gs_dem_collision_frequency(eps, Ni, Nj, 1, i == j));
       }
     fprintf(fp, "\nclass_i,class_j,name_i,name_j,events,N_i,N_j,window_s,events_per_s,C_ij\n");
     for (size_t i = 0; i < ncl; i++)
       for (size_t j = i; j < ncl; j++) {
         double ev = a.pair_events[i * ncl + j];
         double Ni = a.num[i] / ns, Nj = a.num[j] / ns;
-        double cij = Ni > 0 && Nj > 0 ? ev / (Ni * Nj * win) : 0;
+        double cij = gs_dem_collision_frequency(ev, Ni, Nj, win, i == j);
         C[i * ncl + j] = C[j * ncl + i] = cij;
         fprintf(fp, "%zu,%zu,%s,%s,%.0f,%.6g,%.6g,%.9g,%.9g,%.9g\n", i + 1, j + 1, c->cls[i].name, c->cls[j].name,
                 ev, Ni, Nj, win, ev / win, cij);
@@ -400,7 +400,8 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     rc = gs_dem_table_end(&tab, gs_dem_units_collisions, err);
   } else if (!rc) rc = err->code;
   if (!rc && (fp = gs_dem_table_begin(&tab, out, "collision_kernel.csv", err))) {
-    fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt) [1/s], window %.9g s%s;\n"
+    fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt), C_ii = 2 N_coll,ii / (N_i^2 dt) [1/s], "
+            "window %.9g s%s;\n"
             "# edges are particle diameters [m]: use `kernel: {type: table, measure: diameter, ...}`\nedges", win, note);
     for (size_t i = 0; i <= ncl; i++) fprintf(fp, ", %.9g", e[i]);
     fprintf(fp, "\n");
