@@ -402,46 +402,57 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
   if ((rc = gs_dem_table_end(&tab, gs_dem_units_velocity, err))) return rc;
 
   /* residence times of particles that left through an outlet: all, and per class */
+  return gs_dem_residence_write(c, dir, s->rt, s->rt_cls, s->nrt, s->out_mass, s->t0, t_end,
+                                have ? s->hold_n_sum / ns : NAN, have ? s->hold_m_sum / ns : NAN, note, err);
+}
+
+int gs_dem_residence_write(const gs_dem_case *c, const char *dir, const double *rt, const int *rt_cls, size_t nrt,
+                           double out_mass, double t0, double t_end, double hold_n, double hold_m, const char *note,
+                           gs_error *err) {
+  const int ncl = (int)c->nclass;
+  gs_csv_out tab;
+  FILE *fp;
+  int rc;
   double mx = 0, sum = 0;
-  for (size_t r = 0; r < s->nrt; r++) {
-    mx = fmax(mx, s->rt[r]);
-    sum += s->rt[r];
+  for (size_t r = 0; r < nrt; r++) {
+    mx = fmax(mx, rt[r]);
+    sum += rt[r];
   }
   const int nb = 50;
   const double bw = mx > 0 ? mx / nb * (1 + 1e-9) : 1;
   if (!(fp = gs_dem_table_begin(&tab, dir, "residence.csv", err))) return err->code;
   fprintf(fp, "# %zu particles left through outlets (%.6g kg) from t = %.9g to %.9g s; mean residence %.6g s;"
           " mean hold-up %.6g particles, %.6g kg%s\n",
-          s->nrt, s->out_mass, s->t0, t_end, s->nrt ? sum / (double)s->nrt : NAN, have ? s->hold_n_sum / ns : NAN,
-          have ? s->hold_m_sum / ns : NAN, note);
+          nrt, out_mass, t0, t_end, nrt ? sum / (double)nrt : NAN, hold_n,
+          hold_m, note);
   fprintf(fp, "t_lo,t_hi,count,fraction\n");
-  for (int b = 0; b < nb && s->nrt; b++) {
+  for (int b = 0; b < nb && nrt; b++) {
     size_t cnt = 0;
-    for (size_t r = 0; r < s->nrt; r++)
-      if ((int)(s->rt[r] / bw) == b) cnt++;
-    fprintf(fp, "%.6g,%.6g,%zu,%.6g\n", b * bw, (b + 1) * bw, cnt, (double)cnt / (double)s->nrt);
+    for (size_t r = 0; r < nrt; r++)
+      if ((int)(rt[r] / bw) == b) cnt++;
+    fprintf(fp, "%.6g,%.6g,%zu,%.6g\n", b * bw, (b + 1) * bw, cnt, (double)cnt / (double)nrt);
   }
   if ((rc = gs_dem_table_end(&tab, gs_dem_units_residence, err))) return rc;
 
   if (!(fp = gs_dem_table_begin(&tab, dir, "residence_class.csv", err))) return err->code;
   fprintf(fp, "# residence-time distribution per class of the %zu particles that left through outlets from "
-          "t = %.9g to %.9g s, bins as in residence.csv; fraction: of the class%s\n", s->nrt, s->t0, t_end, note);
+          "t = %.9g to %.9g s, bins as in residence.csv; fraction: of the class%s\n", nrt, t0, t_end, note);
   for (int i = 0; i < ncl; i++) {
     size_t n = 0;
     double si = 0;
-    for (size_t r = 0; r < s->nrt; r++)
-      if (s->rt_cls[r] == i) n++, si += s->rt[r];
+    for (size_t r = 0; r < nrt; r++)
+      if (rt_cls[r] == i) n++, si += rt[r];
     fprintf(fp, "# class %d (%s): %zu particles, mean residence %.6g s\n", i + 1, c->cls[i].name, n,
             n ? si / (double)n : NAN);
   }
   fprintf(fp, "class,name,t_lo,t_hi,count,fraction\n");
-  for (int i = 0; i < ncl && s->nrt; i++) {
+  for (int i = 0; i < ncl && nrt; i++) {
     size_t n = 0;
-    for (size_t r = 0; r < s->nrt; r++) n += s->rt_cls[r] == i;
+    for (size_t r = 0; r < nrt; r++) n += rt_cls[r] == i;
     for (int b = 0; b < nb; b++) {
       size_t cnt = 0;
-      for (size_t r = 0; r < s->nrt; r++)
-        if (s->rt_cls[r] == i && (int)(s->rt[r] / bw) == b) cnt++;
+      for (size_t r = 0; r < nrt; r++)
+        if (rt_cls[r] == i && (int)(rt[r] / bw) == b) cnt++;
       fprintf(fp, "%d,%s,%.6g,%.6g,%zu,%.6g\n", i + 1, c->cls[i].name, b * bw, (b + 1) * bw, cnt,
               n ? (double)cnt / (double)n : NAN);
     }

@@ -6,9 +6,12 @@
 
 #include "dem/dem_case.h"
 
+/* thermo_style custom step atoms ke c_rke cpu v_hn v_hm (deck.c) */
+#define GS_LIG_THERMO_COLS 7
 typedef struct {
   size_t n, cap;
-  double *row; /* 5 per row: time [s], atoms, kinetic energy, rotational energy, cpu seconds */
+  double *row; /* per row: time [s], atoms, kinetic energy, rotational energy, cpu seconds, hold-up number and
+                  mass [kg] */
 } gs_lig_thermo;
 
 /* A deck that only reads mesh `wall` and writes the facets LIGGGHTS refuses

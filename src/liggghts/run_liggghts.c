@@ -93,6 +93,8 @@ static int run_deck(const char *dir, const char *launch, const char *bin, const 
     return gs_error_set(err, GS_EIO, "cannot start '%s': %s", cmd, strerror(errno));
   }
   char line[4096], tail[12][512], first_error[512] = "";
+  const long out_k = (long)fmax(1, round(c->out_every / c->prm.dt));
+  double cpu_last = 0, cpu_sum = 0;
   int nt = 0, saw_error = 0, short_insert = 0;
   while (fgets(line, sizeof line, pp)) {
     fputs(line, sc);
@@ -106,18 +108,27 @@ static int run_deck(const char *dir, const char *launch, const char *bin, const 
       memcpy(first_error, tail[(nt - 1) % 12], sizeof first_error);
     }
     if (strstr(line, "Less insertions than requested")) short_insert++;
-    double step, atoms, ke, rke, cpu;
+    double step, atoms, ke, rke, cpu, hn, hm;
     char extra;
-    if (th && sscanf(line, "%lf %lf %lf %lf %lf %c", &step, &atoms, &ke, &rke, &cpu, &extra) == 5) {
+    /* LIGGGHTS' cpu column restarts with each run command: summed over them */
+    /* a row per output interval: each run command also prints its first and
+     * last step (the outlets' runs of 200 steps), which are left out */
+    int is_row = th && sscanf(line, "%lf %lf %lf %lf %lf %lf %lf %c", &step, &atoms, &ke, &rke, &cpu, &hn, &hm, &extra) == 7;
+    if (is_row) {
+      if (cpu < cpu_last) cpu_sum += cpu_last;
+      cpu_last = cpu;
+      cpu += cpu_sum;
+    }
+    if (is_row && fmod(step, (double)out_k) == 0 && (th->n == 0 || step * c->prm.dt > th->row[GS_LIG_THERMO_COLS * (th->n - 1)])) {
       if (th->n == th->cap) {
         size_t cap = th->cap ? 2 * th->cap : 256;
-        double *r = realloc(th->row, cap * 5 * sizeof(double));
+        double *r = realloc(th->row, cap * GS_LIG_THERMO_COLS * sizeof(double));
         if (!r) break;
         th->row = r;
         th->cap = cap;
       }
-      double *r = th->row + 5 * th->n++;
-      r[0] = step * c->prm.dt, r[1] = atoms, r[2] = ke, r[3] = rke, r[4] = cpu;
+      double *r = th->row + GS_LIG_THERMO_COLS * th->n++;
+      r[0] = step * c->prm.dt, r[1] = atoms, r[2] = ke, r[3] = rke, r[4] = cpu, r[5] = hn, r[6] = hm;
       if (progress)
         fprintf(stderr, "gransim dem (liggghts): t = %.5f / %.5f s, %.0f particles, kinetic energy %.4g J\n", r[0],
                 c->duration, atoms, ke);

@@ -42,7 +42,7 @@ int gs_lig_clear_dumps(const char *dir, gs_error *err) {
   for (struct dirent *e; (e = readdir(dp));)
     if ((strstr(e->d_name, ".atom") && (!strncmp(e->d_name, "collision", 9) || !strncmp(e->d_name, "impact", 6) ||
                                         !strncmp(e->d_name, "ppcoll", 6))) ||
-        !strncmp(e->d_name, "events_", 7)) {
+        !strncmp(e->d_name, "events_", 7) || (!strncmp(e->d_name, "left", 4) && strstr(e->d_name, ".atom"))) {
       snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
       remove(path);
     }
@@ -65,6 +65,11 @@ typedef struct {
   double *hist;            /* nw x ncl x nbins: relative impact speeds */
   int nbins;
   double dv;
+  double hold_n, hold_m;   /* sums over the snapshots of the hold-up */
+  double *rt;              /* residence times of the atoms that left through outlets ... */
+  int *rt_cls;             /* ... their classes */
+  size_t nrt, caprt;
+  double out_mass;
 } pass;
 
 static void cmp_add(pass *a, const gs_dem_case *c, int k, const double x[3], const double v[3]) {
@@ -91,9 +96,9 @@ static int snapshot(pass *a, const gs_dem_case *c, const char *post, long step, 
   snprintf(path, sizeof path, "%s/collision%ld.atom", post, step);
   int rc = gs_dump_read(path, &d, err);
   if (rc) return rc;
-  const char *need[] = {"id", "type", "x", "y", "z", "vx", "vy", "vz"};
-  long col[8];
-  for (int k = 0; k < 8 && !rc; k++)
+  const char *need[] = {"id", "type", "x", "y", "z", "vx", "vy", "vz", "radius"};
+  long col[9];
+  for (int k = 0; k < 9 && !rc; k++)
     if ((col[k] = gs_dump_col(&d, need[k])) < 0) rc = gs_error_set(err, GS_EINPUT, "%s: no column '%s'", path, need[k]);
   id_cls *map = rc ? NULL : malloc((d.nrows + 1) * sizeof *map);
   if (!rc && !map) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
@@ -105,6 +110,11 @@ static int snapshot(pass *a, const gs_dem_case *c, const char *post, long step, 
     a->num[k] += 1;
     const double x[3] = {v[col[2]], v[col[3]], v[col[4]]}, u[3] = {v[col[5]], v[col[6]], v[col[7]]};
     cmp_add(a, c, k, x, u);
+    if (!c->has_holdup || gs_dem_region_contains(&c->holdup, x)) { /* as gs_dem_holdup */
+      const double r = v[col[8]];
+      a->hold_n += 1;
+      a->hold_m += c->cls[k].mat.density * 4.0 / 3.0 * M_PI * r * r * r;
+    }
   }
   size_t nmap = d.nrows;
   gs_dump_free(&d);
@@ -297,6 +307,46 @@ static int snapshot_steps(const char *dir, long **out, size_t *n, gs_error *err)
   return GS_OK;
 }
 
+/* The atoms that left through the outlets in the statistics window: the
+ * left<STEP>_<OUTLET>.atom dumps the deck writes before each delete_atoms,
+ * with each atom's time in the domain (fix property/atom/regiontracer/time). */
+static int residence(pass *a, const gs_dem_case *c, const char *post, gs_error *err) {
+  const long k0 = (long)round(c->stats_start / c->prm.dt);
+  DIR *dp = opendir(post);
+  if (!dp) return gs_error_set(err, GS_EIO, "%s: cannot open: %s", post, strerror(errno));
+  int rc = GS_OK;
+  for (struct dirent *e; !rc && (e = readdir(dp));) {
+    long st;
+    size_t k;
+    char tail[8], path[4900];
+    if (sscanf(e->d_name, "left%ld_%zu%7s", &st, &k, tail) != 3 || strcmp(tail, ".atom") || st <= k0) continue;
+    snprintf(path, sizeof path, "%s/%s", post, e->d_name);
+    gs_dump d;
+    if ((rc = gs_dump_read(path, &d, err))) break;
+    long ct = gs_dump_col(&d, "type"), cm = gs_dump_col(&d, "mass"), cr = gs_dump_col(&d, "f_rtime");
+    if (ct < 0 || cm < 0 || cr < 0) rc = gs_error_set(err, GS_EINPUT, "%s: no columns type, mass, f_rtime", path);
+    if (!rc && a->nrt + d.nrows > a->caprt) {
+      size_t cap = a->caprt ? a->caprt : 256;
+      while (cap < a->nrt + d.nrows) cap *= 2;
+      double *t = realloc(a->rt, cap * sizeof *t);
+      if (t) a->rt = t;
+      int *q = realloc(a->rt_cls, cap * sizeof *q);
+      if (q) a->rt_cls = q;
+      if (!t || !q) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+      else a->caprt = cap;
+    }
+    for (size_t r = 0; !rc && r < d.nrows; r++) {
+      const double *v = d.v + r * d.ncols;
+      int cls = (int)v[ct] - 1;
+      if (cls < 0 || (size_t)cls >= a->ncl) rc = gs_error_set(err, GS_EINPUT, "%s: type %g is no class", path, v[ct]);
+      else a->rt[a->nrt] = v[cr], a->rt_cls[a->nrt++] = cls, a->out_mass += v[cm];
+    }
+    gs_dump_free(&d);
+  }
+  closedir(dp);
+  return rc;
+}
+
 int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, gs_error *err) {
   char post[4400], path[4600];
   snprintf(post, sizeof post, "%s/liggghts/post", out);
@@ -360,6 +410,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   if (!rc) rc = count_events(&a, path, 0, err);
   snprintf(path, sizeof path, "%s/events_wall.txt", post);
   if (!rc && nw) rc = count_events(&a, path, 1, err);
+  if (!rc && c->noutlets) rc = residence(&a, c, post, err);
   const double ns = nsnap ? (double)nsnap : 1;
   const double t0 = nsnap ? steps[0] * dt : NAN, t1 = nsnap ? steps[nsnap - 1] * dt : NAN;
   const double win = c->duration - c->stats_start;
@@ -464,17 +515,11 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     rc = gs_dem_table_end(&tab, gs_dem_units_velocity, err);
   } else if (!rc) rc = err->code;
 
-  /* residence times: LIGGGHTS' delete_atoms keeps no record of who left when */
-  if (!rc && (fp = gs_dem_table_begin(&tab, out, "residence.csv", err))) {
-    fprintf(fp, "# engine liggghts: residence times are not measured (delete_atoms keeps no record)\n"
-            "t_lo,t_hi,count,fraction\n");
-    rc = gs_dem_table_end(&tab, gs_dem_units_residence, err);
-  } else if (!rc) rc = err->code;
-  if (!rc && (fp = gs_dem_table_begin(&tab, out, "residence_class.csv", err))) {
-    fprintf(fp, "# engine liggghts: residence times are not measured (delete_atoms keeps no record)\n"
-            "class,name,t_lo,t_hi,count,fraction\n");
-    rc = gs_dem_table_end(&tab, gs_dem_units_residence_class, err);
-  } else if (!rc) rc = err->code;
+  /* residence times: the atoms that left through outlets */
+  if (!rc)
+    rc = gs_dem_residence_write(c, out, a.rt, a.rt_cls, a.nrt, a.out_mass, c->stats_start, c->duration, a.hold_n / ns,
+                                a.hold_m / ns, "; engine liggghts: outlets emptied every 200 steps, residence time "
+                                "from fix property/atom/regiontracer/time", err);
 
   /* the time series from LIGGGHTS' thermo rows; what it does not report is nan */
   if (!rc && (fp = gs_dem_table_begin(&tab, out, "timeseries.csv", err))) {
@@ -483,8 +528,8 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     for (size_t w = 0; w < nw; w++) fprintf(fp, ",torque_axis_%s", c->wall_src[w].name);
     fprintf(fp, ",lost,steady,wall_seconds\n");
     for (size_t r = 0; r < th->n; r++) {
-      const double *v = th->row + 5 * r;
-      fprintf(fp, "%.9g,%.0f,%.0f,nan,%.9g,%.9g,nan,nan", v[0], v[1], v[1], v[2], v[3]);
+      const double *v = th->row + GS_LIG_THERMO_COLS * r;
+      fprintf(fp, "%.9g,%.0f,%.0f,%.9g,%.9g,%.9g,nan,nan", v[0], v[1], v[5], v[6], v[2], v[3]);
       for (size_t w = 0; w < 2 * nw; w++) fprintf(fp, ",nan");
       fprintf(fp, ",nan,0,%.6f\n", v[4]);
     }
@@ -498,6 +543,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
 
   free(a.num), free(a.cv_n), free(a.cv_s), free(a.cv_s2), free(a.cv_a), free(a.cv_v), free(a.cv_v2);
   free(a.wall_contacts), free(a.ln_u), free(a.u_wc), free(a.hist), free(a.pair_events), free(a.ids);
+  free(a.rt), free(a.rt_cls);
   if (have_dd) gs_dem_data_free(&dd);
   free(steps);
   return rc;
