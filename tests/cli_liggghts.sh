@@ -99,6 +99,25 @@ rate_e, rate_l = rate(sys.argv[5]), rate(sys.argv[6])
 for k, (a, b) in enumerate(zip(rate_e, rate_l)):
     print("cli_liggghts: wall impacts class %d: %.4g / %.4g per particle per s" % (k + 1, a, b))
     assert 1 / 1.5 < b / a < 1.5, ("impact rate", k + 1, a, b)
+d = sys.argv[3].rsplit("/", 1)[0], sys.argv[4].rsplit("/", 1)[0]
+ie, il = rows(d[0] + "/impacts.csv"), rows(d[1] + "/impacts.csv")
+for a, b in zip(ie, il):
+    print("cli_liggghts: impacts on %s, class %s: mean vn %s / %s, std vn %s / %s, mean vt %s / %s m/s" % (
+        a["wall"], a["name"], a["mean_vn"], b["mean_vn"], a["std_vn"], b["std_vn"], a["mean_vt"], b["mean_vt"]))
+    for k in ("mean_vn", "std_vn", "mean_vt"): assert b[k] != "nan", (k, b)
+    assert 1 / 1.5 < float(b["mean_vn"]) / float(a["mean_vn"]) < 1.5, ("mean vn", a, b)
+# the time series' event rates add up to the tables' events (every event lies in one output interval)
+for dd, nm in zip(d, ("embedded", "liggghts")):
+    ts = rows(dd + "/timeseries.csv")
+    t = [float(r["time"]) for r in ts]
+    span = t[1] - t[0]
+    win = [r for r in ts if float(r["time"]) > 0.08 + 1e-9]
+    ev = sum(float(r["collisions_per_s"]) * span for r in win)
+    tot = sum(float(r["events"]) for r in rows(dd + "/collisions.csv"))
+    imp = sum(float(r["impacts_per_s_box"]) * span for r in win)
+    tot_imp = sum(float(r["impacts"]) for r in rows(dd + "/impacts.csv"))
+    print("cli_liggghts: %s time series: %.1f collisions, %.1f impacts in the window (tables: %.0f, %.0f)" % (nm, ev, imp, tot, tot_imp))
+    assert abs(ev - tot) < 1e-6 * tot + 1e-6 and abs(imp - tot_imp) < 1e-6 * tot_imp + 1e-6, (nm, ev, tot, imp, tot_imp)
 PY
 # outlets and hold-up: 70 particles fall at 1 m/s into an outlet (the residence case of
 # test_dem_stats); the class of 40 ('low') empties first, which LIGGGHTS 3.8 survives only with

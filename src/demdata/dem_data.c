@@ -246,13 +246,17 @@ static int read_collision(const char *path, const char *prefix, accum *a, size_t
   return rc;
 }
 
-/* Columns 1..14 of a local dump, located by their "[k]" suffix. */
+/* Columns 1..14 of a local dump, located by their "[k]" suffix: those of the
+ * keywords id vel force contactArea delta, or with force_normal too (17
+ * columns, as gransim's decks write wall contacts: contact area and overlap
+ * are then [16] and [17]). */
 static int local_columns(const gs_dump *d, long col[14], const char *what, gs_error *err) {
-  if (d->ncols != 14)
+  if (d->ncols != 14 && d->ncols != 17)
     return gs_error_set(err, GS_EINPUT, "%s:%ld: %zu columns, expected the 14 of %s (keywords id vel force "
-                        "contactArea delta)", d->path, d->first_row_line - 1, d->ncols, what);
+                        "contactArea delta) or 17 (id vel force force_normal contactArea delta)", d->path,
+                        d->first_row_line - 1, d->ncols, what);
   for (int k = 0; k < 14; k++)
-    if ((col[k] = gs_dump_col_index(d, k + 1)) < 0)
+    if ((col[k] = gs_dump_col_index(d, k < 12 || d->ncols == 14 ? k + 1 : k + 3)) < 0)
       return gs_error_set(err, GS_EINPUT, "%s:%ld: no column named '...[%d]' (expected c_<compute>[1] .. [14] "
                           "of %s)", d->path, d->first_row_line - 1, k + 1, what);
   return GS_OK;

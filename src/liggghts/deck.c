@@ -331,7 +331,10 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   fprintf(fp, "# contacts and impacts: the dumps gransim reduces (src/demdata)\n");
   for (size_t i = 1; i <= ncl; i++) fprintf(fp, "group t%zu type %zu\ncompute cc_%zu t%zu contact/atom\n", i, i, i, i);
   fprintf(fp, "compute pgl all pair/gran/local id vel force contactArea delta\n");
-  if (c->nwall_src) fprintf(fp, "compute wgl all wall/gran/local id vel force contactArea delta\n");
+  /* the normal force's direction is the contact normal (impacts.csv's vn, vt); LIGGGHTS allows
+   * one wall/gran/local only, so its columns are: wall and particle velocity 1-6, mesh,
+   * triangle, atom 7-9, force 10-12, normal force 13-15, contact area 16, overlap 17 */
+  if (c->nwall_src) fprintf(fp, "compute wgl all wall/gran/local id vel force force_normal contactArea delta\n");
   fprintf(fp, "compute rke all erotate/sphere\n"
               "thermo_style custom step atoms ke c_rke cpu v_hn v_hm\nthermo %ld\nthermo_modify lost ignore norm no\n", out_k);
 
@@ -351,7 +354,7 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   /* (without walls the runner writes an empty impact file per snapshot) */
   if (c->nwall_src) {
     fprintf(fp, "dump dimp all local %ld post/impact*.atom", smp_k);
-    for (int q = 1; q <= 14; q++) fprintf(fp, " c_wgl[%d]", q);
+    for (int q = 1; q <= 17; q++) fprintf(fp, " c_wgl[%d]", q);
     fprintf(fp, "\n");
   }
   /* the contact lists the collision events are counted from (tables.c) */
@@ -360,7 +363,7 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   if (c->nwall_src) {
     fprintf(fp, "dump dwev all local %ld post/events_wall.txt", ek);
     for (int q = 1; q <= 9; q++) fprintf(fp, " c_wgl[%d]", q);
-    fprintf(fp, " c_wgl[14]\n");
+    fprintf(fp, " c_wgl[17] c_wgl[13] c_wgl[14] c_wgl[15]\n");
   }
   run_cmd(fp, c, nsteps - start_k, "window");
   return ferror(fp) ? gs_error_set(err, GS_EIO, "cannot write the LIGGGHTS deck") : GS_OK;

@@ -66,6 +66,9 @@ typedef struct {
   int nbins;
   double dv;
   double hold_n, hold_m;   /* sums over the snapshots of the hold-up */
+  double *vn_n, *vn_s, *vn_s2, *vt_s; /* nw x ncl: impacts with a normal, sums of |vn|, vn^2, |vt| */
+  long out_k, nout;        /* output interval (steps) and the number of intervals up to the end */
+  double *ts_ev;           /* (1 + nw) x nout: pair events, then wall impacts per wall, per output interval */
   double *rt;              /* residence times of the atoms that left through outlets ... */
   int *rt_cls;             /* ... their classes */
   size_t nrt, caprt;
@@ -163,13 +166,13 @@ static long next_list(FILE *fp, size_t ncol, double **rows, size_t *cap, size_t 
 }
 
 /* Contacts that began: keys of the list not in the previous list.  Pairs
- * (ncol 3: id1 id2 overlap) or wall contacts (ncol 10: particle and wall
- * velocities, mesh, triangle, atom, overlap); an atom on a mesh is one contact
- * whichever triangles it touches. */
+ * (ncol 3: id1 id2 overlap) or wall contacts (ncol 13: wall and particle
+ * velocities, mesh, triangle, atom, overlap, normal force); an atom on a mesh
+ * is one contact whichever triangles it touches. */
 static int count_events(pass *a, const char *path, int wall, gs_error *err) {
   FILE *fp = fopen(path, "r");
   if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot read: %s", path, strerror(errno));
-  const size_t ncol = wall ? 10 : 3;
+  const size_t ncol = wall ? 13 : 3, cdelta = wall ? 9 : 2;
   double *rows = NULL;
   size_t cap = 0, n = 0, nprev = 0, ncur = 0;
   unsigned long long *prev = NULL, *cur = NULL;
@@ -182,7 +185,7 @@ static int count_events(pass *a, const char *path, int wall, gs_error *err) {
     ncur = 0;
     for (size_t r = 0; r < n; r++) {
       const double *v = rows + r * ncol;
-      if (!(v[ncol - 1] > 0)) continue; /* not overlapping */
+      if (!(v[cdelta] > 0)) continue; /* not overlapping */
       unsigned long long i1 = (unsigned long long)(wall ? v[8] : v[0]), i2 = (unsigned long long)(wall ? v[6] : v[1]);
       unsigned long long key = wall ? i1 << 16 | i2 : (i1 < i2 ? i1 << 32 | i2 : i2 << 32 | i1);
       if (ncur && cur[ncur - 1] == key) continue; /* the same atom on another triangle of the mesh */
@@ -193,20 +196,32 @@ static int count_events(pass *a, const char *path, int wall, gs_error *err) {
       if (first || (nprev && bsearch(&key, prev, nprev, sizeof *prev, cmp_u64))) continue;
       int c1 = class_of(a, wall ? v[8] : v[0]), c2 = wall ? 0 : class_of(a, v[1]);
       if (c1 < 0 || c2 < 0) { a->unknown++; continue; }
+      /* the output interval (ts_ev) the event falls in: steps ((k-1) out_k, k out_k] */
+      long ko = (st - 1 + a->out_k - 1) / a->out_k;
       if (!wall) {
         size_t i = (size_t)(c1 < c2 ? c1 : c2), j = (size_t)(c1 < c2 ? c2 : c1);
         a->pair_events[i * a->ncl + j] += 1;
+        if (ko < a->nout) a->ts_ev[ko] += 1;
         continue;
       }
       size_t w = (size_t)v[6];
       if (w >= a->nw) continue;
       size_t at = w * a->ncl + (size_t)c1;
       a->wall_contacts[at] += 1;
-      double du[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]};
+      if (ko < a->nout) a->ts_ev[(1 + w) * (size_t)a->nout + (size_t)ko] += 1;
+      double du[3] = {v[0] - v[3], v[1] - v[4], v[2] - v[5]};
       double u = sqrt(du[0] * du[0] + du[1] * du[1] + du[2] * du[2]);
-      int b = (int)(u / a->dv);
-      if (b >= a->nbins) b = a->nbins - 1;
-      a->hist[at * (size_t)a->nbins + (size_t)b] += 1;
+      /* normal and tangential speed relative to the wall, the normal along the
+       * normal force (the spin's part of the contact point's speed is not in the lists) */
+      const double fn = sqrt(v[10] * v[10] + v[11] * v[11] + v[12] * v[12]);
+      if (fn > 0) {
+        const double vn = (du[0] * v[10] + du[1] * v[11] + du[2] * v[12]) / fn;
+        const double vt = sqrt(fmax(0, u * u - vn * vn));
+        a->vn_n[at] += 1, a->vn_s[at] += fabs(vn), a->vn_s2[at] += vn * vn, a->vt_s[at] += vt;
+        int b = (int)(fabs(vn) / a->dv);
+        if (b >= a->nbins) b = a->nbins - 1;
+        a->hist[at * (size_t)a->nbins + (size_t)b] += 1;
+      }
       if (!(u >= GS_DEM_MIN_IMPACT_SPEED)) continue; /* resting contacts: no speed, as the embedded engine */
       if (a->nu == a->capu) {
         size_t nc = a->capu ? 2 * a->capu : 1024;
@@ -376,7 +391,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
       if (!fp) { closedir(dp); return gs_error_set(err, GS_EIO, "%s: cannot write", path); }
       fprintf(fp, "ITEM: TIMESTEP\n%ld\nITEM: NUMBER OF ENTRIES\n0\nITEM: BOX BOUNDS ff ff ff\n0 1\n0 1\n0 1\n"
               "ITEM: ENTRIES", st);
-      for (int q = 1; q <= 14; q++) fprintf(fp, " c_wgl[%d]", q);
+      for (int q = 1; q <= 17; q++) fprintf(fp, " c_wgl[%d]", q);
       fprintf(fp, "\n");
       fclose(fp);
     }
@@ -400,7 +415,13 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   a.cv_a = calloc(nc, sizeof(double)), a.cv_v = calloc(3 * nc, sizeof(double)), a.cv_v2 = calloc(3 * nc, sizeof(double));
   a.wall_contacts = calloc(nw * ncl + 1, sizeof(double));
   a.hist = calloc(nw * ncl * (size_t)a.nbins + 1, sizeof(double));
-  if (!a.num || !a.cv_n || !a.cv_s || !a.cv_s2 || !a.cv_a || !a.cv_v || !a.cv_v2 || !a.wall_contacts || !a.hist)
+  a.vn_n = calloc(nw * ncl + 1, sizeof(double)), a.vn_s = calloc(nw * ncl + 1, sizeof(double));
+  a.vn_s2 = calloc(nw * ncl + 1, sizeof(double)), a.vt_s = calloc(nw * ncl + 1, sizeof(double));
+  a.out_k = (long)fmax(1, round(c->out_every / dt));
+  a.nout = (long)ceil(c->duration / dt - 1e-9) / a.out_k + 1;
+  a.ts_ev = calloc((1 + nw) * (size_t)a.nout, sizeof(double));
+  if (!a.num || !a.cv_n || !a.cv_s || !a.cv_s2 || !a.cv_a || !a.cv_v || !a.cv_v2 || !a.wall_contacts || !a.hist ||
+      !a.vn_n || !a.vn_s || !a.vn_s2 || !a.vt_s || !a.ts_ev)
     rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   a.pair_events = calloc(ncl * ncl, sizeof(double));
   if (!rc && !a.pair_events) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
@@ -414,6 +435,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   const double ns = nsnap ? (double)nsnap : 1;
   const double t0 = nsnap ? steps[0] * dt : NAN, t1 = nsnap ? steps[nsnap - 1] * dt : NAN;
   const double win = c->duration - c->stats_start;
+  const long start_k = (long)round(c->stats_start / dt);
   FILE *fp = NULL;
   gs_csv_out tab;
   double e[GS_DEM_MAX_CLASSES + 1];
@@ -466,23 +488,26 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
 
   /* impacts per wall and class; the breakage selection's tables */
   if (!rc && (fp = gs_dem_table_begin(&tab, out, "impacts.csv", err))) {
-    fprintf(fp, "# wall impacts (contacts that began) from t = %.9g to %.9g s (%.9g s)%s; vn, vt: not in LIGGGHTS' "
-            "contact lists (nan); impact_table.csv holds the fits of the relative speed\n", c->stats_start, c->duration,
-            win, note);
+    fprintf(fp, "# wall impacts (contacts that began) from t = %.9g to %.9g s (%.9g s)%s; vn: normal speed "
+            "relative to the wall, vt: tangential speed relative to the wall without the particle's spin (LIGGGHTS' "
+            "contact lists hold no angular velocity), both at the first contact list holding the impact\n",
+            c->stats_start, c->duration, win, note);
     fprintf(fp, "wall,class,name,impacts,impacts_per_s,impacts_per_particle_s,mean_vn,std_vn,mean_vt\n");
     for (size_t w = 0; w < nw; w++)
       for (size_t i = 0; i < ncl; i++) {
-        double Ni = a.num[i] / ns, n = a.wall_contacts[w * ncl + i];
-        fprintf(fp, "%s,%zu,%s,%.0f,%.9g,%.9g,nan,nan,nan\n", c->wall_src[w].name, i + 1, c->cls[i].name, n, n / win,
-                Ni > 0 ? n / (Ni * win) : 0);
+        const size_t q = w * ncl + i;
+        double Ni = a.num[i] / ns, n = a.wall_contacts[q], m = a.vn_n[q];
+        double mv = m > 0 ? a.vn_s[q] / m : NAN, sv = m > 1 ? sqrt(fmax(0, (a.vn_s2[q] - m * mv * mv) / (m - 1))) : NAN;
+        fprintf(fp, "%s,%zu,%s,%.0f,%.9g,%.9g,%.6g,%.6g,%.6g\n", c->wall_src[w].name, i + 1, c->cls[i].name, n, n / win,
+                Ni > 0 ? n / (Ni * win) : 0, mv, sv, m > 0 ? a.vt_s[q] / m : NAN);
       }
     rc = gs_dem_table_end(&tab, gs_dem_units_impacts, err);
   } else if (!rc) rc = err->code;
   if (!rc) rc = impact_table(&a, c, out, -1, ns, NULL, err);
   for (size_t w = 0; w < nw && !rc; w++) rc = impact_table(&a, c, out, (long)w, ns, NULL, err);
   if (!rc && (fp = gs_dem_table_begin(&tab, out, "impact_velocity.csv", err))) {
-    fprintf(fp, "# impact speed distributions (the last bin holds everything above); engine liggghts: the relative "
-            "speed |v - v_wall| of the wall contacts in the snapshots, not the normal speed at first contact\n"
+    fprintf(fp, "# normal impact speed distributions (the last bin holds everything above); engine liggghts: at the "
+            "first contact list holding the impact\n"
             "wall,class,vn_lo,vn_hi,impacts\n");
     for (size_t w = 0; w < nw; w++)
       for (size_t i = 0; i < ncl; i++)
@@ -529,8 +554,16 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     fprintf(fp, ",lost,steady,wall_seconds\n");
     for (size_t r = 0; r < th->n; r++) {
       const double *v = th->row + GS_LIG_THERMO_COLS * r;
-      fprintf(fp, "%.9g,%.0f,%.0f,%.9g,%.9g,%.9g,nan,nan", v[0], v[1], v[5], v[6], v[2], v[3]);
-      for (size_t w = 0; w < 2 * nw; w++) fprintf(fp, ",nan");
+      /* event rates of the interval that ends at this row, where the contact
+       * lists (from statistics.start on) cover all of it */
+      const long step = (long)round(v[0] / dt), ko = step / a.out_k;
+      const int have_rate = step > 0 && step - a.out_k >= start_k && ko < a.nout;
+      const double span = a.out_k * dt;
+      fprintf(fp, "%.9g,%.0f,%.0f,%.9g,%.9g,%.9g,nan,", v[0], v[1], v[5], v[6], v[2], v[3]);
+      fprintf(fp, have_rate ? "%.9g" : "nan", have_rate ? a.ts_ev[ko] / span : 0.0);
+      for (size_t w = 0; w < nw; w++)
+        fprintf(fp, have_rate ? ",%.9g" : ",nan", have_rate ? a.ts_ev[(1 + w) * (size_t)a.nout + (size_t)ko] / span : 0.0);
+      for (size_t w = 0; w < nw; w++) fprintf(fp, ",nan");
       fprintf(fp, ",nan,0,%.6f\n", v[4]);
     }
     const char *names[GS_DEM_CASE_MAX_WALLS];
@@ -543,7 +576,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
 
   free(a.num), free(a.cv_n), free(a.cv_s), free(a.cv_s2), free(a.cv_a), free(a.cv_v), free(a.cv_v2);
   free(a.wall_contacts), free(a.ln_u), free(a.u_wc), free(a.hist), free(a.pair_events), free(a.ids);
-  free(a.rt), free(a.rt_cls);
+  free(a.rt), free(a.rt_cls), free(a.vn_n), free(a.vn_s), free(a.vn_s2), free(a.vt_s), free(a.ts_ev);
   if (have_dd) gs_dem_data_free(&dd);
   free(steps);
   return rc;
