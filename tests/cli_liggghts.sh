@@ -185,12 +185,69 @@ sed 's/  - {name: box, mesh: box.stl, scale: 1.0e-3, material: granule}/  - {nam
   "$W/l.yaml" > "$W/bad.yaml"
 if "$BIN" dem --check "$W/bad.yaml" 2> "$W/bad.log"; then fail "a plane wall was accepted"; fi
 grep -q "walls\[0\] (floor): plane walls are not expressible" "$W/bad.log" || { cat "$W/bad.log"; fail "plane error"; }
-# a failed run reports LIGGGHTS' own error line
-cp "$W/l.yaml" "$W/fail.yaml"
+# a failed run reports LIGGGHTS' own error line and the deck line it refers to: a wrapper adds a
+# command LIGGGHTS refuses to the real deck
+LIG=$(command -v "${GRANSIM_LIGGGHTS:-liggghts}")
 mkdir -p "$W/fakebin"
-printf '#!/bin/sh\necho "ERROR: Illegal something (./src/input.cpp:1)"\nexit 1\n' > "$W/fakebin/liggghts"
+cat > "$W/fakebin/liggghts" <<SH
+#!/bin/sh
+case "\$*" in *in.gransim*) sed -i '/^fix integr /a fix bad all no_such_style' in.gransim ;; esac
+exec "$LIG" "\$@"
+SH
 chmod +x "$W/fakebin/liggghts"
-if GRANSIM_LIGGGHTS="$W/fakebin/liggghts" "$BIN" dem "$W/fail.yaml" --out "$W/f" --launcher "" --quiet 2> "$W/f.log"; then
+cp -r "$W/l" "$W/f" # an earlier run's tables, which a failed run must not leave behind
+if GRANSIM_LIGGGHTS="$W/fakebin/liggghts" "$BIN" dem "$W/l.yaml" --out "$W/f" --launcher "" --quiet 2> "$W/f.log"; then
   fail "a failing LIGGGHTS run succeeded"; fi
-grep -q "LIGGGHTS failed.*ERROR: Illegal something" "$W/f.log" || { cat "$W/f.log"; fail "failure report"; }
+n=$(grep -n "^fix bad all no_such_style" "$W/f/liggghts/in.gransim" | cut -d: -f1)
+grep -q "LIGGGHTS failed.*ERROR: Invalid fix style" "$W/f.log" || { cat "$W/f.log"; fail "failure report"; }
+grep -q "^in.gransim line $n: fix bad all no_such_style" "$W/f.log" || { cat "$W/f.log"; fail "no deck line $n"; }
+[ ! -e "$W/f/collisions.csv" ] && [ ! -e "$W/f/timeseries.csv" ] || fail "a failed run left tables"
+# a killed run: no tables, and --reduce refuses its dumps (the log has no end)
+cat > "$W/fakebin/liggghts" <<SH
+#!/bin/sh
+case "\$*" in *in.gransim*) "$LIG" "\$@" & p=\$!
+  until grep -qs "Step" log.liggghts; do sleep 0.05; done; kill -9 \$p; exit 137 ;; esac
+exec "$LIG" "\$@"
+SH
+if GRANSIM_LIGGGHTS="$W/fakebin/liggghts" "$BIN" dem "$W/l.yaml" --out "$W/k" --launcher "" --quiet 2> "$W/k.log"; then
+  fail "a killed LIGGGHTS run succeeded"; fi
+[ ! -e "$W/k/collisions.csv" ] || fail "a killed run left tables"
+if "$BIN" dem "$W/l.yaml" --out "$W/k" --reduce --quiet 2> "$W/k2.log"; then fail "--reduce took a killed run"; fi
+grep -q "did not finish" "$W/k2.log" || { cat "$W/k2.log"; fail "--reduce message"; }
+[ ! -e "$W/k/collisions.csv" ] || fail "--reduce of a killed run left tables"
+# LIGGGHTS or mpirun missing: the message names the Debian package
+if PATH=/nonexistent "$BIN" dem "$W/l.yaml" --out "$W/m" --quiet 2> "$W/m.log"; then fail "ran without liggghts"; fi
+grep -q "apt-get install liggghts" "$W/m.log" || { cat "$W/m.log"; fail "no package named for liggghts"; }
+mkdir -p "$W/onlylig"
+ln -s "$LIG" "$W/onlylig/liggghts"
+if PATH="$W/onlylig" "$BIN" dem "$W/l.yaml" --out "$W/m" --quiet 2> "$W/m.log"; then fail "ran without mpirun"; fi
+grep -q "mpirun is not on PATH (Debian: apt-get install mpi-default-bin" "$W/m.log" || { cat "$W/m.log"; fail "mpirun message"; }
+
+# the cluster recipe (README.md, "LIGGGHTS on a cluster"): --dry-run on the embedded case file with
+# --engine, the Slurm script with srun standing for mpirun -np 2, then --reduce
+mkdir -p "$W/slurm/bin" "$W/slurm/case"
+cp "$W/e.yaml" "$W/box.stl" "$W/slurm/case/"
+printf '#!/bin/sh\nexec mpirun -np 2 "$@"\n' > "$W/slurm/bin/srun"
+printf '#!/bin/sh\nexec "%s" "$@"\n' "$BIN" > "$W/slurm/bin/gransim"
+chmod +x "$W/slurm/bin/srun" "$W/slurm/bin/gransim"
+sed -n '/<!-- slurm-recipe -->/,/<!-- \/slurm-recipe -->/p' "$2/README.md" | sed '1,2d;$d' | sed '$d' > "$W/slurm/job.sh"
+grep -q "^LAUNCH=srun" "$W/slurm/job.sh" || fail "no recipe in README.md"
+(cd "$W/slurm/case" && "$BIN" dem e.yaml --out run1 --engine liggghts --dry-run --ranks 2 --quiet) || fail "--dry-run"
+[ -s "$W/slurm/case/run1/liggghts/in.gransim" ] && [ -s "$W/slurm/case/run1/liggghts/wall0_box.stl" ] &&
+  [ -x "$W/slurm/case/run1/liggghts/run.sh" ] || fail "--dry-run wrote no deck, mesh or run.sh"
+[ ! -e "$W/slurm/case/run1/collisions.csv" ] && [ -z "$(ls "$W/slurm/case/run1/liggghts/post")" ] || fail "--dry-run ran"
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+(cd "$W/slurm/case" && PATH="$W/slurm/bin:$PATH" CASE=e.yaml OUT=run1 bash "$W/slurm/job.sh" > "$W/slurm/job.log" 2>&1) ||
+  { tail -20 "$W/slurm/job.log"; fail "the Slurm recipe"; }
+grep -q "2 by 1 by 1 MPI processor grid\|1 by 2 by 1 MPI processor grid\|1 by 1 by 2 MPI processor grid" \
+  "$W/slurm/case/run1/liggghts/log.liggghts" || fail "the recipe did not run on 2 ranks"
+python3 - "$W/l" "$W/slurm/case/run1" <<'PY'
+import csv, sys
+def rows(p): return list(csv.DictReader(open(p)))
+a, b = rows(sys.argv[1] + "/collisions.csv"), rows(sys.argv[2] + "/collisions.csv")
+for x, y in zip(a, b):
+    print("cli_liggghts: 1 rank / the recipe on 2 ranks: %s-%s: N %s / %s, %s / %s events" % (x["name_i"], x["name_j"], x["N_i"], y["N_i"], x["events"], y["events"]))
+    assert x["N_i"] == y["N_i"] and x["N_j"] == y["N_j"], (x, y)
+    if float(x["events"]) > 100: assert 1 / 1.5 < float(y["events"]) / float(x["events"]) < 1.5, (x, y)
+PY
 echo "cli_liggghts: ok"

@@ -160,6 +160,11 @@ static void preamble(const gs_dem_case *c, FILE *fp, const char *data_file) {
 
 }
 
+void gs_lig_mesh_name(const gs_dem_case *c, size_t w, char *buf, size_t n) {
+  const char *base = strrchr(c->wall_src[w].mesh, '/');
+  snprintf(buf, n, "wall%zu_%s", w, base ? base + 1 : c->wall_src[w].mesh);
+}
+
 long gs_lig_event_every(const gs_dem_case *c) {
   /* the contact time falls with the impact speed as v^(-1/5): at 10 m/s it is
    * shorter than nearly every contact in a granulator */
@@ -237,7 +242,9 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
     for (size_t w = 0; w < c->nwall_src; w++) {
       const gs_dem_wall_src *s = &c->wall_src[w];
       /* LIGGGHTS wants its keywords in this order: type, heal, element_exclusion_list, scale */
-      fprintf(fp, "fix wall%zu all mesh/surface file %s type %zu heal auto_remove_duplicates", w, s->mesh, ncl + 1 + w);
+      char mesh[4200];
+      gs_lig_mesh_name(c, w, mesh, sizeof mesh);
+      fprintf(fp, "fix wall%zu all mesh/surface file %s type %zu heal auto_remove_duplicates", w, mesh, ncl + 1 + w);
       /* LIGGGHTS refuses facets with more than two edge neighbours (the CoriMix
        * shell has such rings); its remedy: a first run writes them, this one excludes them */
       if (exclusion) fprintf(fp, " element_exclusion_list %s ex_wall%zu.txt", exclusion, w);
@@ -376,8 +383,10 @@ int gs_lig_write_exclusion_deck(const gs_dem_case *c, size_t wall, const char *p
   /* no atoms, hence no cutoff: LIGGGHTS would refuse to sort them by bins of size 0 */
   fprintf(fp, "atom_modify sort 0 0.0\n");
   const gs_dem_wall_src *s = &c->wall_src[wall];
+  char mesh[4200];
+  gs_lig_mesh_name(c, wall, mesh, sizeof mesh);
   fprintf(fp, "fix wall%zu all mesh/surface file %s type %zu heal auto_remove_duplicates "
-          "element_exclusion_list write ex_wall%zu.txt scale %.9g curvature_tolerant yes\n", wall, s->mesh,
+          "element_exclusion_list write ex_wall%zu.txt scale %.9g curvature_tolerant yes\n", wall, mesh,
           c->nclass + 1 + wall, wall, s->scale);
   fprintf(fp, "fix walls all wall/gran model hertz tangential history rolling_friction cdt mesh n_meshes 1 "
           "meshes wall%zu\nrun 1\n", wall);

@@ -20,8 +20,14 @@ int gs_lig_write_exclusion_deck(const gs_dem_case *c, size_t wall, const char *p
 /* Steps between the contact lists the events are counted from: a third of
  * the Hertz contact time of two of the smallest particles at 10 m/s. */
 long gs_lig_event_every(const gs_dem_case *c);
+/* The name under which the deck reads wall w's mesh: a copy beside the deck,
+ * wall<w>_<file name>, so that the folder runs anywhere (a cluster). */
+void gs_lig_mesh_name(const gs_dem_case *c, size_t w, char *buf, size_t n);
 /* Remove the collision/impact/ppcoll dumps of an earlier run from dir. */
 int gs_lig_clear_dumps(const char *dir, gs_error *err);
+/* Remove the tables a reduction writes from out (before a run, and after a
+ * failed reduction: all of them or none). */
+void gs_lig_remove_tables(const gs_dem_case *c, const char *out);
 /* Reduce out/liggghts/post into out's tables (those of src/dem/stats.c). */
 int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, gs_error *err);
 #endif

@@ -50,6 +50,19 @@ int gs_lig_clear_dumps(const char *dir, gs_error *err) {
   return GS_OK;
 }
 
+void gs_lig_remove_tables(const gs_dem_case *c, const char *out) {
+  static const char *const names[] = {"collisions", "collision_kernel", "impacts", "impact_table", "impact_velocity",
+                                      "velocity", "residence", "residence_class", "timeseries"};
+  char path[4400];
+  for (size_t k = 0; k < sizeof names / sizeof names[0] + c->nwall_src; k++)
+    for (int j = 0; j < 2; j++) {
+      if (k < sizeof names / sizeof names[0]) snprintf(path, sizeof path, "%s/%s.%s", out, names[k], j ? "json" : "csv");
+      else snprintf(path, sizeof path, "%s/impact_table_%s.%s", out, c->wall_src[k - sizeof names / sizeof names[0]].name,
+                    j ? "json" : "csv");
+      remove(path);
+    }
+}
+
 /* What the per-snapshot pass gathers beyond demdata's reduction. */
 typedef struct {
   size_t ncl, ncmp, nw;
@@ -579,5 +592,6 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   free(a.rt), free(a.rt_cls), free(a.vn_n), free(a.vn_s), free(a.vn_s2), free(a.vt_s), free(a.ts_ev);
   if (have_dd) gs_dem_data_free(&dd);
   free(steps);
+  if (rc) gs_lig_remove_tables(c, out); /* all the tables or none */
   return rc;
 }
