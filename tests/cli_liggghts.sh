@@ -185,6 +185,36 @@ sed 's/  - {name: box, mesh: box.stl, scale: 1.0e-3, material: granule}/  - {nam
   "$W/l.yaml" > "$W/bad.yaml"
 if "$BIN" dem --check "$W/bad.yaml" 2> "$W/bad.log"; then fail "a plane wall was accepted"; fi
 grep -q "walls\[0\] (floor): plane walls are not expressible" "$W/bad.log" || { cat "$W/bad.log"; fail "plane error"; }
+# a coupled case's DEM stage runs to its steady state, which a deck cannot detect: refused, not run embedded
+ln -s "$2/examples/data" "$W/data"
+sed 's/^    seed: 7$/    seed: 7\n    engine: liggghts/' "$2/examples/corimix-coupled.yaml" > "$W/cpl.yaml"
+n=$(grep -n "^    engine: liggghts" "$W/cpl.yaml" | cut -d: -f1)
+[ -n "$n" ] || fail "no engine line in the coupled case"
+if "$BIN" check "$W/cpl.yaml" 2> "$W/cpl.log"; then fail "a coupled case with engine liggghts was accepted"; fi
+grep -q "cpl.yaml:$n: dem.dem.engine: 'liggghts' cannot run a coupled case's DEM stage" "$W/cpl.log" ||
+  { cat "$W/cpl.log"; fail "coupled engine message"; }
+
+# every bundled DEM example: its deck runs 200 steps in LIGGGHTS (every `run` cut to 100 steps, every
+# loop to one pass), or --check refuses it naming what a deck cannot express
+ran=0
+for ex in "$2"/examples/*.yaml; do
+  grep -q "^dem:" "$ex" && ! grep -q "^grid:" "$ex" || continue # DEM cases (coupled ones: above)
+  name=$(basename "$ex" .yaml)
+  if ! "$BIN" dem --check "$ex" --engine liggghts > /dev/null 2> "$W/ex.log"; then
+    grep -q "not expressible\|needs the embedded DEM" "$W/ex.log" || { cat "$W/ex.log"; fail "$name: refused without a reason"; }
+    echo "cli_liggghts: example $name refused: $(cut -c1-160 "$W/ex.log")"
+    continue
+  fi
+  "$BIN" dem "$ex" --out "$W/ex_$name" --engine liggghts --dry-run --ranks 1 --quiet || fail "$name: --dry-run"
+  sed -i -E 's/^run [0-9]+/run 100/; s/^variable (\w+) loop [0-9]+/variable \1 loop 1/' "$W/ex_$name/liggghts/in.gransim"
+  OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 LAUNCH="mpirun -np 1" sh "$W/ex_$name/liggghts/run.sh" \
+    > "$W/ex.log" 2>&1 || { tail -20 "$W/ex.log"; fail "$name: LIGGGHTS refused its deck"; }
+  ! grep -q "^ERROR" "$W/ex.log" || fail "$name: an ERROR in LIGGGHTS' output"
+  echo "cli_liggghts: example $name: LIGGGHTS ran its deck for 200 steps"
+  ran=$((ran + 1))
+done
+[ "$ran" -ge 1 ] || fail "no bundled example ran in LIGGGHTS"
+
 # a failed run reports LIGGGHTS' own error line and the deck line it refers to: a wrapper adds a
 # command LIGGGHTS refuses to the real deck
 LIG=$(command -v "${GRANSIM_LIGGGHTS:-liggghts}")

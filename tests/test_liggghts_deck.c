@@ -134,6 +134,8 @@ int main(void) {
       {"{name: b, radius: 1.5e-3,", "{name: b, radius: [1.0e-3, 2.0e-3],", "classes[1].radius"},
       {"seed: 5,", "seed: 5, damping: exact,", "dem.damping"},
       {"seed: 5,", "seed: 5, mesh_contacts: closest,", "dem.mesh_contacts"},
+      {"statistics: {start: 0.005", "spray: {point: [0, 0, 0.01], axis: [0, 0, -1], half_angle: 25, droplet_diameter: "
+       "1.0e-3, mass_rate: 1.0e-4, density: 1000, speed: 1.0}\nstatistics: {start: 0.005", "spray: "},
   };
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
     char y[4096];

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "dem/dem_case.h"
+#include "dem/dem_wet.h"
 #include "gransim/dem_data.h"
 #include "gransim/liggghts.h"
 #include "liggghts/lig_internal.h"
@@ -180,6 +181,10 @@ long gs_lig_event_every(const gs_dem_case *c) {
 
 /* What a deck cannot express, named by key. */
 int gs_lig_check(const gs_dem_case *c, gs_error *err) {
+  if (c->wet)
+    return gs_error_set(err, GS_EINPUT, "%s: not expressible in a LIGGGHTS deck (droplets, the liquid on the "
+                        "particles and their aggregation live in the embedded engine); use engine: embedded",
+                        c->wet->has_spray ? "spray" : "granulation");
   for (size_t w = 0; w < c->nwall_src; w++)
     if (c->wall_src[w].kind != GS_DEM_SRC_MESH)
       return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): %s walls are not expressible in the LIGGGHTS engine "
