@@ -280,4 +280,92 @@ for x, y in zip(a, b):
     assert x["N_i"] == y["N_i"] and x["N_j"] == y["N_j"], (x, y)
     if float(x["events"]) > 100: assert 1 / 1.5 < float(y["events"]) / float(x["events"]) < 1.5, (x, y)
 PY
+
+# ctest-long
+# The same physics on both engines (GRANSIM_TEST_LONG=1, cli_liggghts_long): the CoriMix meshes with
+# the impeller at 1000 rpm (at 2000 rpm the soft spheres, E = 8 MPa, are sometimes pressed into
+# each other by more than the embedded engine's health limit allows), 3000 spheres of three
+# classes, no feed or outlet, LIGGGHTS' damping and mesh-contact rule in the embedded engine; S
+# fills (seeds, default 3), each 0.03 s to spin up and a window of 0.08 s.  Per class pair the ratio embedded / LIGGGHTS of C_ij, per class that of the mean speed,
+# averaged over the fills with the standard error of that mean (the spread between fills holds the
+# bursts in which collisions come).  Required: the standard errors below 5 % (C) and 2 % (speed),
+# the means within 5 % and 2 % of 1.  The table: $GRANSIM_PHYSICS_TABLE (default
+# liggghts_physics.csv in the working directory).
+if [ "${GRANSIM_TEST_LONG:-0}" = 1 ]; then
+  S=${GRANSIM_PHYSICS_SEEDS:-3}
+  for s in $(seq 1 "$S"); do
+    for eng in embedded liggghts; do
+      cat > "$W/phys_${eng}_$s.yaml" <<YAML
+dem:
+  time_step: 5.0e-6
+  duration: 0.11
+  gravity: [0, -9.81, 0]
+  box: {lo: [-0.01, -0.12, -0.07], hi: [0.415, 0.12, 0.07]}
+  skin: 1.0e-3
+  seed: $((11 * s + 2))
+  damping: liggghts
+  mesh_contacts: liggghts
+  engine: $eng
+materials:
+  - {name: granule, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}
+  - {name: steel, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2}
+classes:
+  - {name: fine, radius: 1.0e-3, material: granule}
+  - {name: medium, radius: 1.5e-3, material: granule}
+  - {name: coarse, radius: 2.0e-3, material: granule}
+walls:
+  - {name: shell, mesh: $2/examples/data/corimix/shell.stl, scale: 1.0e-3, material: steel}
+  - {name: impeller, mesh: $2/examples/data/corimix/impeller.stl, scale: 1.0e-3, material: steel,
+     rotation: {origin: [0.193, 0, 0], axis: [1, 0, 0], rpm: 1000}}
+fill:
+  - region: {cylinder: {point: [0, 0, 0], axis: [1, 0, 0], radius: 0.057, inner_radius: 0.033, from: 0.01, to: 0.39}}
+    count: 3000
+    fractions: [0.3, 0.4, 0.3]
+    fractions_by: mass
+statistics: {start: 0.03, sample_every: 0.002}
+output: {every: 0.01}
+YAML
+      t0=$(date +%s)
+      "$BIN" dem "$W/phys_${eng}_$s.yaml" --out "$W/phys_${eng}_$s" --ranks 1 --threads 1 --quiet ||
+        fail "physics run $eng $s"
+      echo "cli_liggghts: physics fill $s, $eng: $(( $(date +%s) - t0 )) s"
+    done
+  done
+  python3 - "$W" "$S" "${GRANSIM_PHYSICS_TABLE:-liggghts_physics.csv}" <<'PY'
+import csv, math, sys
+w, S, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+def rows(p): return list(csv.DictReader(open(p)))
+def stat(x):
+    m = sum(x) / len(x)
+    se = math.sqrt(sum((v - m) ** 2 for v in x) / (len(x) - 1) / len(x)) if len(x) > 1 else float("inf")
+    return m, se
+res, bad = [], []
+pairs = [(r["name_i"], r["name_j"]) for r in rows("%s/phys_embedded_1/collisions.csv" % w)]
+for k, pr in enumerate(pairs):
+    ratios, ev = [], [0, 0]
+    for s in range(1, S + 1):
+        e, l = (rows("%s/phys_%s_%d/collisions.csv" % (w, g, s))[k] for g in ("embedded", "liggghts"))
+        ratios.append(float(e["C_ij"]) / float(l["C_ij"]))
+        ev[0] += float(e["events"]); ev[1] += float(l["events"])
+    m, se = stat(ratios)
+    res.append(("C_ij", "%s-%s" % pr, m, se, ev[0], ev[1], 0.05))
+for i, name in enumerate(r["name"] for r in rows("%s/phys_embedded_1/velocity.csv" % w)):
+    ratios, n = [], [0, 0]
+    for s in range(1, S + 1):
+        e, l = (rows("%s/phys_%s_%d/velocity.csv" % (w, g, s))[i] for g in ("embedded", "liggghts"))
+        ratios.append(float(e["mean_speed"]) / float(l["mean_speed"]))
+        n[0] += float(e["mean_number"]); n[1] += float(l["mean_number"])
+    m, se = stat(ratios)
+    res.append(("mean_speed", name, m, se, n[0] / S, n[1] / S, 0.02))
+with open(out, "w") as f:
+    f.write("quantity,classes,ratio_embedded_over_liggghts,standard_error,embedded_total,liggghts_total,allowed\n")
+    for q, c, m, se, a, b, tol in res:
+        f.write("%s,%s,%.5f,%.5f,%.6g,%.6g,%g\n" % (q, c, m, se, a, b, tol))
+        print("cli_liggghts: physics %s %s: ratio %.4f +- %.4f (events or N %.6g / %.6g; allowed %g)" % (q, c, m, se, a, b, tol))
+        if not (se < tol): bad.append("%s %s: standard error %.4f not below %g (windows too short)" % (q, c, se, tol))
+        if not (abs(m - 1) < tol): bad.append("%s %s: ratio %.4f off by more than %g" % (q, c, m, tol))
+print("cli_liggghts: physics table in %s" % out)
+assert not bad, bad
+PY
+fi
 echo "cli_liggghts: ok"
