@@ -59,7 +59,8 @@ echo "cli_liggghts: embedded run took $(awk "BEGIN { printf \"%.2f\", $(date +%s
 t0=$(date +%s.%N)
 "$BIN" dem "$W/l.yaml" --out "$W/l" --ranks 1 2> "$W/l.log" || { cat "$W/l.log"; fail "liggghts run"; }
 echo "cli_liggghts: LIGGGHTS run (200 spheres, 20000 steps, 1 rank) took $(awk "BEGIN { printf \"%.2f\", $(date +%s.%N) - $t0 }") s"
-grep -q "gransim dem (liggghts): t = 0.10000 / 0.10000 s, 200 particles" "$W/l.log" || fail "no progress line from thermo"
+grep -q "gransim dem (liggghts): t = 0.10000 / 0.10000 s, 200 particles, .*, 0 s left$" "$W/l.log" ||
+  { cat "$W/l.log"; fail "no progress line from thermo with the time left"; }
 grep -q "^fix wall0 all mesh/surface file .*box.stl type 3 .*scale 0.001" "$W/l/liggghts/in.gransim" || fail "deck mesh"
 for t in collisions.csv collision_kernel.csv impacts.csv impact_table.csv impact_table_box.csv impact_velocity.csv \
          velocity.csv residence.csv residence_class.csv timeseries.csv; do

@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/progress.h"
 #include "dem/dem_case.h"
 #include "gransim/liggghts.h"
 #include "liggghts/lig_internal.h"
@@ -159,7 +160,7 @@ static int run_deck(const char *dir, const char *launch, const char *bin, const 
   }
   /* the lines before the first ERROR, to find the deck line among them */
   char line[4096], tail[12][512], first_error[512] = "", before[8][512];
-  double cpu_acc[2] = {0, 0};
+  double cpu_acc[2] = {0, 0}, t_first = -1, wall_first = 0;
   int nt = 0, saw_error = 0, short_insert = 0, nbefore = 0;
   while (fgets(line, sizeof line, pp)) {
     fputs(line, sc);
@@ -182,9 +183,16 @@ static int run_deck(const char *dir, const char *launch, const char *bin, const 
     int kept = th ? thermo_row(line, c, th, cpu_acc) : 0;
     if (kept < 0) break;
     if (kept && progress) {
-      const double *r = th->row + GS_LIG_THERMO_COLS * (th->n - 1);
-      fprintf(stderr, "gransim dem (liggghts): t = %.5f / %.5f s, %.0f particles, kinetic energy %.4g J\n", r[0],
-              c->duration, r[1], r[2]);
+      /* the time left from the simulated time per wall second since the first row */
+      const double *r = th->row + GS_LIG_THERMO_COLS * (th->n - 1), now = gs_progress_clock();
+      char left[64] = "time left not known yet";
+      if (t_first < 0) t_first = r[0], wall_first = now;
+      else if (r[0] > t_first && now > wall_first) {
+        gs_progress_duration(left, sizeof left - 5, (c->duration - r[0]) * (now - wall_first) / (r[0] - t_first));
+        strcat(left, " left");
+      }
+      fprintf(stderr, "gransim dem (liggghts): t = %.5f / %.5f s, %.0f particles, kinetic energy %.4g J, %s\n", r[0],
+              c->duration, r[1], r[2], left);
     }
   }
   int st = pclose(pp);
