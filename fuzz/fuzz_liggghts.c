@@ -65,6 +65,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
                                       "liggghts/post/collision100.atom"};
   const char *at = (const char *)data, *end = at + size;
   gs_lig_thermo th = {0};
+  double cpu_acc[2] = {0, 0};
   for (int part = 0; part < 4; part++) {
     const char *sep = NULL;
     for (const char *p = at; p + 3 <= end && !sep; p++)
@@ -74,7 +75,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     else {
       char *text = fuzz_input_text((const uint8_t *)at, (size_t)(stop - at));
       for (char *line = text ? strtok(text, "\n") : NULL; line; line = strtok(NULL, "\n"))
-        if (gs_lig_thermo_add(&th, line, 2.5e-6) < 0) break;
+        if (gs_lig_thermo_add(&th, line, 2.5e-6, the_case->out_every, cpu_acc) < 0) break;
       free(text);
     }
     at = sep ? sep + 3 : end;

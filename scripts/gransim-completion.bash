@@ -29,7 +29,7 @@ _gransim() {
     fit) opts="--data --batches --params --global --seed --porosity-tol --max-runs --predict --out --help" ;;
     sensitivity) opts="--range --outputs --method --levels --bootstrap --conf --seed --out --resume --threads --quiet --progress --help" ;;
     optimise) opts="--target --controls --weights --method --max-runs --tol --help" ;;
-    dem) opts="--out --check --quiet --threads --ranks --launcher --help" ;;
+    dem) opts="--out --check --quiet --threads --engine --ranks --launcher --dry-run --reduce --help" ;;
     dem-reduce) opts="--out --impacts --E --nu --rho --e --wall-E --wall-nu --contact-time --min-speed --edges --measure --prefix --contacts --help" ;;
     couple) opts="--out --check --resume --quiet --threads --help" ;;
     geometry) opts="--out --help" ;;
@@ -57,6 +57,7 @@ _gransim() {
       esac
       return ;;
     --measure) COMPREPLY=($(compgen -W "diameter volume" -- "$cur")); return ;;
+    --engine) COMPREPLY=($(compgen -W "embedded liggghts" -- "$cur")); return ;;
     --contacts) COMPREPLY=($(compgen -W "auto ppcoll cc cc-partner" -- "$cur")); return ;;
     --design) COMPREPLY=($(compgen -W "lhs:" -- "$cur")); return ;;
     --threads | --ranks | --seed | --levels | --bootstrap | --conf | --max-runs | --tol | --max-loss | \

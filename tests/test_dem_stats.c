@@ -7,6 +7,8 @@
  *  - velocity statistics per axial compartment for a prescribed velocity
  *    field: mean number, mean and sample sd of the speed and of each velocity
  *    component, mean axial velocity;
+ *  - the collision frequencies of one like and one unlike head-on collision:
+ *    C_11 = 2/(N_1^2 W) and C_12 = 1/(N_1 N_2 W), the PBM pair loop's convention;
  *  - with `start: steady` that never fires, a warning on stderr, a note in the
  *    headers and nan rates instead of zeros. */
 #include <math.h>
@@ -264,6 +266,48 @@ static void test_velocity(void) {
   free(vel);
 }
 
+/* ---- the diagonal of C: two head-on collisions, one like, one unlike ------------ */
+static void test_meet(void) {
+  gs_dem_case *c = dt_load("meet", VEL);
+  if (c) {
+    gs_error err = {0};
+    /* a-a closing at 0.4 m/s from a 0.2 mm gap (touch at 0.5 ms), a-b from a 0.3 mm gap
+     * (0.75 ms); the rebound (e = 0.4) parts them for good within the 2 ms of the run */
+    const double pa[3] = {0.01, 0.01, 0.01}, pb[3] = {0.0122, 0.01, 0.01};
+    const double pc[3] = {0.01, 0.03, 0.01}, pd[3] = {0.0128, 0.03, 0.01};
+    const double vr[3] = {0.2, 0, 0}, vl[3] = {-0.2, 0, 0};
+    CHECK(gs_dem_add_particle(c->dem, c->cls[0].type, 1.0e-3, pa, vr, NULL, &err) >= 0);
+    CHECK(gs_dem_add_particle(c->dem, c->cls[0].type, 1.0e-3, pb, vl, NULL, &err) >= 0);
+    CHECK(gs_dem_add_particle(c->dem, c->cls[0].type, 1.0e-3, pc, vr, NULL, &err) >= 0);
+    CHECK(gs_dem_add_particle(c->dem, c->cls[1].type, 1.5e-3, pd, vl, NULL, &err) >= 0);
+  }
+  if (!c || dt_run(c, "meet")) {
+    gs_dem_case_free(c);
+    return;
+  }
+  gs_dem_case_free(c);
+  char *col = dt_slurp("meet", "collisions.csv"), *ker = dt_slurp("meet", "collision_kernel.csv");
+  double r11[10] = {0}, r12[10] = {0}, r22[10] = {0};
+  /* class_i, class_j, events, N_i, N_j, window_s, events_per_s, C_ij (names skipped) */
+  CHECK(row(col, "1,1,", r11, 10) == 8 && row(col, "1,2,", r12, 10) == 8 && row(col, "2,2,", r22, 10) == 8);
+  const double W = r11[5];
+  fprintf(stderr, "meet: events 1-1 %g, 1-2 %g, 2-2 %g; N %g, %g; window %g s; C_11 %.6g, C_12 %.6g\n", r11[2],
+          r12[2], r22[2], r11[3], r12[4], W, r11[7], r12[7]);
+  CHECK(r11[2] == 1 && r12[2] == 1 && r22[2] == 0);
+  CHECK(r11[3] == 3 && r12[4] == 1);
+  /* the PBM's convention: C_ii = 2 E_ii / (N_i^2 W), C_ij = E_ij / (N_i N_j W) */
+  CHECK_ABS(r11[7], 2.0 / (9 * W), 1e-9 / W);
+  CHECK_ABS(r12[7], 1.0 / (3 * W), 1e-9 / W);
+  /* the kernel table holds the same matrix: first row C_11, C_12 */
+  const char *m = ker && !strncmp(ker, "edges", 5) ? strchr(ker, '\n') : NULL; /* the header first */
+  double k11 = 0, k12 = 0;
+  CHECK(m && sscanf(m + 1, "%lf, %lf", &k11, &k12) == 2);
+  CHECK_ABS(k11, r11[7], 1e-6 * r11[7]);
+  CHECK_ABS(k12, r12[7], 1e-6 * r12[7]);
+  free(col);
+  free(ker);
+}
+
 /* ---- start: steady that never fires ---------------------------------------- */
 static const char *NEVER =
     "dem:\n"
@@ -319,6 +363,7 @@ int main(void) {
   test_detector();
   test_residence();
   test_velocity();
+  test_meet();
   test_never_steady();
   dt_scratch_end();
   TEST_EXIT();

@@ -90,7 +90,11 @@ int main(void) {
     HAS(d, "region outlet0 block -0.02 0.02 -0.02 -0.015 -0.02 0.02 units box\n");
     HAS(d, "delete_atoms region outlet0 compress no\n");
     HAS(d, "compute pgl all pair/gran/local id vel force contactArea delta\n");
-    HAS(d, "compute wgl all wall/gran/local id vel force contactArea delta\n");
+    HAS(d, "compute wgl all wall/gran/local id vel force force_normal contactArea delta\n");
+    HAS(d, "write_dump all custom post/left*_0.atom id type mass f_rtime modify region outlet0\n");
+    HAS(d, "fix rtime all property/atom/regiontracer/time\n");
+    HAS(d, "fix pdd_types all particledistribution/discrete");
+    HAS(d, "thermo_style custom step atoms ke c_rke cpu v_hn v_hm\n");
     HAS(d, "dump dcol all custom 200 post/collision*.atom id type x y z vx vy vz radius c_cc_1 c_cc_2\n");
     HAS(d, "dump dimp all local 200 post/impact*.atom c_wgl[1]");
     /* the contact lists of the events: every third of the Hertz contact of two 1 mm spheres at 10 m/s */
@@ -130,6 +134,8 @@ int main(void) {
       {"{name: b, radius: 1.5e-3,", "{name: b, radius: [1.0e-3, 2.0e-3],", "classes[1].radius"},
       {"seed: 5,", "seed: 5, damping: exact,", "dem.damping"},
       {"seed: 5,", "seed: 5, mesh_contacts: closest,", "dem.mesh_contacts"},
+      {"statistics: {start: 0.005", "spray: {point: [0, 0, 0.01], axis: [0, 0, -1], half_angle: 25, droplet_diameter: "
+       "1.0e-3, mass_rate: 1.0e-4, density: 1000, speed: 1.0}\nstatistics: {start: 0.005", "spray: "},
   };
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
     char y[4096];

@@ -277,6 +277,8 @@ struct gs_cfg_node *gs_dem_case_gas(gs_dem_case *c);
 /* The engine the case asks for (dem.engine): 0 embedded, 1 LIGGGHTS
  * (include/gransim/liggghts.h runs those). */
 int gs_dem_case_engine(const gs_dem_case *c);
+/* Overrides dem.engine (`gransim dem --engine`); no key's reading depends on it. */
+void gs_dem_case_set_engine(gs_dem_case *c, int engine);
 
 #ifdef __cplusplus
 }

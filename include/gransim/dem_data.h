@@ -101,6 +101,15 @@ int gs_dem_data_write_table(const gs_dem_data *d, const char *path, gs_error *er
 int gs_dem_data_write_impacts(const gs_dem_data *d, const char *path, gs_error *err);
 void gs_dem_data_free(gs_dem_data *d);
 
+/* Collision frequency of classes i and j from `events` collisions (or
+ * collision rate times window) in `window` seconds with N_i, N_j particles:
+ * C_ij = E / (N_i N_j window) for i != j and C_ii = 2 E / (N_i^2 window),
+ * the convention of the PBM's pair loop, which counts a like pair once
+ * (rate 1/2 beta N_i^2; docs/models.md, "Collision frequencies").  0 without
+ * particles of a class.  Every writer of C (dem, dem-reduce, the LIGGGHTS
+ * engine) takes it from here so that they agree. */
+double gs_dem_collision_frequency(double events, double Ni, double Nj, double window, int same_class);
+
 /* Lognormal fit of impact speeds from their logarithms ln_u: mu = mean and
  * sigma = sample standard deviation of ln U (GSL); both NAN below 2 samples.
  * Used by the dump reducer and by `gransim dem` (src/dem/stats.c). */

@@ -20,6 +20,8 @@ typedef struct {
   const char *launcher; /* command that starts LIGGGHTS, e.g. "srun -n 64" (NULL: mpirun -np ranks) */
   const char *binary;   /* the LIGGGHTS executable (NULL: $GRANSIM_LIGGGHTS or "liggghts") */
   int progress;         /* a progress line on stderr from LIGGGHTS' thermo output */
+  int dry_run;          /* write the folder (deck, bed, meshes, run.sh) without running */
+  int reduce_only;      /* reduce the dumps of a finished run in the folder (e.g. from a cluster) */
 } gs_lig_options;
 
 /* Write the deck of case c to fp.  data_file: the initial bed's data file
@@ -30,9 +32,13 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
                       gs_error *err);
 /* Whether the deck can express case c (for `gransim dem --check`). */
 int gs_lig_check(const gs_dem_case *c, gs_error *err);
-/* Write the deck and the initial bed into out_dir/liggghts, run it, and
- * reduce its dumps into out_dir's tables.  A failed run's error holds the
- * last lines of its output. */
+/* Write the deck, the initial bed and copies of the meshes into
+ * out_dir/liggghts, run it, and reduce its dumps into out_dir's tables.  A
+ * failed run's error holds LIGGGHTS' error line, the deck line it refers to
+ * and the last lines of its output; no table is written then.  dry_run: the
+ * folder and its run.sh only (the exclusion runs and the run, for a cluster
+ * job).  reduce_only: the tables from the folder's dumps, refused unless its
+ * log.liggghts shows a finished run. */
 int gs_lig_case_run(gs_dem_case *c, const char *out_dir, const gs_lig_options *opt, gs_error *err);
 
 #ifdef __cplusplus

@@ -15,8 +15,9 @@
 
 static void dem_usage(FILE *fp) {
   fprintf(fp,
-          "usage: gransim dem CASE --out DIR [--quiet] [--threads N] [--ranks N] [--launcher CMD]\n"
-          "       gransim dem --check CASE\n\n"
+          "usage: gransim dem CASE --out DIR [--quiet] [--threads N] [--engine embedded|liggghts]\n"
+          "                  [--ranks N] [--launcher CMD] [--dry-run | --reduce]\n"
+          "       gransim dem --check CASE [--engine embedded|liggghts]\n\n"
           "Runs the DEM case CASE (spheres, STL walls, insertion, statistics) and writes into DIR:\n"
           "  timeseries.csv       hold-up, energies, contacts, collision and impact rates\n"
           "  collisions.csv       collision events per class pair, numbers per class, C_ij\n"
@@ -45,18 +46,22 @@ static void dem_usage(FILE *fp) {
           "writes the deck and the initial bed into DIR/liggghts, runs `mpirun -np N liggghts -in\n"
           "in.gransim` there (--ranks N, default the machine's cores; --launcher CMD replaces\n"
           "`mpirun -np N`, e.g. \"srun -n 64\"; $GRANSIM_LIGGGHTS names another executable) and\n"
-          "reduces its dumps into the same tables.\n");
+          "reduces its dumps into the same tables.  --engine overrides dem.engine.  --dry-run writes\n"
+          "DIR/liggghts (deck, initial bed, meshes, run.sh) without running, for a cluster job;\n"
+          "--reduce then writes the tables from the dumps of that finished run.\n");
 }
 
 int gs_cmd_dem(int argc, char **argv) {
   const char *path = NULL, *out = NULL;
-  int check = 0, progress = 1;
+  int check = 0, progress = 1, engine = -1;
   gs_lig_options lig = {.ranks = 0, .launcher = NULL, .binary = NULL, .progress = 1};
   static const struct option opts[] = {
       {"help", no_argument, NULL, GS_CLI_HELP},    {"out", required_argument, NULL, 'o'},
       {"check", no_argument, NULL, 'c'},           {"quiet", no_argument, NULL, 'q'},
       {"launcher", required_argument, NULL, 'l'}, {"ranks", required_argument, NULL, 'r'},
-      {"threads", required_argument, NULL, 't'},  {0}};
+      {"threads", required_argument, NULL, 't'},  {"engine", required_argument, NULL, 'e'},
+      {"dry-run", no_argument, NULL, 'd'},        {"reduce", no_argument, NULL, 'R'},
+      {0}};
   gs_cli_begin();
   for (int o, n; (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
     case GS_CLI_HELP: dem_usage(stdout); return 0;
@@ -64,6 +69,16 @@ int gs_cmd_dem(int argc, char **argv) {
     case 'c': check = 1; break;
     case 'q': progress = 0; break;
     case 'l': lig.launcher = optarg; break;
+    case 'e':
+      if (!strcmp(optarg, "embedded")) engine = 0;
+      else if (!strcmp(optarg, "liggghts")) engine = 1;
+      else {
+        fprintf(stderr, "gransim dem: --engine '%s': expected embedded or liggghts\n", optarg);
+        return 2;
+      }
+      break;
+    case 'd': lig.dry_run = 1; break;
+    case 'R': lig.reduce_only = 1; break;
     case 'r':
       if (gs_cli_positive("dem", "ranks", optarg, &lig.ranks)) return 2;
       break;
@@ -90,10 +105,17 @@ int gs_cmd_dem(int argc, char **argv) {
     fprintf(stderr, "gransim: %s\n", err.msg);
     return 1;
   }
+  if (engine >= 0) gs_dem_case_set_engine(c, engine);
   char desc[512];
   gs_dem_case_describe(c, desc, sizeof desc);
   int rc = 0;
   const int liggghts = gs_dem_case_engine(c) == 1;
+  if ((lig.dry_run || lig.reduce_only) && (!liggghts || check || (lig.dry_run && lig.reduce_only))) {
+    fprintf(stderr, "gransim dem: --dry-run and --reduce are for the LIGGGHTS engine (dem.engine: liggghts or "
+            "--engine liggghts), one at a time, with --out\n");
+    gs_dem_case_free(c);
+    return 2;
+  }
   lig.progress = progress;
   /* a `gas` section: the gas phase steps inside the DEM run (src/cfd) */
   gs_cfd *gas = NULL;
@@ -128,7 +150,7 @@ int gs_cmd_dem(int argc, char **argv) {
     gs_parallel_context(context);
     rc = liggghts ? gs_lig_case_run(c, out, &lig, &err) : gs_dem_case_run(c, out, progress, &err);
     if (rc) fprintf(stderr, "gransim: %s\n", err.msg);
-    else if (progress) fprintf(stderr, "gransim dem: results in %s\n", out);
+    else if (progress && !lig.dry_run) fprintf(stderr, "gransim dem: results in %s\n", out);
   }
   gs_cfd_free(gas);
   gs_dem_case_free(c);

@@ -220,6 +220,17 @@ static int dem_error(const couple *k, const char *written, gs_error *err) {
                       at ? gs_cfg_line(at) : k->dem_line, rest);
 }
 
+/* The DEM stage runs to its steady state (statistics.start: steady), which
+ * the LIGGGHTS engine cannot detect: refused rather than run embedded. */
+static int engine_check(const couple *k, const gs_dem_case *dc, gs_error *err) {
+  if (gs_dem_case_engine(dc) != 1) return GS_OK;
+  const gs_cfg_node *at = find_path(k->dem, "dem.engine");
+  return gs_error_set(err, GS_EINPUT, "%s:%d: dem.dem.engine: 'liggghts' cannot run a coupled case's DEM stage, which "
+                      "runs to its steady state (statistics.start: steady, not expressible in a LIGGGHTS deck); use "
+                      "'embedded', or run the DEM case alone with `gransim dem` and give its tables to the PBM",
+                      at ? gs_cfg_file(at) : k->path, at ? gs_cfg_line(at) : k->dem_line);
+}
+
 /* Placeholder tables of the derived classes, for `check` (no DEM run). */
 static int write_placeholders(const couple *k, const char *kernel, const char *impacts, gs_error *err) {
   FILE *a = fopen(kernel, "w"), *b = fopen(impacts, "w");
@@ -259,7 +270,7 @@ int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
   if (!rc) {
     gs_dem_case *dc = gs_dem_case_load(dcase, err);
     if (!dc) rc = dem_error(&k, dcase, err);
-    else gs_dem_case_describe(dc, dd, sizeof dd);
+    else if (!(rc = engine_check(&k, dc, err))) gs_dem_case_describe(dc, dd, sizeof dd);
     gs_dem_case_free(dc);
   }
   if (!rc) rc = write_placeholders(&k, kt, it, err);
@@ -341,6 +352,7 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
     if (!rc) rc = write_classes(&k, part, err);
     gs_dem_case *dc = rc ? NULL : gs_dem_case_load(dcase, err);
     if (!rc && !dc) rc = dem_error(&k, dcase, err);
+    if (!rc) rc = engine_check(&k, dc, err);
     if (!rc) {
       if (opt->progress) fprintf(stderr, "gransim couple: DEM stage (%g s at most) in %s\n", k.s.max_time, part);
       rc = gs_dem_case_run(dc, part, opt->progress, err);

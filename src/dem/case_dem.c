@@ -544,6 +544,7 @@ void gs_dem_case_describe(const gs_dem_case *c, char *buf, size_t n) {
 }
 
 int gs_dem_case_engine(const gs_dem_case *c) { return c->engine; }
+void gs_dem_case_set_engine(gs_dem_case *c, int engine) { c->engine = engine; }
 gs_dem *gs_dem_case_sim(gs_dem_case *c) { return c->dem; }
 gs_cfg_node *gs_dem_case_gas(gs_dem_case *c) { return c->gas; }
 double gs_dem_case_duration(const gs_dem_case *c) { return c->duration; }

@@ -67,6 +67,13 @@ extern const char *const gs_dem_units_collisions[], *const gs_dem_units_kernel[]
     *const gs_dem_units_impacts[], *const gs_dem_units_impact_velocity[], *const gs_dem_units_velocity[],
     *const gs_dem_units_residence[], *const gs_dem_units_residence_class[];
 void gs_dem_class_edges(const gs_dem_case *c, double *e);
+/* residence.csv and residence_class.csv: the nrt residence times rt (class
+ * rt_cls) of the particles that left through outlets from t0 to t_end
+ * (out_mass kg), the mean hold-up (hold_n particles, hold_m kg) and the note
+ * for the headers. */
+int gs_dem_residence_write(const gs_dem_case *c, const char *dir, const double *rt, const int *rt_cls, size_t nrt,
+                           double out_mass, double t0, double t_end, double hold_n, double hold_m, const char *note,
+                           gs_error *err);
 /* timeseries.json beside path (timeseries.csv, written row by row as the run
  * goes): the description and the units of its columns, walls included. */
 int gs_dem_timeseries_meta(const char *path, const char *description, size_t nw,

@@ -4,7 +4,9 @@
  * (length dt, from t0 to the end):  C_ij = N_coll,ij / (N_i N_j dt), with
  * N_coll,ij the collision events (contacts that began) between the classes
  * and N_i the mean number of class-i particles over the samples, as in
- * Sampat et al. (2018) eq. (9).  collision_kernel.csv holds C in the format of the PBM's
+ * Sampat et al. (2018) eq. (9); on the diagonal C_ii = 2 N_coll,ii / (N_i^2
+ * dt), as the PBM's pair loop counts a like pair once
+ * (gs_dem_collision_frequency).  collision_kernel.csv holds C in the format of the PBM's
  * `table` kernel (src/kernel/kernel_table.c) with class edges in particle
  * diameter (use `measure: diameter` there); impact_table.csv holds the wall
  * impacts in the format of the `dem_impact` breakage selection
@@ -311,7 +313,7 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
     for (int j = i; j < ncl; j++) {
       double ev = (double)k.pair_events[i * ncl + j];
       double Ni = have ? s->num_sum[i] / ns : NAN, Nj = have ? s->num_sum[j] / ns : NAN;
-      double cij = !have ? NAN : Ni > 0 && Nj > 0 ? ev / (Ni * Nj * win) : 0;
+      double cij = !have ? NAN : gs_dem_collision_frequency(ev, Ni, Nj, win, i == j);
       C[i * ncl + j] = C[j * ncl + i] = cij;
       fprintf(fp, "%d,%d,%s,%s,%.0f,%.6g,%.6g,%.9g,%.9g,%.9g\n", i + 1, j + 1, c->cls[i].name,
               c->cls[j].name, ev, Ni, Nj, win, have ? ev / win : NAN, cij);
@@ -320,7 +322,8 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
 
   /* the same as a PBM kernel table: edges in diameter halfway between classes */
   if (!(fp = gs_dem_table_begin(&tab, dir, "collision_kernel.csv", err))) { free(C); free(e); return err->code; }
-  fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt) [1/s], window %.9g s%s;\n"
+  fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt), C_ii = 2 N_coll,ii / (N_i^2 dt) [1/s], "
+          "window %.9g s%s;\n"
           "# edges are particle diameters [m]: use `kernel: {type: table, measure: diameter, ...}`\n"
           "edges", win, note);
   gs_dem_class_edges(c, e);
@@ -399,46 +402,57 @@ int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *
   if ((rc = gs_dem_table_end(&tab, gs_dem_units_velocity, err))) return rc;
 
   /* residence times of particles that left through an outlet: all, and per class */
+  return gs_dem_residence_write(c, dir, s->rt, s->rt_cls, s->nrt, s->out_mass, s->t0, t_end,
+                                have ? s->hold_n_sum / ns : NAN, have ? s->hold_m_sum / ns : NAN, note, err);
+}
+
+int gs_dem_residence_write(const gs_dem_case *c, const char *dir, const double *rt, const int *rt_cls, size_t nrt,
+                           double out_mass, double t0, double t_end, double hold_n, double hold_m, const char *note,
+                           gs_error *err) {
+  const int ncl = (int)c->nclass;
+  gs_csv_out tab;
+  FILE *fp;
+  int rc;
   double mx = 0, sum = 0;
-  for (size_t r = 0; r < s->nrt; r++) {
-    mx = fmax(mx, s->rt[r]);
-    sum += s->rt[r];
+  for (size_t r = 0; r < nrt; r++) {
+    mx = fmax(mx, rt[r]);
+    sum += rt[r];
   }
   const int nb = 50;
   const double bw = mx > 0 ? mx / nb * (1 + 1e-9) : 1;
   if (!(fp = gs_dem_table_begin(&tab, dir, "residence.csv", err))) return err->code;
   fprintf(fp, "# %zu particles left through outlets (%.6g kg) from t = %.9g to %.9g s; mean residence %.6g s;"
           " mean hold-up %.6g particles, %.6g kg%s\n",
-          s->nrt, s->out_mass, s->t0, t_end, s->nrt ? sum / (double)s->nrt : NAN, have ? s->hold_n_sum / ns : NAN,
-          have ? s->hold_m_sum / ns : NAN, note);
+          nrt, out_mass, t0, t_end, nrt ? sum / (double)nrt : NAN, hold_n,
+          hold_m, note);
   fprintf(fp, "t_lo,t_hi,count,fraction\n");
-  for (int b = 0; b < nb && s->nrt; b++) {
+  for (int b = 0; b < nb && nrt; b++) {
     size_t cnt = 0;
-    for (size_t r = 0; r < s->nrt; r++)
-      if ((int)(s->rt[r] / bw) == b) cnt++;
-    fprintf(fp, "%.6g,%.6g,%zu,%.6g\n", b * bw, (b + 1) * bw, cnt, (double)cnt / (double)s->nrt);
+    for (size_t r = 0; r < nrt; r++)
+      if ((int)(rt[r] / bw) == b) cnt++;
+    fprintf(fp, "%.6g,%.6g,%zu,%.6g\n", b * bw, (b + 1) * bw, cnt, (double)cnt / (double)nrt);
   }
   if ((rc = gs_dem_table_end(&tab, gs_dem_units_residence, err))) return rc;
 
   if (!(fp = gs_dem_table_begin(&tab, dir, "residence_class.csv", err))) return err->code;
   fprintf(fp, "# residence-time distribution per class of the %zu particles that left through outlets from "
-          "t = %.9g to %.9g s, bins as in residence.csv; fraction: of the class%s\n", s->nrt, s->t0, t_end, note);
+          "t = %.9g to %.9g s, bins as in residence.csv; fraction: of the class%s\n", nrt, t0, t_end, note);
   for (int i = 0; i < ncl; i++) {
     size_t n = 0;
     double si = 0;
-    for (size_t r = 0; r < s->nrt; r++)
-      if (s->rt_cls[r] == i) n++, si += s->rt[r];
+    for (size_t r = 0; r < nrt; r++)
+      if (rt_cls[r] == i) n++, si += rt[r];
     fprintf(fp, "# class %d (%s): %zu particles, mean residence %.6g s\n", i + 1, c->cls[i].name, n,
             n ? si / (double)n : NAN);
   }
   fprintf(fp, "class,name,t_lo,t_hi,count,fraction\n");
-  for (int i = 0; i < ncl && s->nrt; i++) {
+  for (int i = 0; i < ncl && nrt; i++) {
     size_t n = 0;
-    for (size_t r = 0; r < s->nrt; r++) n += s->rt_cls[r] == i;
+    for (size_t r = 0; r < nrt; r++) n += rt_cls[r] == i;
     for (int b = 0; b < nb; b++) {
       size_t cnt = 0;
-      for (size_t r = 0; r < s->nrt; r++)
-        if (s->rt_cls[r] == i && (int)(s->rt[r] / bw) == b) cnt++;
+      for (size_t r = 0; r < nrt; r++)
+        if (rt_cls[r] == i && (int)(rt[r] / bw) == b) cnt++;
       fprintf(fp, "%d,%s,%.6g,%.6g,%zu,%.6g\n", i + 1, c->cls[i].name, b * bw, (b + 1) * bw, cnt,
               n ? (double)cnt / (double)n : NAN);
     }

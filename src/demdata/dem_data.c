@@ -246,13 +246,17 @@ static int read_collision(const char *path, const char *prefix, accum *a, size_t
   return rc;
 }
 
-/* Columns 1..14 of a local dump, located by their "[k]" suffix. */
+/* Columns 1..14 of a local dump, located by their "[k]" suffix: those of the
+ * keywords id vel force contactArea delta, or with force_normal too (17
+ * columns, as gransim's decks write wall contacts: contact area and overlap
+ * are then [16] and [17]). */
 static int local_columns(const gs_dump *d, long col[14], const char *what, gs_error *err) {
-  if (d->ncols != 14)
+  if (d->ncols != 14 && d->ncols != 17)
     return gs_error_set(err, GS_EINPUT, "%s:%ld: %zu columns, expected the 14 of %s (keywords id vel force "
-                        "contactArea delta)", d->path, d->first_row_line - 1, d->ncols, what);
+                        "contactArea delta) or 17 (id vel force force_normal contactArea delta)", d->path,
+                        d->first_row_line - 1, d->ncols, what);
   for (int k = 0; k < 14; k++)
-    if ((col[k] = gs_dump_col_index(d, k + 1)) < 0)
+    if ((col[k] = gs_dump_col_index(d, k < 12 || d->ncols == 14 ? k + 1 : k + 3)) < 0)
       return gs_error_set(err, GS_EINPUT, "%s:%ld: no column named '...[%d]' (expected c_<compute>[1] .. [14] "
                           "of %s)", d->path, d->first_row_line - 1, k + 1, what);
   return GS_OK;
@@ -398,6 +402,11 @@ static int alloc_out(gs_dem_data *o, size_t n, size_t ns, gs_error *err) {
       !o->vel_mu || !o->vel_sigma)
     return gs_error_set(err, GS_ENOMEM, "out of memory");
   return GS_OK;
+}
+
+double gs_dem_collision_frequency(double events, double Ni, double Nj, double window, int same_class) {
+  if (!(Ni > 0 && Nj > 0)) return 0;
+  return (same_class ? 2 : 1) * events / (Ni * Nj * window);
 }
 
 void gs_dem_lognormal_fit(const double *ln_u, size_t n, double *mu, double *sigma) {
@@ -560,8 +569,8 @@ int gs_dem_data_read(const char *dir, const gs_dem_options *opt_in, gs_dem_data 
     for (size_t i = 0; i < n; i++)
       for (size_t j = 0; j < n; j++) {
         double E = K[i * n + j] / out->pair_contact_time[i * n + j];
-        double pairs = N[i] * N[j];
-        C[i * n + j] = pairs > 0 ? (i == j ? 2 * E : E) / pairs : NAN; /* undefined without particles */
+        /* undefined without particles */
+        C[i * n + j] = N[i] > 0 && N[j] > 0 ? gs_dem_collision_frequency(E, N[i], N[j], 1, i == j) : NAN;
         out->contacts[i * n + j] += K[i * n + j] / (double)ns;
       }
   }

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "dem/dem_case.h"
+#include "dem/dem_wet.h"
 #include "gransim/dem_data.h"
 #include "gransim/liggghts.h"
 #include "liggghts/lig_internal.h"
@@ -54,29 +55,60 @@ static void pair_prop(FILE *fp, const gs_dem_case *c, size_t nt, const char *id,
   fprintf(fp, "\n");
 }
 
-/* A region as a LIGGGHTS region command: boxes, and cylinders along x, y or z
- * without an inner radius. */
-static int region_cmd(FILE *fp, const char *id, const gs_dem_region *g, const char *key, gs_error *err) {
+/* The axis (0, 1, 2) of a cylinder region along x, y or z, or -1. */
+static int cyl_axis(const gs_dem_region *g) {
+  int ax = -1;
+  for (int a = 0; a < 3; a++)
+    if (fabs(fabs(g->a[a]) - 1) < 1e-12) ax = a;
+  return ax;
+}
+
+/* Whether a LIGGGHTS region can be g: boxes, and cylinders along x, y or z;
+ * an annulus (inner_radius) only where feed is 0, as the intersection of two
+ * cylinders, which insert/rate/region cannot fill. */
+static int region_check(const gs_dem_region *g, const char *key, int feed, gs_error *err) {
+  if (g->kind == GS_DEM_REGION_BOX) return GS_OK;
+  if (cyl_axis(g) < 0)
+    return gs_error_set(err, GS_EINPUT, "%s.cylinder: the LIGGGHTS engine takes cylinders along x, y or z only "
+                        "(axis (%g, %g, %g)); use a box or such a cylinder", key, g->a[0], g->a[1], g->a[2]);
+  if (feed && g->Rin > 0)
+    return gs_error_set(err, GS_EINPUT, "%s.cylinder.inner_radius: a LIGGGHTS feed region cannot be an annulus "
+                        "(insert/rate/region fills simple regions); use a box or a full cylinder", key);
+  return GS_OK;
+}
+
+/* A region as LIGGGHTS region commands (checked by region_check). */
+static int region_cmd(FILE *fp, const char *id, const gs_dem_region *g, const char *key, int feed, gs_error *err) {
+  int rc = region_check(g, key, feed, err);
+  if (rc) return rc;
   if (g->kind == GS_DEM_REGION_BOX) {
     fprintf(fp, "region %s block %.9g %.9g %.9g %.9g %.9g %.9g units box\n", id, g->lo[0], g->hi[0], g->lo[1],
             g->hi[1], g->lo[2], g->hi[2]);
     return GS_OK;
   }
-  int ax = -1;
-  for (int a = 0; a < 3; a++)
-    if (fabs(fabs(g->a[a]) - 1) < 1e-12) ax = a;
-  if (ax < 0 || g->Rin > 0)
-    return gs_error_set(err, GS_EINPUT, "%s.cylinder: the LIGGGHTS engine takes cylinders along x, y or z without "
-                        "inner_radius here (a LIGGGHTS region); use a box or such a cylinder", key);
+  const int ax = cyl_axis(g);
   double lo = g->p[ax] + g->a[ax] * g->s0, hi = g->p[ax] + g->a[ax] * g->s1;
   int c1 = ax == 0 ? 1 : 0, c2 = ax == 2 ? 1 : 2;
-  fprintf(fp, "region %s cylinder %c %.9g %.9g %.9g %.9g %.9g units box\n", id, "xyz"[ax], g->p[c1], g->p[c2], g->R,
-          fmin(lo, hi), fmax(lo, hi));
+  const char *sfx = g->Rin > 0 ? "_outer" : "";
+  fprintf(fp, "region %s%s cylinder %c %.9g %.9g %.9g %.9g %.9g units box\n", id, sfx, "xyz"[ax], g->p[c1], g->p[c2],
+          g->R, fmin(lo, hi), fmax(lo, hi));
+  if (g->Rin > 0)
+    fprintf(fp, "region %s_inner cylinder %c %.9g %.9g %.9g %.9g %.9g side out units box\n"
+                "region %s intersect 2 %s_outer %s_inner\n", id, "xyz"[ax], g->p[c1], g->p[c2], g->Rin,
+            fmin(lo, hi), fmax(lo, hi), id, id, id);
   return GS_OK;
 }
 
 /* Runs nsteps; with outlets, in chunks of 200 steps with the outlet regions
  * emptied after each (the embedded engine removes at least every 200 steps). */
+static void empty_outlets(FILE *fp, const gs_dem_case *c) {
+  /* the atoms about to leave, with their time in the domain (fix rtime), for
+   * residence.csv: left<STEP>_<OUTLET>.atom (tables.c) */
+  for (size_t k = 0; k < c->noutlets; k++)
+    fprintf(fp, "write_dump all custom post/left*_%zu.atom id type mass f_rtime modify region outlet%zu\n"
+                "delete_atoms region outlet%zu compress no\n", k, k, k);
+}
+
 static void run_cmd(FILE *fp, const gs_dem_case *c, long nsteps, const char *label) {
   if (nsteps <= 0) return;
   if (!c->noutlets) {
@@ -86,12 +118,12 @@ static void run_cmd(FILE *fp, const gs_dem_case *c, long nsteps, const char *lab
   long q = nsteps / 200, r = nsteps % 200;
   if (q > 0) {
     fprintf(fp, "variable %s loop %ld\nlabel %s\nrun 200\n", label, q, label);
-    for (size_t k = 0; k < c->noutlets; k++) fprintf(fp, "delete_atoms region outlet%zu compress no\n", k);
+    empty_outlets(fp, c);
     fprintf(fp, "next %s\njump SELF %s\n", label, label);
   }
   if (r > 0) {
     fprintf(fp, "run %ld\n", r);
-    for (size_t k = 0; k < c->noutlets; k++) fprintf(fp, "delete_atoms region outlet%zu compress no\n", k);
+    empty_outlets(fp, c);
   }
 }
 
@@ -129,6 +161,11 @@ static void preamble(const gs_dem_case *c, FILE *fp, const char *data_file) {
 
 }
 
+void gs_lig_mesh_name(const gs_dem_case *c, size_t w, char *buf, size_t n) {
+  const char *base = strrchr(c->wall_src[w].mesh, '/');
+  snprintf(buf, n, "wall%zu_%s", w, base ? base + 1 : c->wall_src[w].mesh);
+}
+
 long gs_lig_event_every(const gs_dem_case *c) {
   /* the contact time falls with the impact speed as v^(-1/5): at 10 m/s it is
    * shorter than nearly every contact in a granulator */
@@ -144,6 +181,10 @@ long gs_lig_event_every(const gs_dem_case *c) {
 
 /* What a deck cannot express, named by key. */
 int gs_lig_check(const gs_dem_case *c, gs_error *err) {
+  if (c->wet)
+    return gs_error_set(err, GS_EINPUT, "%s: not expressible in a LIGGGHTS deck (droplets, the liquid on the "
+                        "particles and their aggregation live in the embedded engine); use engine: embedded",
+                        c->wet->has_spray ? "spray" : "granulation");
   for (size_t w = 0; w < c->nwall_src; w++)
     if (c->wall_src[w].kind != GS_DEM_SRC_MESH)
       return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): %s walls are not expressible in the LIGGGHTS engine "
@@ -158,14 +199,24 @@ int gs_lig_check(const gs_dem_case *c, gs_error *err) {
   if (c->start_steady)
     return gs_error_set(err, GS_EINPUT, "statistics.start: 'steady' is not expressible in a LIGGGHTS deck (the "
                         "detector needs the collision rate during the run); give a time");
-  if (c->has_holdup)
-    return gs_error_set(err, GS_EINPUT, "statistics.holdup_region: not available with the LIGGGHTS engine");
   for (size_t k = 0; k < c->nfeed; k++)
     for (size_t i = 0; i < c->nclass; i++)
       if (c->feed[k].frac[i] > 0 && c->cls[i].rmin != c->cls[i].rmax)
         return gs_error_set(err, GS_EINPUT, "classes[%zu].radius: a feed of the LIGGGHTS engine inserts classes of "
                             "one radius only (particletemplate/sphere radius constant); class '%s' has a range or "
                             "a distribution", i, c->cls[i].name);
+  char key[64];
+  int rc = GS_OK;
+  for (size_t k = 0; k < c->nfeed && !rc; k++) {
+    snprintf(key, sizeof key, "feed[%zu].region", k);
+    rc = region_check(&c->feed[k].reg, key, 1, err);
+  }
+  for (size_t k = 0; k < c->noutlets && !rc; k++) {
+    snprintf(key, sizeof key, "outlets[%zu].region", k);
+    rc = region_check(&c->outlets[k], key, 0, err);
+  }
+  if (!rc && c->has_holdup) rc = region_check(&c->holdup, "statistics.holdup_region", 0, err);
+  if (rc) return rc;
   for (size_t i = 0; i < c->nclass; i++)
     if (memcmp(&c->cls[i].mat, &c->cls[0].mat, sizeof c->cls[0].mat))
       return gs_error_set(err, GS_EINPUT, "classes[%zu].material: the LIGGGHTS engine's reduction assumes one "
@@ -200,7 +251,9 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
     for (size_t w = 0; w < c->nwall_src; w++) {
       const gs_dem_wall_src *s = &c->wall_src[w];
       /* LIGGGHTS wants its keywords in this order: type, heal, element_exclusion_list, scale */
-      fprintf(fp, "fix wall%zu all mesh/surface file %s type %zu heal auto_remove_duplicates", w, s->mesh, ncl + 1 + w);
+      char mesh[4200];
+      gs_lig_mesh_name(c, w, mesh, sizeof mesh);
+      fprintf(fp, "fix wall%zu all mesh/surface file %s type %zu heal auto_remove_duplicates", w, mesh, ncl + 1 + w);
       /* LIGGGHTS refuses facets with more than two edge neighbours (the CoriMix
        * shell has such rings); its remedy: a first run writes them, this one excludes them */
       if (exclusion) fprintf(fp, " element_exclusion_list %s ex_wall%zu.txt", exclusion, w);
@@ -212,14 +265,20 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
     fprintf(fp, "\n");
   }
 
-  /* feeds: one particle template per class, one distribution and inserter per feed */
+  /* one particle template per class (a class with a radius range, which no
+   * feed may insert, at its smallest radius), and a distribution of them all
+   * that no feed uses: LIGGGHTS stops ("Atom types must start from 1") once
+   * no atom, wall or distribution of type 1 is left, e.g. when the outlets
+   * have emptied class 1 */
+  for (size_t i = 0; i < ncl; i++)
+    fprintf(fp, "fix pts%zu all particletemplate/sphere %ld atom_type %zu density constant %.9g radius constant %.9g\n",
+            i + 1, lig_seed(c, (int)i), i + 1, c->cls[i].mat.density, c->cls[i].rmin);
+  fprintf(fp, "fix pdd_types all particledistribution/discrete %ld %zu", lig_seed(c, 63), ncl);
+  for (size_t i = 0; i < ncl; i++) fprintf(fp, " pts%zu %.9g", i + 1, 1.0 / (double)ncl);
+  fprintf(fp, "\n");
+  /* feeds: one distribution and inserter per feed */
   for (size_t k = 0; k < c->nfeed; k++) {
     const gs_dem_inserter *f = &c->feed[k];
-    if (k == 0)
-      for (size_t i = 0; i < ncl; i++)
-        if (c->cls[i].rmin == c->cls[i].rmax)
-          fprintf(fp, "fix pts%zu all particletemplate/sphere %ld atom_type %zu density constant %.9g radius constant %.9g\n",
-                  i + 1, lig_seed(c, (int)i), i + 1, c->cls[i].mat.density, c->cls[i].rmin);
     size_t nz = 0;
     for (size_t i = 0; i < ncl; i++) nz += f->frac[i] > 0;
     /* mass-based weights (particledistribution/discrete): number fractions become mass
@@ -239,7 +298,7 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
     snprintf(key, sizeof key, "feed[%zu].region", k);
     char rid[32];
     snprintf(rid, sizeof rid, "feed%zu", k);
-    if ((rc = region_cmd(fp, rid, &f->reg, key, err))) return rc;
+    if ((rc = region_cmd(fp, rid, &f->reg, key, 1, err))) return rc;
     double span = fmin(f->end, c->duration) - f->start;
     long every = (long)fmax(1, round(f->every / dt)), start = (long)round(f->start / dt);
     /* LIGGGHTS reads these keywords in this order only */
@@ -255,7 +314,16 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
     char key[64], rid[32];
     snprintf(key, sizeof key, "outlets[%zu].region", k);
     snprintf(rid, sizeof rid, "outlet%zu", k);
-    if ((rc = region_cmd(fp, rid, &c->outlets[k], key, err))) return rc;
+    if ((rc = region_cmd(fp, rid, &c->outlets[k], key, 0, err))) return rc;
+  }
+  /* each atom's time since it entered (its residence time when it leaves) */
+  if (c->noutlets) fprintf(fp, "fix rtime all property/atom/regiontracer/time\n");
+  /* the hold-up of the time series: in the hold-up region, or everything */
+  if (c->has_holdup) {
+    if ((rc = region_cmd(fp, "holdup", &c->holdup, "statistics.holdup_region", 0, err))) return rc;
+    fprintf(fp, "variable hn equal count(all,holdup)\nvariable hm equal mass(all,holdup)\n");
+  } else {
+    fprintf(fp, "variable hn equal count(all)\nvariable hm equal mass(all)\n");
   }
   fprintf(fp, "fix integr all nve/sphere\n");
 
@@ -279,9 +347,12 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   fprintf(fp, "# contacts and impacts: the dumps gransim reduces (src/demdata)\n");
   for (size_t i = 1; i <= ncl; i++) fprintf(fp, "group t%zu type %zu\ncompute cc_%zu t%zu contact/atom\n", i, i, i, i);
   fprintf(fp, "compute pgl all pair/gran/local id vel force contactArea delta\n");
-  if (c->nwall_src) fprintf(fp, "compute wgl all wall/gran/local id vel force contactArea delta\n");
+  /* the normal force's direction is the contact normal (impacts.csv's vn, vt); LIGGGHTS allows
+   * one wall/gran/local only, so its columns are: wall and particle velocity 1-6, mesh,
+   * triangle, atom 7-9, force 10-12, normal force 13-15, contact area 16, overlap 17 */
+  if (c->nwall_src) fprintf(fp, "compute wgl all wall/gran/local id vel force force_normal contactArea delta\n");
   fprintf(fp, "compute rke all erotate/sphere\n"
-              "thermo_style custom step atoms ke c_rke cpu\nthermo %ld\nthermo_modify lost ignore norm no\n", out_k);
+              "thermo_style custom step atoms ke c_rke cpu v_hn v_hm\nthermo %ld\nthermo_modify lost ignore norm no\n", out_k);
 
   if (c->vtk_every > 0) { /* frames in DIR/vtk, named by step: LIGGGHTS' own writers */
     long vk = (long)fmax(1, round(c->vtk_every / dt));
@@ -299,7 +370,7 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   /* (without walls the runner writes an empty impact file per snapshot) */
   if (c->nwall_src) {
     fprintf(fp, "dump dimp all local %ld post/impact*.atom", smp_k);
-    for (int q = 1; q <= 14; q++) fprintf(fp, " c_wgl[%d]", q);
+    for (int q = 1; q <= 17; q++) fprintf(fp, " c_wgl[%d]", q);
     fprintf(fp, "\n");
   }
   /* the contact lists the collision events are counted from (tables.c) */
@@ -308,7 +379,7 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   if (c->nwall_src) {
     fprintf(fp, "dump dwev all local %ld post/events_wall.txt", ek);
     for (int q = 1; q <= 9; q++) fprintf(fp, " c_wgl[%d]", q);
-    fprintf(fp, " c_wgl[14]\n");
+    fprintf(fp, " c_wgl[17] c_wgl[13] c_wgl[14] c_wgl[15]\n");
   }
   run_cmd(fp, c, nsteps - start_k, "window");
   return ferror(fp) ? gs_error_set(err, GS_EIO, "cannot write the LIGGGHTS deck") : GS_OK;
@@ -321,8 +392,10 @@ int gs_lig_write_exclusion_deck(const gs_dem_case *c, size_t wall, const char *p
   /* no atoms, hence no cutoff: LIGGGHTS would refuse to sort them by bins of size 0 */
   fprintf(fp, "atom_modify sort 0 0.0\n");
   const gs_dem_wall_src *s = &c->wall_src[wall];
+  char mesh[4200];
+  gs_lig_mesh_name(c, wall, mesh, sizeof mesh);
   fprintf(fp, "fix wall%zu all mesh/surface file %s type %zu heal auto_remove_duplicates "
-          "element_exclusion_list write ex_wall%zu.txt scale %.9g curvature_tolerant yes\n", wall, s->mesh,
+          "element_exclusion_list write ex_wall%zu.txt scale %.9g curvature_tolerant yes\n", wall, mesh,
           c->nclass + 1 + wall, wall, s->scale);
   fprintf(fp, "fix walls all wall/gran model hertz tangential history rolling_friction cdt mesh n_meshes 1 "
           "meshes wall%zu\nrun 1\n", wall);

@@ -6,14 +6,19 @@
 
 #include "dem/dem_case.h"
 
+/* thermo_style custom step atoms ke c_rke cpu v_hn v_hm (deck.c) */
+#define GS_LIG_THERMO_COLS 7
 typedef struct {
   size_t n, cap;
-  double *row; /* 5 per row: time [s], atoms, kinetic energy, rotational energy, cpu seconds */
+  double *row; /* per row: time [s], atoms, kinetic energy, rotational energy, cpu seconds, hold-up number and
+                  mass [kg] */
 } gs_lig_thermo;
-/* One line of LIGGGHTS' screen output: a thermo line (step, atoms, kinetic
- * and rotational energy, cpu seconds, nothing else) is added to th as a row
- * at time step * dt (1); any other line is left (0); -1: out of memory. */
-int gs_lig_thermo_add(gs_lig_thermo *th, const char *line, double dt);
+/* One line of LIGGGHTS' screen output: a thermo line (the 7 columns above,
+ * nothing else) at a multiple of the output interval out_every and later
+ * than the last row is added to th as a row at time step * dt (1); any other
+ * line is left (0); -1: out of memory.  cpu_acc[2] (zero at the start)
+ * carries the cpu seconds across LIGGGHTS' runs, which restart its clock. */
+int gs_lig_thermo_add(gs_lig_thermo *th, const char *line, double dt, double out_every, double cpu_acc[2]);
 
 /* A deck that only reads mesh `wall` and writes the facets LIGGGHTS refuses
  * to ex_wall<wall>.txt (element_exclusion_list write). */
@@ -21,8 +26,14 @@ int gs_lig_write_exclusion_deck(const gs_dem_case *c, size_t wall, const char *p
 /* Steps between the contact lists the events are counted from: a third of
  * the Hertz contact time of two of the smallest particles at 10 m/s. */
 long gs_lig_event_every(const gs_dem_case *c);
+/* The name under which the deck reads wall w's mesh: a copy beside the deck,
+ * wall<w>_<file name>, so that the folder runs anywhere (a cluster). */
+void gs_lig_mesh_name(const gs_dem_case *c, size_t w, char *buf, size_t n);
 /* Remove the collision/impact/ppcoll dumps of an earlier run from dir. */
 int gs_lig_clear_dumps(const char *dir, gs_error *err);
+/* Remove the tables a reduction writes from out (before a run, and after a
+ * failed reduction: all of them or none). */
+void gs_lig_remove_tables(const gs_dem_case *c, const char *out);
 /* Reduce out/liggghts/post into out's tables (those of src/dem/stats.c). */
 int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, gs_error *err);
 #endif

@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/progress.h"
 #include "dem/dem_case.h"
 #include "gransim/liggghts.h"
 #include "liggghts/lig_internal.h"
@@ -76,14 +77,58 @@ static void quote(const char *s, char *out, size_t n) {
   out[k] = 0;
 }
 
-/* Run `cd dir && launch binary -in deck -log log`, keeping its output in
- * screen (and the last lines for the error), thermo rows for the progress
- * line and the time series. */
+/* One thermo row (thermo_style custom step atoms ke c_rke cpu v_hn v_hm) into
+ * th, once per output interval: each run command also prints its first and
+ * last step (the outlets' runs of 200 steps), which are left out.  LIGGGHTS'
+ * cpu column restarts with each run command: summed over them (cpu[0] the
+ * last value read, cpu[1] the sum of the finished runs').  Returns 1 for a
+ * row kept, 0 otherwise, -1 out of memory. */
+/* The deck's lines, to find the one LIGGGHTS echoes before an ERROR. */
+typedef struct {
+  char **line;
+  size_t n;
+} deck_lines;
+
+static void deck_lines_read(const char *path, deck_lines *d) {
+  d->line = NULL, d->n = 0;
+  FILE *fp = fopen(path, "r");
+  char buf[4096];
+  size_t cap = 0;
+  while (fp && fgets(buf, sizeof buf, fp)) {
+    buf[strcspn(buf, "\r\n")] = 0;
+    if (d->n == cap) {
+      char **t = realloc(d->line, (cap = cap ? 2 * cap : 128) * sizeof *t);
+      if (!t) break;
+      d->line = t;
+    }
+    if (!(d->line[d->n] = strdup(buf))) break;
+    d->n++;
+  }
+  if (fp) fclose(fp);
+}
+
+/* 1-based number of the deck line equal to s (the first such), or 0. */
+static size_t deck_line_of(const deck_lines *d, const char *s) {
+  if (!(*s >= 'a' && *s <= 'z')) return 0; /* commands start with a lower-case letter */
+  for (size_t k = 0; k < d->n; k++)
+    if (d->line[k][0] && !strcmp(d->line[k], s)) return k + 1;
+  return 0;
+}
+
+static void deck_lines_free(deck_lines *d) {
+  for (size_t k = 0; k < d->n; k++) free(d->line[k]);
+  free(d->line);
+}
+
+/* Run `cd dir && launch binary -echo screen -in deck -log log`, keeping its
+ * output in screen (and the last lines for the error), thermo rows for the
+ * progress line and the time series.  The echo gives the deck line an ERROR
+ * refers to: the last deck line echoed before it. */
 static int run_deck(const char *dir, const char *launch, const char *bin, const char *deck, const char *log,
                     const char *screen, const gs_dem_case *c, int progress, gs_lig_thermo *th, gs_error *err) {
   char qd[4400], cmd[9000], path[4400];
   quote(dir, qd, sizeof qd);
-  snprintf(cmd, sizeof cmd, "cd %s && %s %s -in %s -log %s 2>&1", qd, launch, bin, deck, log);
+  snprintf(cmd, sizeof cmd, "cd %s && %s %s -echo screen -in %s -log %s 2>&1", qd, launch, bin, deck, log);
   snprintf(path, sizeof path, "%s/%s", dir, screen);
   FILE *sc = fopen(path, "w");
   if (!sc) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
@@ -92,8 +137,10 @@ static int run_deck(const char *dir, const char *launch, const char *bin, const 
     fclose(sc);
     return gs_error_set(err, GS_EIO, "cannot start '%s': %s", cmd, strerror(errno));
   }
-  char line[4096], tail[12][512], first_error[512] = "";
-  int nt = 0, saw_error = 0, short_insert = 0;
+  /* the lines before the first ERROR, to find the deck line among them */
+  char line[4096], tail[12][512], first_error[512] = "", before[8][512];
+  double cpu_acc[2] = {0, 0}, t_first = -1, wall_first = 0;
+  int nt = 0, saw_error = 0, short_insert = 0, nbefore = 0;
   while (fgets(line, sizeof line, pp)) {
     fputs(line, sc);
     size_t ll = strlen(line);
@@ -104,19 +151,42 @@ static int run_deck(const char *dir, const char *launch, const char *bin, const 
     if (!strncmp(line, "ERROR", 5) && !saw_error) {
       saw_error = 1;
       memcpy(first_error, tail[(nt - 1) % 12], sizeof first_error);
+      nbefore = nt - 1 < 8 ? nt - 1 : 8;
+      for (int i = 0; i < nbefore; i++) {
+        memcpy(before[i], tail[(nt - 2 - i) % 12], sizeof before[i]); /* newest first */
+        before[i][strcspn(before[i], "\r\n")] = 0;
+      }
     }
+    line[strcspn(line, "\r\n")] = 0;
     if (strstr(line, "Less insertions than requested")) short_insert++;
-    const int added = th ? gs_lig_thermo_add(th, line, c->prm.dt) : 0;
-    if (added < 0) break;
-    if (added) {
-      const double *r = th->row + 5 * (th->n - 1), atoms = r[1], ke = r[2];
-      if (progress)
-        fprintf(stderr, "gransim dem (liggghts): t = %.5f / %.5f s, %.0f particles, kinetic energy %.4g J\n", r[0],
-                c->duration, atoms, ke);
+    int kept = th ? gs_lig_thermo_add(th, line, c->prm.dt, c->out_every, cpu_acc) : 0;
+    if (kept < 0) break;
+    if (kept && progress) {
+      /* the time left from the simulated time per wall second since the first row */
+      const double *r = th->row + GS_LIG_THERMO_COLS * (th->n - 1), now = gs_progress_clock();
+      char left[64] = "time left not known yet";
+      if (t_first < 0) t_first = r[0], wall_first = now;
+      else if (r[0] > t_first && now > wall_first) {
+        gs_progress_duration(left, sizeof left - 5, (c->duration - r[0]) * (now - wall_first) / (r[0] - t_first));
+        strcat(left, " left");
+      }
+      fprintf(stderr, "gransim dem (liggghts): t = %.5f / %.5f s, %.0f particles, kinetic energy %.4g J, %s\n", r[0],
+              c->duration, r[1], r[2], left);
     }
   }
   int st = pclose(pp);
   fclose(sc);
+  /* the deck line of the error: the last echoed line before it that is one */
+  size_t error_cmd = 0;
+  const char *cmd_line = "";
+  if (saw_error) {
+    deck_lines dl;
+    snprintf(path, sizeof path, "%s/%s", dir, deck);
+    deck_lines_read(path, &dl);
+    for (int i = 0; i < nbefore && !error_cmd; i++)
+      if ((error_cmd = deck_line_of(&dl, before[i]))) cmd_line = before[i];
+    deck_lines_free(&dl);
+  }
   /* LIGGGHTS places the largest particles first and drops what finds no room,
    * where the embedded engine keeps a drawn particle until it fits */
   if (short_insert && progress)
@@ -124,43 +194,120 @@ static int run_deck(const char *dir, const char *launch, const char *bin, const 
             "it drops the particles that find no room, the smallest first, so the fed size distribution leans "
             "to the large classes; enlarge the feed region or insert more often\n", short_insert);
   if (st != 0 || saw_error) {
-    char msg[4096];
+    char msg[4096], where[700] = "";
     size_t k = 0;
     for (int i = nt > 12 ? nt - 12 : 0; i < nt && k < sizeof msg - 1; i++)
       k += (size_t)snprintf(msg + k, sizeof msg - k, "  | %s", tail[i % 12]);
     if (k >= sizeof msg) k = sizeof msg - 1;
     msg[k] = 0;
-    return gs_error_set(err, GS_EIO, "LIGGGHTS failed (%s in %s; its output: %s/%s): %slast lines:\n%s", deck, dir,
-                        dir, screen, first_error[0] ? first_error : "", msg);
+    if (saw_error && error_cmd) snprintf(where, sizeof where, "%.64s line %zu: %.500s\n", deck, error_cmd, cmd_line);
+    return gs_error_set(err, GS_EIO, "LIGGGHTS failed (%s in %s; its output: %s/%s): %s%slast lines:\n%s", deck, dir,
+                        dir, screen, first_error[0] ? first_error : "", where, msg);
   }
+  return GS_OK;
+}
+
+/* Copy file from to to (the meshes beside the deck). */
+static int copy_file(const char *from, const char *to, gs_error *err) {
+  FILE *in = fopen(from, "rb");
+  if (!in) return gs_error_set(err, GS_EIO, "%s: cannot read: %s", from, strerror(errno));
+  FILE *out = fopen(to, "wb");
+  if (!out) {
+    fclose(in);
+    return gs_error_set(err, GS_EIO, "%s: cannot write: %s", to, strerror(errno));
+  }
+  char buf[65536];
+  size_t n;
+  int bad = 0;
+  while ((n = fread(buf, 1, sizeof buf, in)) > 0)
+    if (fwrite(buf, 1, n, out) != n) bad = 1;
+  bad |= ferror(in);
+  fclose(in);
+  if (fclose(out) || bad) return gs_error_set(err, GS_EIO, "%s: copying %s failed", to, from);
+  return GS_OK;
+}
+
+/* The thermo rows of a finished run's log; refused when the run did not end
+ * (no thermo row at the last step: every run command prints one at its end). */
+static int read_log(const gs_dem_case *c, const char *dir, gs_lig_thermo *th, gs_error *err) {
+  char path[4400], line[4096];
+  snprintf(path, sizeof path, "%s/log.liggghts", dir);
+  FILE *fp = fopen(path, "r");
+  if (!fp) return gs_error_set(err, GS_EINPUT, "%s: cannot read: %s (no LIGGGHTS run in %s?)", path, strerror(errno), dir);
+  double cpu_acc[2] = {0, 0}, last = -1, x[7];
+  const long nsteps = (long)ceil(c->duration / c->prm.dt - 1e-9);
+  int rc = GS_OK;
+  while (fgets(line, sizeof line, fp) && !rc) {
+    if (sscanf(line, "%lf %lf %lf %lf %lf %lf %lf", &x[0], &x[1], &x[2], &x[3], &x[4], &x[5], &x[6]) == 7)
+      last = fmax(last, x[0]);
+    if (gs_lig_thermo_add(th, line, c->prm.dt, c->out_every, cpu_acc) < 0) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  }
+  fclose(fp);
+  if (!rc && last != (double)nsteps)
+    rc = gs_error_set(err, GS_EINPUT, "%s: the LIGGGHTS run did not finish (its last step is %.0f of %ld): run it to "
+                      "the end before reducing its dumps", path, last, nsteps);
+  return rc;
+}
+
+/* run.sh: the exclusion runs and the run, for a job on a cluster
+ * (`LAUNCH="srun" sh run.sh`). */
+static int write_run_sh(const gs_dem_case *c, const char *dir, int ranks, gs_error *err) {
+  char path[4400];
+  snprintf(path, sizeof path, "%s/run.sh", dir);
+  FILE *fp = fopen(path, "w");
+  if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  fprintf(fp, "#!/bin/sh\n# Runs the LIGGGHTS deck gransim wrote for %s (gransim dem --dry-run).\n"
+              "# LAUNCH: the MPI launcher (default: mpirun -np %d; on Slurm: srun); LIGGGHTS: the executable.\n"
+              "# Afterwards: gransim dem CASE --out DIR --reduce (DIR: the folder above this one).\n"
+              "set -e\ncd \"$(dirname \"$0\")\"\nrm -f post/*\nmkdir -p post\n", c->path, ranks);
+  for (size_t w = 0; w < c->nwall_src; w++)
+    fprintf(fp, "# the facets LIGGGHTS refuses in mesh %zu (%s), left out by the run\n"
+                "rm -f ex_wall%zu.txt\n${LIGGGHTS:-liggghts} -echo screen -in in.exclude%zu -log none > screen.exclude%zu "
+                "2>&1 || true\ntouch ex_wall%zu.txt\n", w, c->wall_src[w].name, w, w, w, w);
+  fprintf(fp, "${LAUNCH:-mpirun -np %d} ${LIGGGHTS:-liggghts} -echo screen -in in.gransim -log log.liggghts\n", ranks);
+  int bad = ferror(fp);
+  if (fclose(fp) || bad) return gs_error_set(err, GS_EIO, "%s: write failed", path);
+  chmod(path, 0755);
   return GS_OK;
 }
 
 int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, gs_error *err) {
   int rc = gs_lig_check(c, err);
   if (rc) return rc;
-  const char *bin = opt && opt->binary ? opt->binary : getenv("GRANSIM_LIGGGHTS") ? getenv("GRANSIM_LIGGGHTS") : "liggghts";
-  if (!on_path(bin))
-    return gs_error_set(err, GS_EINPUT, "the LIGGGHTS executable '%s' is not on PATH (Debian: apt-get install "
-                        "liggghts mpi-default-bin; or set GRANSIM_LIGGGHTS)", bin);
+  const int dry = opt && opt->dry_run, reduce = opt && opt->reduce_only, progress = opt ? opt->progress : 0;
   char dir[4200], path[4400], launch[2048];
   snprintf(dir, sizeof dir, "%s/liggghts", out);
+  int ranks = opt && opt->ranks > 0 ? opt->ranks : (int)sysconf(_SC_NPROCESSORS_ONLN);
+  if (ranks < 1) ranks = 1;
+  if (reduce) {
+    gs_lig_remove_tables(c, out);
+    gs_lig_thermo th = {0};
+    rc = read_log(c, dir, &th, err);
+    if (!rc) rc = gs_lig_reduce(c, out, &th, err);
+    free(th.row);
+    return rc;
+  }
+  const char *bin = opt && opt->binary ? opt->binary : getenv("GRANSIM_LIGGGHTS") ? getenv("GRANSIM_LIGGGHTS") : "liggghts";
+  if (!dry && !on_path(bin))
+    return gs_error_set(err, GS_EINPUT, "the LIGGGHTS executable '%s' is not on PATH (Debian: apt-get install "
+                        "liggghts; or set GRANSIM_LIGGGHTS)", bin);
+  if (!dry && !(opt && opt->launcher) && !on_path("mpirun"))
+    return gs_error_set(err, GS_EINPUT, "mpirun is not on PATH (Debian: apt-get install mpi-default-bin, which "
+                        "brings Open MPI's openmpi-bin; or give --launcher, e.g. \"srun -n 64\")");
   if ((mkdir(out, 0777) && errno != EEXIST) || (mkdir(dir, 0777) && errno != EEXIST))
     return gs_error_set(err, GS_EIO, "%s: cannot create: %s", dir, strerror(errno));
   snprintf(path, sizeof path, "%s/post", dir);
   if (mkdir(path, 0777) && errno != EEXIST) return gs_error_set(err, GS_EIO, "%s: cannot create: %s", path, strerror(errno));
   if ((rc = gs_lig_clear_dumps(path, err))) return rc;
+  gs_lig_remove_tables(c, out); /* a failed run leaves none of an earlier run's */
   snprintf(path, sizeof path, "%s/vtk", out);
   if (c->vtk_every > 0 && mkdir(path, 0777) && errno != EEXIST)
     return gs_error_set(err, GS_EIO, "%s: cannot create: %s", path, strerror(errno));
-  int ranks = opt && opt->ranks > 0 ? opt->ranks : (int)sysconf(_SC_NPROCESSORS_ONLN);
-  if (ranks < 1) ranks = 1;
   if (opt && opt->launcher) snprintf(launch, sizeof launch, "%s", opt->launcher);
   /* Open MPI refuses root without these; other MPIs ignore the variables */
   else snprintf(launch, sizeof launch, "%smpirun -np %d", geteuid() == 0 ?
                 "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 " : "",
                 ranks);
-  int progress = opt ? opt->progress : 0;
 
   if ((rc = gs_dem_case_write_geometry(c, out, NULL, err))) return rc;
   size_t nbed = 0;
@@ -169,14 +316,19 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
     if ((rc = write_bed(c, path, &nbed, err))) return rc;
     if (progress) fprintf(stderr, "gransim dem (liggghts): initial bed of %zu particles in %s\n", nbed, path);
   }
-  /* the exclusion runs: one per mesh, each writes the facets LIGGGHTS refuses and stops */
+  /* the meshes beside the deck; the exclusion runs: one per mesh, each writes
+   * the facets LIGGGHTS refuses and stops */
   for (size_t w = 0; w < c->nwall_src && !rc; w++) {
-    char deck[64], ex[4400];
+    char deck[64], ex[4400], name[4200], copy[8500];
+    gs_lig_mesh_name(c, w, name, sizeof name);
+    snprintf(copy, sizeof copy, "%s/%s", dir, name);
+    if ((rc = copy_file(c->wall_src[w].mesh, copy, err))) return rc;
     snprintf(deck, sizeof deck, "in.exclude%zu", w);
     snprintf(ex, sizeof ex, "%s/ex_wall%zu.txt", dir, w);
     remove(ex);
     snprintf(path, sizeof path, "%s/%s", dir, deck);
     if ((rc = gs_lig_write_exclusion_deck(c, w, path, err))) return rc;
+    if (dry) continue;
     gs_error ignored = {0};
     (void)run_deck(dir, "", bin, deck, "none", "screen.exclude", c, 0, NULL, &ignored);
     FILE *fp = fopen(ex, "a"); /* an empty list when nothing was refused */
@@ -187,7 +339,13 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
   if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
   rc = gs_lig_write_deck(c, fp, c->nfill ? "bed.data" : NULL, c->nwall_src ? "read" : NULL, err);
   if (fclose(fp) && !rc) rc = gs_error_set(err, GS_EIO, "%s: write failed", path);
-  if (rc) return rc;
+  if (!rc) rc = write_run_sh(c, dir, ranks, err);
+  if (rc || dry) {
+    if (!rc && progress)
+      fprintf(stderr, "gransim dem (liggghts): wrote %s (deck in.gransim, run.sh); run it, then reduce with "
+              "gransim dem %s --out %s --reduce\n", dir, c->path, out);
+    return rc;
+  }
   if (progress) fprintf(stderr, "gransim dem (liggghts): cd %s && %s %s -in in.gransim -log log.liggghts\n", dir, launch, bin);
   gs_lig_thermo th = {0};
   rc = run_deck(dir, launch, bin, "in.gransim", "log.liggghts", "screen.liggghts", c, progress, &th, err);

@@ -42,12 +42,25 @@ int gs_lig_clear_dumps(const char *dir, gs_error *err) {
   for (struct dirent *e; (e = readdir(dp));)
     if ((strstr(e->d_name, ".atom") && (!strncmp(e->d_name, "collision", 9) || !strncmp(e->d_name, "impact", 6) ||
                                         !strncmp(e->d_name, "ppcoll", 6))) ||
-        !strncmp(e->d_name, "events_", 7)) {
+        !strncmp(e->d_name, "events_", 7) || (!strncmp(e->d_name, "left", 4) && strstr(e->d_name, ".atom"))) {
       snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
       remove(path);
     }
   closedir(dp);
   return GS_OK;
+}
+
+void gs_lig_remove_tables(const gs_dem_case *c, const char *out) {
+  static const char *const names[] = {"collisions", "collision_kernel", "impacts", "impact_table", "impact_velocity",
+                                      "velocity", "residence", "residence_class", "timeseries"};
+  char path[4400];
+  for (size_t k = 0; k < sizeof names / sizeof names[0] + c->nwall_src; k++)
+    for (int j = 0; j < 2; j++) {
+      if (k < sizeof names / sizeof names[0]) snprintf(path, sizeof path, "%s/%s.%s", out, names[k], j ? "json" : "csv");
+      else snprintf(path, sizeof path, "%s/impact_table_%s.%s", out, c->wall_src[k - sizeof names / sizeof names[0]].name,
+                    j ? "json" : "csv");
+      remove(path);
+    }
 }
 
 /* What the per-snapshot pass gathers beyond demdata's reduction. */
@@ -65,6 +78,14 @@ typedef struct {
   double *hist;            /* nw x ncl x nbins: relative impact speeds */
   int nbins;
   double dv;
+  double hold_n, hold_m;   /* sums over the snapshots of the hold-up */
+  double *vn_n, *vn_s, *vn_s2, *vt_s; /* nw x ncl: impacts with a normal, sums of |vn|, vn^2, |vt| */
+  long out_k, nout;        /* output interval (steps) and the number of intervals up to the end */
+  double *ts_ev;           /* (1 + nw) x nout: pair events, then wall impacts per wall, per output interval */
+  double *rt;              /* residence times of the atoms that left through outlets ... */
+  int *rt_cls;             /* ... their classes */
+  size_t nrt, caprt;
+  double out_mass;
 } pass;
 
 static void cmp_add(pass *a, const gs_dem_case *c, int k, const double x[3], const double v[3]) {
@@ -96,9 +117,9 @@ static int snapshot(pass *a, const gs_dem_case *c, const char *post, long step, 
   snprintf(path, sizeof path, "%s/collision%ld.atom", post, step);
   int rc = gs_dump_read(path, &d, err);
   if (rc) return rc;
-  const char *need[] = {"id", "type", "x", "y", "z", "vx", "vy", "vz"};
-  long col[8];
-  for (int k = 0; k < 8 && !rc; k++)
+  const char *need[] = {"id", "type", "x", "y", "z", "vx", "vy", "vz", "radius"};
+  long col[9];
+  for (int k = 0; k < 9 && !rc; k++)
     if ((col[k] = gs_dump_col(&d, need[k])) < 0) rc = gs_error_set(err, GS_EINPUT, "%s: no column '%s'", path, need[k]);
   id_cls *map = rc ? NULL : malloc((d.nrows + 1) * sizeof *map);
   if (!rc && !map) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
@@ -111,6 +132,11 @@ static int snapshot(pass *a, const gs_dem_case *c, const char *post, long step, 
     a->num[k] += 1;
     const double x[3] = {v[col[2]], v[col[3]], v[col[4]]}, u[3] = {v[col[5]], v[col[6]], v[col[7]]};
     cmp_add(a, c, k, x, u);
+    if (!c->has_holdup || gs_dem_region_contains(&c->holdup, x)) { /* as gs_dem_holdup */
+      const double r = v[col[8]];
+      a->hold_n += 1;
+      a->hold_m += c->cls[k].mat.density * 4.0 / 3.0 * M_PI * r * r * r;
+    }
   }
   size_t nmap = d.nrows;
   gs_dump_free(&d);
@@ -160,13 +186,13 @@ static long next_list(FILE *fp, size_t ncol, double **rows, size_t *cap, size_t 
 }
 
 /* Contacts that began: keys of the list not in the previous list.  Pairs
- * (ncol 3: id1 id2 overlap) or wall contacts (ncol 10: particle and wall
- * velocities, mesh, triangle, atom, overlap); an atom on a mesh is one contact
- * whichever triangles it touches. */
+ * (ncol 3: id1 id2 overlap) or wall contacts (ncol 13: wall and particle
+ * velocities, mesh, triangle, atom, overlap, normal force); an atom on a mesh
+ * is one contact whichever triangles it touches. */
 static int count_events(pass *a, const char *path, int wall, gs_error *err) {
   FILE *fp = fopen(path, "r");
   if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot read: %s", path, strerror(errno));
-  const size_t ncol = wall ? 10 : 3;
+  const size_t ncol = wall ? 13 : 3, cdelta = wall ? 9 : 2;
   double *rows = NULL;
   size_t cap = 0, n = 0, nprev = 0, ncur = 0;
   unsigned long long *prev = NULL, *cur = NULL;
@@ -179,7 +205,7 @@ static int count_events(pass *a, const char *path, int wall, gs_error *err) {
     ncur = 0;
     for (size_t r = 0; !rc && r < n; r++) {
       const double *v = rows + r * ncol;
-      if (!(v[ncol - 1] > 0)) continue; /* not overlapping */
+      if (!(v[cdelta] > 0)) continue; /* not overlapping */
       /* atom ids (LIGGGHTS tags are int) and mesh ids below 2^16 make the keys */
       if (!whole(v[wall ? 8 : 0], 2147483647.0) || !whole(v[wall ? 6 : 1], wall ? 65535.0 : 2147483647.0)) {
         rc = gs_error_set(err, GS_EINPUT, "%s: list at step %ld: row %zu: %s %g or %g is not an id", path, st - 1,
@@ -196,23 +222,40 @@ static int count_events(pass *a, const char *path, int wall, gs_error *err) {
       if (first || (nprev && bsearch(&key, prev, nprev, sizeof *prev, cmp_u64))) continue;
       int c1 = class_of(a, wall ? v[8] : v[0]), c2 = wall ? 0 : class_of(a, v[1]);
       if (c1 < 0 || c2 < 0) { a->unknown++; continue; }
+      /* the output interval (ts_ev) the event falls in: steps ((k-1) out_k, k out_k] */
+      long ko = (st - 1 + a->out_k - 1) / a->out_k;
       if (!wall) {
         size_t i = (size_t)(c1 < c2 ? c1 : c2), j = (size_t)(c1 < c2 ? c2 : c1);
         a->pair_events[i * a->ncl + j] += 1;
+        if (ko < a->nout) a->ts_ev[ko] += 1;
         continue;
       }
       size_t w = (size_t)v[6];
       if (w >= a->nw) continue;
       size_t at = w * a->ncl + (size_t)c1;
       a->wall_contacts[at] += 1;
-      double du[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]};
+      if (ko < a->nout) a->ts_ev[(1 + w) * (size_t)a->nout + (size_t)ko] += 1;
+      double du[3] = {v[0] - v[3], v[1] - v[4], v[2] - v[5]};
       double u = sqrt(du[0] * du[0] + du[1] * du[1] + du[2] * du[2]);
       if (!isfinite(u)) {
         rc = gs_error_set(err, GS_EINPUT, "%s: list at step %ld: row %zu: a velocity is not finite", path, st - 1, r + 1);
         break;
       }
-      int b = u / a->dv < a->nbins ? (int)(u / a->dv) : a->nbins - 1;
-      a->hist[at * (size_t)a->nbins + (size_t)b] += 1;
+      /* normal and tangential speed relative to the wall, the normal along the
+       * normal force (the spin's part of the contact point's speed is not in the lists) */
+      const double fn = sqrt(v[10] * v[10] + v[11] * v[11] + v[12] * v[12]);
+      if (!isfinite(fn)) {
+        rc = gs_error_set(err, GS_EINPUT, "%s: list at step %ld: row %zu: a force is not finite", path, st - 1, r + 1);
+        break;
+      }
+      if (fn > 0) {
+        const double vn = (du[0] * v[10] + du[1] * v[11] + du[2] * v[12]) / fn;
+        const double vt = sqrt(fmax(0, u * u - vn * vn));
+        a->vn_n[at] += 1, a->vn_s[at] += fabs(vn), a->vn_s2[at] += vn * vn, a->vt_s[at] += vt;
+        int b = (int)(fabs(vn) / a->dv);
+        if (b >= a->nbins) b = a->nbins - 1;
+        a->hist[at * (size_t)a->nbins + (size_t)b] += 1;
+      }
       if (!(u >= GS_DEM_MIN_IMPACT_SPEED)) continue; /* resting contacts: no speed, as the embedded engine */
       if (a->nu == a->capu) {
         size_t nc = a->capu ? 2 * a->capu : 1024;
@@ -313,6 +356,46 @@ static int snapshot_steps(const char *dir, long **out, size_t *n, gs_error *err)
   return GS_OK;
 }
 
+/* The atoms that left through the outlets in the statistics window: the
+ * left<STEP>_<OUTLET>.atom dumps the deck writes before each delete_atoms,
+ * with each atom's time in the domain (fix property/atom/regiontracer/time). */
+static int residence(pass *a, const gs_dem_case *c, const char *post, gs_error *err) {
+  const long k0 = (long)round(c->stats_start / c->prm.dt);
+  DIR *dp = opendir(post);
+  if (!dp) return gs_error_set(err, GS_EIO, "%s: cannot open: %s", post, strerror(errno));
+  int rc = GS_OK;
+  for (struct dirent *e; !rc && (e = readdir(dp));) {
+    long st;
+    size_t k;
+    char tail[8], path[4900];
+    if (sscanf(e->d_name, "left%ld_%zu%7s", &st, &k, tail) != 3 || strcmp(tail, ".atom") || st <= k0) continue;
+    snprintf(path, sizeof path, "%s/%s", post, e->d_name);
+    gs_dump d;
+    if ((rc = gs_dump_read(path, &d, err))) break;
+    long ct = gs_dump_col(&d, "type"), cm = gs_dump_col(&d, "mass"), cr = gs_dump_col(&d, "f_rtime");
+    if (ct < 0 || cm < 0 || cr < 0) rc = gs_error_set(err, GS_EINPUT, "%s: no columns type, mass, f_rtime", path);
+    if (!rc && a->nrt + d.nrows > a->caprt) {
+      size_t cap = a->caprt ? a->caprt : 256;
+      while (cap < a->nrt + d.nrows) cap *= 2;
+      double *t = realloc(a->rt, cap * sizeof *t);
+      if (t) a->rt = t;
+      int *q = realloc(a->rt_cls, cap * sizeof *q);
+      if (q) a->rt_cls = q;
+      if (!t || !q) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+      else a->caprt = cap;
+    }
+    for (size_t r = 0; !rc && r < d.nrows; r++) {
+      const double *v = d.v + r * d.ncols;
+      int cls = (int)v[ct] - 1;
+      if (cls < 0 || (size_t)cls >= a->ncl) rc = gs_error_set(err, GS_EINPUT, "%s: type %g is no class", path, v[ct]);
+      else a->rt[a->nrt] = v[cr], a->rt_cls[a->nrt++] = cls, a->out_mass += v[cm];
+    }
+    gs_dump_free(&d);
+  }
+  closedir(dp);
+  return rc;
+}
+
 int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, gs_error *err) {
   char post[4400], path[4600];
   snprintf(post, sizeof post, "%s/liggghts/post", out);
@@ -342,7 +425,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
       if (!fp) { closedir(dp); return gs_error_set(err, GS_EIO, "%s: cannot write", path); }
       fprintf(fp, "ITEM: TIMESTEP\n%ld\nITEM: NUMBER OF ENTRIES\n0\nITEM: BOX BOUNDS ff ff ff\n0 1\n0 1\n0 1\n"
               "ITEM: ENTRIES", st);
-      for (int q = 1; q <= 14; q++) fprintf(fp, " c_wgl[%d]", q);
+      for (int q = 1; q <= 17; q++) fprintf(fp, " c_wgl[%d]", q);
       fprintf(fp, "\n");
       fclose(fp);
     }
@@ -366,7 +449,13 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   a.cv_a = calloc(nc, sizeof(double)), a.cv_v = calloc(3 * nc, sizeof(double)), a.cv_v2 = calloc(3 * nc, sizeof(double));
   a.wall_contacts = calloc(nw * ncl + 1, sizeof(double));
   a.hist = calloc(nw * ncl * (size_t)a.nbins + 1, sizeof(double));
-  if (!a.num || !a.cv_n || !a.cv_s || !a.cv_s2 || !a.cv_a || !a.cv_v || !a.cv_v2 || !a.wall_contacts || !a.hist)
+  a.vn_n = calloc(nw * ncl + 1, sizeof(double)), a.vn_s = calloc(nw * ncl + 1, sizeof(double));
+  a.vn_s2 = calloc(nw * ncl + 1, sizeof(double)), a.vt_s = calloc(nw * ncl + 1, sizeof(double));
+  a.out_k = (long)fmax(1, round(c->out_every / dt));
+  a.nout = (long)ceil(c->duration / dt - 1e-9) / a.out_k + 1;
+  a.ts_ev = calloc((1 + nw) * (size_t)a.nout, sizeof(double));
+  if (!a.num || !a.cv_n || !a.cv_s || !a.cv_s2 || !a.cv_a || !a.cv_v || !a.cv_v2 || !a.wall_contacts || !a.hist ||
+      !a.vn_n || !a.vn_s || !a.vn_s2 || !a.vt_s || !a.ts_ev)
     rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   a.pair_events = calloc(ncl * ncl, sizeof(double));
   if (!rc && !a.pair_events) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
@@ -376,9 +465,11 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   if (!rc) rc = count_events(&a, path, 0, err);
   snprintf(path, sizeof path, "%s/events_wall.txt", post);
   if (!rc && nw) rc = count_events(&a, path, 1, err);
+  if (!rc && c->noutlets) rc = residence(&a, c, post, err);
   const double ns = nsnap ? (double)nsnap : 1;
   const double t0 = nsnap ? steps[0] * dt : NAN, t1 = nsnap ? steps[nsnap - 1] * dt : NAN;
   const double win = c->duration - c->stats_start;
+  const long start_k = (long)round(c->stats_start / dt);
   FILE *fp = NULL;
   gs_csv_out tab;
   double e[GS_DEM_MAX_CLASSES + 1];
@@ -401,14 +492,14 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
       for (size_t j = i; j < ncl; j++) {
         double Ni = a.num[i] / ns, Nj = a.num[j] / ns;
         double eps = dd.contacts[i * ncl + j] / dd.pair_contact_time[i * ncl + j];
-        fprintf(fp, " %zu-%zu %.6g", i + 1, j + 1, Ni > 0 && Nj > 0 ? eps / (Ni * Nj) : 0);
+        fprintf(fp, " %zu-%zu %.6g", i + 1, j + 1, gs_dem_collision_frequency(eps, Ni, Nj, 1, i == j));
       }
     fprintf(fp, "\nclass_i,class_j,name_i,name_j,events,N_i,N_j,window_s,events_per_s,C_ij\n");
     for (size_t i = 0; i < ncl; i++)
       for (size_t j = i; j < ncl; j++) {
         double ev = a.pair_events[i * ncl + j];
         double Ni = a.num[i] / ns, Nj = a.num[j] / ns;
-        double cij = Ni > 0 && Nj > 0 ? ev / (Ni * Nj * win) : 0;
+        double cij = gs_dem_collision_frequency(ev, Ni, Nj, win, i == j);
         C[i * ncl + j] = C[j * ncl + i] = cij;
         fprintf(fp, "%zu,%zu,%s,%s,%.0f,%.6g,%.6g,%.9g,%.9g,%.9g\n", i + 1, j + 1, c->cls[i].name, c->cls[j].name,
                 ev, Ni, Nj, win, ev / win, cij);
@@ -416,7 +507,8 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     rc = gs_dem_table_end(&tab, gs_dem_units_collisions, err);
   } else if (!rc) rc = err->code;
   if (!rc && (fp = gs_dem_table_begin(&tab, out, "collision_kernel.csv", err))) {
-    fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt) [1/s], window %.9g s%s;\n"
+    fprintf(fp, "# DEM collision frequency C_ij = N_coll,ij / (N_i N_j dt), C_ii = 2 N_coll,ii / (N_i^2 dt) [1/s], "
+            "window %.9g s%s;\n"
             "# edges are particle diameters [m]: use `kernel: {type: table, measure: diameter, ...}`\nedges", win, note);
     for (size_t i = 0; i <= ncl; i++) fprintf(fp, ", %.9g", e[i]);
     fprintf(fp, "\n");
@@ -430,23 +522,26 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
 
   /* impacts per wall and class; the breakage selection's tables */
   if (!rc && (fp = gs_dem_table_begin(&tab, out, "impacts.csv", err))) {
-    fprintf(fp, "# wall impacts (contacts that began) from t = %.9g to %.9g s (%.9g s)%s; vn, vt: not in LIGGGHTS' "
-            "contact lists (nan); impact_table.csv holds the fits of the relative speed\n", c->stats_start, c->duration,
-            win, note);
+    fprintf(fp, "# wall impacts (contacts that began) from t = %.9g to %.9g s (%.9g s)%s; vn: normal speed "
+            "relative to the wall, vt: tangential speed relative to the wall without the particle's spin (LIGGGHTS' "
+            "contact lists hold no angular velocity), both at the first contact list holding the impact\n",
+            c->stats_start, c->duration, win, note);
     fprintf(fp, "wall,class,name,impacts,impacts_per_s,impacts_per_particle_s,mean_vn,std_vn,mean_vt\n");
     for (size_t w = 0; w < nw; w++)
       for (size_t i = 0; i < ncl; i++) {
-        double Ni = a.num[i] / ns, n = a.wall_contacts[w * ncl + i];
-        fprintf(fp, "%s,%zu,%s,%.0f,%.9g,%.9g,nan,nan,nan\n", c->wall_src[w].name, i + 1, c->cls[i].name, n, n / win,
-                Ni > 0 ? n / (Ni * win) : 0);
+        const size_t q = w * ncl + i;
+        double Ni = a.num[i] / ns, n = a.wall_contacts[q], m = a.vn_n[q];
+        double mv = m > 0 ? a.vn_s[q] / m : NAN, sv = m > 1 ? sqrt(fmax(0, (a.vn_s2[q] - m * mv * mv) / (m - 1))) : NAN;
+        fprintf(fp, "%s,%zu,%s,%.0f,%.9g,%.9g,%.6g,%.6g,%.6g\n", c->wall_src[w].name, i + 1, c->cls[i].name, n, n / win,
+                Ni > 0 ? n / (Ni * win) : 0, mv, sv, m > 0 ? a.vt_s[q] / m : NAN);
       }
     rc = gs_dem_table_end(&tab, gs_dem_units_impacts, err);
   } else if (!rc) rc = err->code;
   if (!rc) rc = impact_table(&a, c, out, -1, ns, NULL, err);
   for (size_t w = 0; w < nw && !rc; w++) rc = impact_table(&a, c, out, (long)w, ns, NULL, err);
   if (!rc && (fp = gs_dem_table_begin(&tab, out, "impact_velocity.csv", err))) {
-    fprintf(fp, "# impact speed distributions (the last bin holds everything above); engine liggghts: the relative "
-            "speed |v - v_wall| of the wall contacts in the snapshots, not the normal speed at first contact\n"
+    fprintf(fp, "# normal impact speed distributions (the last bin holds everything above); engine liggghts: at the "
+            "first contact list holding the impact\n"
             "wall,class,vn_lo,vn_hi,impacts\n");
     for (size_t w = 0; w < nw; w++)
       for (size_t i = 0; i < ncl; i++)
@@ -479,17 +574,11 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     rc = gs_dem_table_end(&tab, gs_dem_units_velocity, err);
   } else if (!rc) rc = err->code;
 
-  /* residence times: LIGGGHTS' delete_atoms keeps no record of who left when */
-  if (!rc && (fp = gs_dem_table_begin(&tab, out, "residence.csv", err))) {
-    fprintf(fp, "# engine liggghts: residence times are not measured (delete_atoms keeps no record)\n"
-            "t_lo,t_hi,count,fraction\n");
-    rc = gs_dem_table_end(&tab, gs_dem_units_residence, err);
-  } else if (!rc) rc = err->code;
-  if (!rc && (fp = gs_dem_table_begin(&tab, out, "residence_class.csv", err))) {
-    fprintf(fp, "# engine liggghts: residence times are not measured (delete_atoms keeps no record)\n"
-            "class,name,t_lo,t_hi,count,fraction\n");
-    rc = gs_dem_table_end(&tab, gs_dem_units_residence_class, err);
-  } else if (!rc) rc = err->code;
+  /* residence times: the atoms that left through outlets */
+  if (!rc)
+    rc = gs_dem_residence_write(c, out, a.rt, a.rt_cls, a.nrt, a.out_mass, c->stats_start, c->duration, a.hold_n / ns,
+                                a.hold_m / ns, "; engine liggghts: outlets emptied every 200 steps, residence time "
+                                "from fix property/atom/regiontracer/time", err);
 
   /* the time series from LIGGGHTS' thermo rows; what it does not report is nan */
   if (!rc && (fp = gs_dem_table_begin(&tab, out, "timeseries.csv", err))) {
@@ -498,9 +587,17 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     for (size_t w = 0; w < nw; w++) fprintf(fp, ",torque_axis_%s", c->wall_src[w].name);
     fprintf(fp, ",lost,steady,wall_seconds\n");
     for (size_t r = 0; r < th->n; r++) {
-      const double *v = th->row + 5 * r;
-      fprintf(fp, "%.9g,%.0f,%.0f,nan,%.9g,%.9g,nan,nan", v[0], v[1], v[1], v[2], v[3]);
-      for (size_t w = 0; w < 2 * nw; w++) fprintf(fp, ",nan");
+      const double *v = th->row + GS_LIG_THERMO_COLS * r;
+      /* event rates of the interval that ends at this row, where the contact
+       * lists (from statistics.start on) cover all of it */
+      const long step = (long)round(v[0] / dt), ko = step / a.out_k;
+      const int have_rate = step > 0 && step - a.out_k >= start_k && ko < a.nout;
+      const double span = a.out_k * dt;
+      fprintf(fp, "%.9g,%.0f,%.0f,%.9g,%.9g,%.9g,nan,", v[0], v[1], v[5], v[6], v[2], v[3]);
+      fprintf(fp, have_rate ? "%.9g" : "nan", have_rate ? a.ts_ev[ko] / span : 0.0);
+      for (size_t w = 0; w < nw; w++)
+        fprintf(fp, have_rate ? ",%.9g" : ",nan", have_rate ? a.ts_ev[(1 + w) * (size_t)a.nout + (size_t)ko] / span : 0.0);
+      for (size_t w = 0; w < nw; w++) fprintf(fp, ",nan");
       fprintf(fp, ",nan,0,%.6f\n", v[4]);
     }
     const char *names[GS_DEM_CASE_MAX_WALLS];
@@ -513,7 +610,9 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
 
   free(a.num), free(a.cv_n), free(a.cv_s), free(a.cv_s2), free(a.cv_a), free(a.cv_v), free(a.cv_v2);
   free(a.wall_contacts), free(a.ln_u), free(a.u_wc), free(a.hist), free(a.pair_events), free(a.ids);
+  free(a.rt), free(a.rt_cls), free(a.vn_n), free(a.vn_s), free(a.vn_s2), free(a.vt_s), free(a.ts_ev);
   if (have_dd) gs_dem_data_free(&dd);
   free(steps);
+  if (rc) gs_lig_remove_tables(c, out); /* all the tables or none */
   return rc;
 }
