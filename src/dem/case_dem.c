@@ -201,7 +201,7 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   }
   if (w < 0) return gs_error_prefix(err, "%s:%d: %s: ", gs_cfg_file(n), gs_cfg_line(n), gs_cfg_path(n));
   /* motion: rotation {origin, axis, rpm | rad_per_s}, velocity */
-  double origin[3] = {0, 0, 0}, axis[3] = {1, 0, 0}, omega = 0, vel[3] = {0, 0, 0};
+  double origin[3] = {0, 0, 0}, axis[3] = {1, 0, 0}, omega = 0, vel[3] = {0, 0, 0}, spin_start = 0;
   gs_cfg_node *rot = gs_cfg_get(n, "rotation");
   if (rot) {
     if ((rc = gs_cfg_require_kind(rot, GS_CFG_MAP, err)) || (rc = vec3(rot, "origin", 1, NULL, origin, err)) ||
@@ -215,7 +215,9 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
     } else if ((rc = gs_cfg_double_req(rot, "rad_per_s", &omega, err))) {
       return rc;
     }
-    if ((rc = gs_cfg_check_unused(rot, err))) return rc;
+    if ((rc = gs_cfg_double_range(rot, "start", 0, 0, 0, 0, HUGE_VAL, 0, &spin_start, err)) ||
+        (rc = gs_cfg_check_unused(rot, err)))
+      return rc;
   }
   const double zero[3] = {0, 0, 0};
   if ((rc = vec3(n, "velocity", 0, zero, vel, err))) return rc;
@@ -223,9 +225,12 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   memcpy(src->origin, origin, sizeof origin);
   memcpy(src->axis, axis, sizeof axis);
   src->omega = omega;
+  src->spin_start = spin_start;
   memcpy(src->velocity, vel, sizeof vel);
   if (rot || vel[0] != 0 || vel[1] != 0 || vel[2] != 0)
-    if ((rc = gs_dem_wall_set_motion(c->dem, w, origin, axis, omega, vel, err))) return rc;
+    if ((rc = gs_dem_wall_set_motion(c->dem, w, origin, axis, omega, vel, err)) ||
+        (rc = gs_dem_wall_set_spin_start(c->dem, w, spin_start, err)))
+      return rc;
   return gs_cfg_check_unused(n, err);
 }
 
@@ -521,6 +526,10 @@ int gs_dem_case_engine(const gs_dem_case *c) { return c->engine; }
 gs_dem *gs_dem_case_sim(gs_dem_case *c) { return c->dem; }
 gs_cfg_node *gs_dem_case_gas(gs_dem_case *c) { return c->gas; }
 double gs_dem_case_duration(const gs_dem_case *c) { return c->duration; }
+
+void gs_dem_case_set_observer(gs_dem_case *c, const gs_dem_observer *o) {
+  c->observer = o ? *o : (gs_dem_observer){0};
+}
 
 void gs_dem_case_free(gs_dem_case *c) {
   if (!c) return;
