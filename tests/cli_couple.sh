@@ -95,6 +95,16 @@ grep -q ',1$' "$WORK/out/dem/steady.csv" || fail "no steady row in steady.csv"
 grep -qF '\ndrift of the window means from the firing to the end: hold-up mass 0 %' "$WORK/out/dem/steady.json" ||
   fail "steady.json lacks the drift after the firing (the closed drum's hold-up is constant)"
 
+# The DEM stops steady.collect (default window x sample_every = 0.015 s) after the detector
+# fired, not at max_time (0.07 s); dem/case.yaml holds the duration as run.
+t_fire=$(awk -F, 'NR > 1 && $NF == 1 { print $1; exit }' "$WORK/out/dem/steady.csv")
+t_last=$(tail -1 "$WORK/out/dem/timeseries.csv" | cut -d, -f1)
+awk -v a="$t_fire" -v b="$t_last" 'BEGIN { exit !(a > 0 && b < 0.07 && (b - a - 0.015)^2 < 1e-12) }' ||
+  fail "the DEM did not stop 0.015 s after the detector fired ($t_fire s): last sample at $t_last s"
+dur=$(sed -n 's/.*duration: "\{0,1\}\([0-9.e+-]*\).*/\1/p' "$WORK/out/dem/case.yaml")
+awk -v a="$dur" -v b="$t_last" 'BEGIN { exit !((a - b)^2 < 1e-18) }' ||
+  fail "dem/case.yaml's duration '$dur' is not the duration as run ($t_last s)"
+
 # The same two commands by hand: the DEM case as written, then the PBM with its tables.
 run_rc 0 "$BIN" dem "$WORK/out/dem/case.yaml" --out "$WORK/manual-dem" --quiet
 for f in collision_kernel.csv impact_table.csv; do

@@ -83,6 +83,10 @@ int gs_dem_add_mesh(gs_dem *d, const char *name, gs_dem_mesh *mesh, const gs_dem
  * through origin (right-hand rule), plus translation at velocity. */
 int gs_dem_wall_set_motion(gs_dem *d, int wall, const double origin[3], const double axis[3],
                            double omega, const double velocity[3], gs_error *err);
+/* The rotation set by gs_dem_wall_set_motion begins at t_start [s] (>= 0;
+ * default 0): before it the wall stands still, so that a bed settles with
+ * the impeller at rest; from it the wall turns at omega. */
+int gs_dem_wall_set_spin_start(gs_dem *d, int wall, double t_start, gs_error *err);
 size_t gs_dem_nwalls(const gs_dem *d);
 const char *gs_dem_wall_name(const gs_dem *d, size_t wall);
 
@@ -269,6 +273,31 @@ void gs_dem_list_generators(FILE *fp);
 /* Run it, writing the tables, time series and VTK files into out_dir. */
 int gs_dem_case_run(gs_dem_case *c, const char *out_dir, int progress, gs_error *err);
 void gs_dem_case_free(gs_dem_case *c);
+
+/* The figures of a DEM case run at every statistics sample
+ * (statistics.sample_every), handed to its observer. */
+typedef struct {
+  double t;                /* [s] */
+  long step;
+  size_t particles;
+  double holdup_mass;      /* [kg] */
+  double collisions_per_s; /* particle-particle collision events over the last sample interval [1/s] */
+  double kinetic_energy;   /* translational + rotational [J] */
+  int steady;              /* the case's own detector (statistics.steady) has fired */
+  int window;              /* the statistics window is open (the tables average from its start) */
+} gs_dem_sample;
+/* An observer of a case's run, called at every sample before the sample
+ * enters the statistics.  Setting *open_window opens the statistics window
+ * at this sample if it is not open yet (as statistics.start: steady does when
+ * the case's detector fires); setting *stop ends the run after this step's
+ * events, the tables written as of then (as if dem.duration ended there).  A
+ * non-zero return (err set) stops the run with that status. */
+typedef struct {
+  int (*sample)(const gs_dem_sample *s, void *user, int *open_window, int *stop, gs_error *err);
+  void *user;
+} gs_dem_observer;
+/* Set (NULL: remove) the observer of gs_dem_case_run. */
+void gs_dem_case_set_observer(gs_dem_case *c, const gs_dem_observer *o);
 /* The simulation the case runs (for gs_dem_set_hooks), its duration [s], and
  * its `gas` section (NULL if none; read by src/cfd, gs_cfd_case_create). */
 gs_dem *gs_dem_case_sim(gs_dem_case *c);

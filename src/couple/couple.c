@@ -57,6 +57,8 @@ static int read_settings(gs_cfg_node *root, gs_couple_settings *s, gs_cfg_node *
       (rc = gs_cfg_double_range(st, "tolerance", 0, 0.1, 0, 0, 1, 0, &s->tolerance, err)) ||
       (rc = gs_cfg_double_range(st, "sample_every", 1, 0, 0, 0, HUGE_VAL, 0, &s->sample_every, err)) ||
       (rc = gs_cfg_double_range(st, "max_time", 1, 0, 0, 0, HUGE_VAL, 0, &s->max_time, err)) ||
+      (rc = gs_cfg_double_range(st, "collect", 0, (double)s->window * s->sample_every, 0, 1, HUGE_VAL, 0,
+                                &s->collect, err)) ||
       (rc = gs_cfg_check_unused(st, err)))
     return rc;
   if ((im = gs_cfg_get(cp, "impacts")) &&
@@ -319,6 +321,26 @@ static int rm_entry(const char *p, const struct stat *sb, int flag, struct FTW *
   return remove(p);
 }
 
+/* The DEM stage's observer: once the detector has fired (the statistics
+ * window opens then: statistics.start: steady), collect for steady.collect
+ * seconds and stop, rather than running on to max_time. */
+typedef struct {
+  double collect, t_fired, t_stop;
+} stage_stop;
+
+static int stop_when_collected(const gs_dem_sample *smp, void *user, int *open_window, int *stop, gs_error *err) {
+  (void)open_window;
+  (void)err;
+  stage_stop *o = user;
+  if (smp->steady && o->t_fired < 0) o->t_fired = smp->t;
+  /* half a sample of slack: the samples' times carry round-off */
+  if (o->t_fired >= 0 && smp->t >= o->t_fired + o->collect * (1 - 1e-9)) {
+    *stop = 1;
+    o->t_stop = smp->t;
+  }
+  return GS_OK;
+}
+
 static int exists(const char *dir, const char *name) {
   char p[4400];
   struct stat sb;
@@ -353,11 +375,26 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
     gs_dem_case *dc = rc ? NULL : gs_dem_case_load(dcase, err);
     if (!rc && !dc) rc = dem_error(&k, dcase, err);
     if (!rc) rc = engine_check(&k, dc, err);
+    stage_stop ss = {.collect = k.s.collect, .t_fired = -1, .t_stop = -1};
     if (!rc) {
-      if (opt->progress) fprintf(stderr, "gransim couple: DEM stage (%g s at most) in %s\n", k.s.max_time, part);
+      if (opt->progress)
+        fprintf(stderr, "gransim couple: DEM stage (%g s at most; %g s of statistics once steady) in %s\n",
+                k.s.max_time, k.s.collect, part);
+      gs_dem_observer ob = {.sample = stop_when_collected, .user = &ss};
+      gs_dem_case_set_observer(dc, &ob);
       rc = gs_dem_case_run(dc, part, opt->progress, err);
     }
     gs_dem_case_free(dc);
+    /* the case as run: its duration ends where the observer stopped it, so that
+     * `gransim dem dem/case.yaml` gives the same tables */
+    if (!rc && ss.t_stop >= 0) {
+      gs_couple_settings as_run = k.s;
+      as_run.max_time = ss.t_stop;
+      const gs_couple_settings keep = k.s;
+      k.s = as_run;
+      rc = write_dem_case(&k, dcase, err);
+      k.s = keep;
+    }
     double ts;
     if (!rc) rc = gs_couple_steady_report(part, &k.s, &ts, err);
     if (!rc && opt->progress) fprintf(stderr, "gransim couple: DEM steady at t = %g s; tables in %s\n", ts, dem);

@@ -17,7 +17,8 @@ typedef struct {
   long window;           /* steady.window: samples */
   double tolerance;      /* steady.tolerance */
   double sample_every;   /* steady.sample_every [s] */
-  double max_time;       /* steady.max_time [s]: the DEM's duration */
+  double max_time;       /* steady.max_time [s]: the DEM's longest duration */
+  double collect;        /* steady.collect [s]: statistics after the detector fired, then the DEM stops */
   const char *wall;      /* impacts.wall (NULL: all walls) */
 } gs_couple_settings;
 

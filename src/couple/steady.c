@@ -1,9 +1,9 @@
 /* The steady-state detector's figures (docs/models.md, "Coupled cases").
- * The embedded DEM cannot be stopped early through its API, so it runs for
- * coupling.steady.max_time with `statistics.start: steady`: its own detector
- * (hold-up mass and collision rate both within `tolerance` of their means
- * over the last `window` samples; Sampat et al. 2018) starts the statistics
- * window.  With one time-series row per sample, the same figures are
+ * The DEM runs with `statistics.start: steady`: its own detector (hold-up
+ * mass and collision rate both within `tolerance` of their means over the
+ * last `window` samples; Sampat et al. 2018) starts the statistics window,
+ * and the coupling's observer stops it steady.collect seconds later (at
+ * coupling.steady.max_time at the latest).  With one time-series row per sample, the same figures are
  * recomputed here from timeseries.csv and written to steady.csv, so that a
  * user sees how close the bed came, and a DEM that never became steady is an
  * error naming the last figures rather than tables of nan. */

@@ -218,7 +218,7 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   }
   if (w < 0) return gs_error_prefix(err, "%s:%d: %s: ", gs_cfg_file(n), gs_cfg_line(n), gs_cfg_path(n));
   /* motion: rotation {origin, axis, rpm | rad_per_s}, velocity */
-  double origin[3] = {0, 0, 0}, axis[3] = {1, 0, 0}, omega = 0, vel[3] = {0, 0, 0};
+  double origin[3] = {0, 0, 0}, axis[3] = {1, 0, 0}, omega = 0, vel[3] = {0, 0, 0}, spin_start = 0;
   gs_cfg_node *rot = gs_cfg_get(n, "rotation");
   if (rot && gm.rotating)
     return gs_cfg_fail(rot, err, "the generated wall turns at its own 'rpm' about the bowl's axis; give one or "
@@ -240,7 +240,9 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
     } else if ((rc = gs_cfg_double_req(rot, "rad_per_s", &omega, err))) {
       return rc;
     }
-    if ((rc = gs_cfg_check_unused(rot, err))) return rc;
+    if ((rc = gs_cfg_double_range(rot, "start", 0, 0, 0, 0, HUGE_VAL, 0, &spin_start, err)) ||
+        (rc = gs_cfg_check_unused(rot, err)))
+      return rc;
   }
   const double zero[3] = {0, 0, 0};
   if ((rc = vec3(n, "velocity", 0, zero, vel, err))) return rc;
@@ -249,9 +251,12 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   memcpy(src->origin, origin, sizeof origin);
   memcpy(src->axis, axis, sizeof axis);
   src->omega = omega;
+  src->spin_start = spin_start;
   memcpy(src->velocity, vel, sizeof vel);
   if (src->rotating || vel[0] != 0 || vel[1] != 0 || vel[2] != 0)
-    if ((rc = gs_dem_wall_set_motion(c->dem, w, origin, axis, omega, vel, err))) return rc;
+    if ((rc = gs_dem_wall_set_motion(c->dem, w, origin, axis, omega, vel, err)) ||
+        (rc = gs_dem_wall_set_spin_start(c->dem, w, spin_start, err)))
+      return rc;
   return gs_cfg_check_unused(n, err);
 }
 
@@ -548,6 +553,10 @@ void gs_dem_case_set_engine(gs_dem_case *c, int engine) { c->engine = engine; }
 gs_dem *gs_dem_case_sim(gs_dem_case *c) { return c->dem; }
 gs_cfg_node *gs_dem_case_gas(gs_dem_case *c) { return c->gas; }
 double gs_dem_case_duration(const gs_dem_case *c) { return c->duration; }
+
+void gs_dem_case_set_observer(gs_dem_case *c, const gs_dem_observer *o) {
+  c->observer = o ? *o : (gs_dem_observer){0};
+}
 
 void gs_dem_case_free(gs_dem_case *c) {
   if (!c) return;

@@ -26,6 +26,7 @@ typedef struct {
   gs_dem_material mat;
   int rotating;
   double origin[3], axis[3], omega; /* rotation (omega rad/s about the unit axis) */
+  double spin_start;                /* rotation.start: the rotation begins then [s] */
   double velocity[3];
   int generated;         /* generate: mesh is empty until gs_dem_case_write_geometry */
   int wall;              /* the engine's wall index */
@@ -87,6 +88,8 @@ struct gs_dem_case_s {
   /* dem.max_lost: the largest share of the particles inserted that may leave
    * the box other than through an outlet before the run stops */
   double max_lost;
+  /* the run's observer (gs_dem_case_set_observer); sample NULL: none */
+  gs_dem_observer observer;
 };
 
 /* case_wet.c, wet_run.c: the `spray:` and `granulation:` sections, and the

@@ -75,6 +75,8 @@ typedef struct {
   /* motion */
   int moving;
   double origin[3], axis[3], omega, vel[3];
+  double spin_start; /* the rotation begins at this time (a bed settles first) */
+  double spin;       /* omega once spin_start is reached, 0 before (set with the frame) */
   double Rm[9], shift[3], tframe; /* body -> world at time tframe */
   /* per-type contact constants, recomputed when types are added */
   gs_dem_pair *pt;

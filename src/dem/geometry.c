@@ -70,16 +70,18 @@ static void rotate(const double k[3], double th, const double v[3], double out[3
 }
 
 /* A wall's body frame coincides with the world at t = 0; at time t it has
- * turned by omega*t about the axis through origin + vel*t and moved by vel*t.
+ * turned by omega*(t - spin_start) (nothing before spin_start) about the axis
+ * through origin + vel*t and moved by vel*t.
  * The rotation matrix is computed once per step (gs_dem_wall_frame), since
  * every particle near the wall is transformed with it. */
 void gs_dem_wall_frame(gs_dem_wall *w, double t) {
   w->tframe = t;
+  w->spin = t >= w->spin_start ? w->omega : 0;
   if (!w->moving) return;
   const double e[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   for (int c = 0; c < 3; c++) {
     double col[3];
-    rotate(w->axis, w->omega * t, e[c], col);
+    rotate(w->axis, w->omega * fmax(0, t - w->spin_start), e[c], col);
     for (int r = 0; r < 3; r++) w->Rm[3 * r + c] = col[r];
   }
   for (int i = 0; i < 3; i++) w->shift[i] = w->origin[i] + w->vel[i] * t;
@@ -126,7 +128,7 @@ void gs_dem_wall_velocity(const gs_dem_wall *w, const double xw[3], double v[3])
   double rel[3];
   for (int i = 0; i < 3; i++) rel[i] = xw[i] - w->shift[i];
   const double *k = w->axis;
-  double om = w->omega;
+  double om = w->spin;
   v[0] = w->vel[0] + om * (k[1] * rel[2] - k[2] * rel[1]);
   v[1] = w->vel[1] + om * (k[2] * rel[0] - k[0] * rel[2]);
   v[2] = w->vel[2] + om * (k[0] * rel[1] - k[1] * rel[0]);

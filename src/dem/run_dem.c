@@ -138,7 +138,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   const long vtk_k = c->vtk_every > 0 ? (long)fmax(1, round(c->vtk_every / dt)) : 0;
   const long start_k = (long)round(c->stats_start / dt);
   long step = 0, frame = 0;
-  int steady = 0, stats_on = !c->start_steady && start_k == 0;
+  int steady = 0, stats_on = !c->start_steady && start_k == 0, stop = 0;
   double t_steady = -1, t0wall = wall_seconds();
   uint64_t prev_events = 0, out_events = 0, out_imp[GS_DEM_MAX_WALLS] = {0};
   /* the engine's counters restart with the statistics window; the time series
@@ -197,16 +197,30 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
         ns++;
         prev_events = ev;
       }
+      int open_window = 0;
       if (!rc && !steady && gs_dem_is_steady(ser_m, ser_c, ns, c->steady_window, c->steady_tol)) {
         steady = 1;
         t_steady = gs_dem_time(d);
         if (progress) fprintf(stderr, "gransim dem: steady state at t = %.6g s\n", t_steady);
-        if (c->start_steady) {
-          add_totals(d, &base_events, base_imp);
-          gs_dem_stats_reset(&st, c, t_steady);
-          prev_events = 0;
-          stats_on = 1;
-        }
+        open_window = c->start_steady;
+      }
+      if (!rc && c->observer.sample) {
+        double et, er;
+        gs_dem_kinetic_energy(d, &et, &er);
+        gs_dem_view v;
+        gs_dem_get_view(d, &v);
+        gs_dem_sample smp = {.t = gs_dem_time(d), .step = gs_dem_step_count(d), .particles = v.n,
+                             .holdup_mass = hm, .collisions_per_s = ser_c[ns - 1], .kinetic_energy = et + er,
+                             .steady = steady, .window = stats_on};
+        int ow = 0;
+        rc = c->observer.sample(&smp, c->observer.user, &ow, &stop, err);
+        open_window |= ow;
+      }
+      if (!rc && open_window && !stats_on) {
+        add_totals(d, &base_events, base_imp);
+        gs_dem_stats_reset(&st, c, gs_dem_time(d));
+        prev_events = 0;
+        stats_on = 1;
       }
       if (!rc && stats_on) rc = gs_dem_stats_sample(&st, c, err);
     }
@@ -247,7 +261,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
           rc = vtk_frame(d, vdir, gs_dem_wall_name(d, w), w, frame, frame_t, path, sizeof path, err);
       frame++;
     }
-    if (rc || step == nsteps) break; /* a failed event above stops the run here */
+    if (rc || stop || step == nsteps) break; /* a failed event above stops the run here */
     /* advance to the next event */
     long next = nsteps;
     long cand[4] = {(step / out_k + 1) * out_k, (step / smp_k + 1) * smp_k,
@@ -281,7 +295,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
     gs_dem_counters k;
     gs_dem_get_counters(d, &k);
     fprintf(stderr, "gransim dem: %ld steps in %.2f s, %.4g particle-steps/s, %llu neighbour-list "
-            "rebuilds%s\n", nsteps, el, el > 0 ? psteps / el : 0, (unsigned long long)k.rebuilds,
+            "rebuilds%s\n", step, el, el > 0 ? psteps / el : 0, (unsigned long long)k.rebuilds,
             t_steady >= 0 ? "" : "; steady state not reached");
   }
   if (ts) {

@@ -176,6 +176,16 @@ int gs_dem_wall_set_motion(gs_dem *d, int wall, const double origin[3], const do
   return GS_OK;
 }
 
+int gs_dem_wall_set_spin_start(gs_dem *d, int wall, double t_start, gs_error *err) {
+  if (wall < 0 || (size_t)wall >= d->nwalls) return gs_error_set(err, GS_EINPUT, "no wall %d", wall);
+  if (!(t_start >= 0) || !isfinite(t_start))
+    return gs_error_set(err, GS_EINPUT, "wall '%s': rotation start %g s: expected a time >= 0", d->walls[wall].name,
+                        t_start);
+  d->walls[wall].spin_start = t_start;
+  gs_dem_wall_frame(&d->walls[wall], d->t);
+  return GS_OK;
+}
+
 size_t gs_dem_nwalls(const gs_dem *d) { return d->nwalls; }
 const char *gs_dem_wall_name(const gs_dem *d, size_t wall) { return d->walls[wall].name; }
 

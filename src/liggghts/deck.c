@@ -190,6 +190,10 @@ int gs_lig_check(const gs_dem_case *c, gs_error *err) {
       return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): %s walls are not expressible in the LIGGGHTS engine "
                           "(compute wall/gran/local reports mesh walls only); give the wall as an STL mesh", w,
                           c->wall_src[w].name, c->wall_src[w].kind == GS_DEM_SRC_PLANE ? "plane" : "cylinder");
+  for (size_t w = 0; w < c->nwall_src; w++)
+    if (c->wall_src[w].rotating && c->wall_src[w].spin_start > 0)
+      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): rotation.start is not expressible in a LIGGGHTS deck "
+                          "(its move/mesh turns from t = 0); use the embedded engine", w, c->wall_src[w].name);
   if (c->damping_given && c->prm.damping != GS_DEM_DAMPING_LIGGGHTS)
     return gs_error_set(err, GS_EINPUT, "dem.damping: 'exact' is not expressible in LIGGGHTS, whose damping follows "
                         "from e by its closed form; give 'liggghts' or leave the key out");
