@@ -1,7 +1,7 @@
 # `gransim dem` with a `gas` section (CFD-DEM, src/cfd): the fluid-bed example,
 # shortened, runs and writes gas.csv and the gas fields as a VTK series; the
 # drag exchange in gas.csv balances; bad gas keys name file:line, key and value;
-# a run stopped by a failure keeps its gas.csv rows up to there.
+# a run stopped by a failure keeps its gas.csv rows and the DEM tables up to there.
 source "$(dirname "$0")/cli-lib.sh" "$@"
 
 run_rc 0 "$BIN" list
@@ -46,4 +46,9 @@ run_rc 1 "$BIN" dem "$WORK/blow.yaml" --out "$WORK/blow" --quiet
 stderr_has "left the gas domain"
 stderr_has "gas step"
 [ "$(wc -l < "$WORK/blow/gas.csv")" -ge 3 ] || fail "gas.csv lost its rows"
+# and the DEM's tables up to there (issue 27, item 8)
+for f in timeseries.csv collisions.csv collision_kernel.csv impact_table.csv; do
+  [ -s "$WORK/blow/$f" ] || fail "the stopped run left no $f"
+done
+grep -q "RUN STOPPED EARLY" "$WORK/blow/collision_kernel".* || fail "collision_kernel.csv does not say the run stopped"
 echo "PASS"

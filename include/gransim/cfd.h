@@ -6,8 +6,9 @@
  * interstitial velocity u on the cell faces (staggered), pressure p at the
  * cell centres.  Gas enters through the plane z = lo[2] at a superficial
  * velocity (the distributor), leaves through z = hi[2] at p = 0, and the four
- * side planes are free-slip walls.  Each gas step is a projection: the
- * momentum predictor with the drag implicit, then a pressure equation solved
+ * side planes are no-slip walls.  Each gas step is a projection: the
+ * momentum predictor (drag implicit, first-order upwind convection and
+ * viscous stress with their diagonals implicit), then a pressure equation solved
  * with hypre (PCG preconditioned by PFMG multigrid).  docs/models.md, section
  * "CFD-DEM", has the equations; docs/case-files.md the `gas:` keys.
  *

@@ -26,7 +26,9 @@ struct gs_cfd {
   double *u[3];           /* interstitial velocity on the faces of each axis */
   double *ef[3];          /* void fraction on the faces (mean of the two cells, or the one) */
   double *k[3], *kv[3];   /* drag: sum of w beta / V, and sum of w beta v / V, per face */
-  double *a[3];           /* eps_f / (eps_f rho / dt + K_f): velocity per pressure gradient, per face */
+  double *a[3];           /* eps_f / A_f: velocity per pressure gradient, per face */
+  double *dg[3], *ex[3];  /* convection and viscous stress per face: the implicit (diagonal)
+                             coefficient and the explicit part (neighbours at step n) */
   double *nb, *diag;      /* the pressure equation: 6 couplings and the outlet's diagonal per cell */
   double *rhs;            /* cells */
   gs_cfd_psolver *ps;
@@ -58,6 +60,9 @@ struct gs_cfd {
 
 /* gas.c */
 int gs_cfd_gas_step(gs_cfd *g, gs_error *err);
+/* transport.c: dg and ex of every face from u, eps and ef (boundary faces
+ * set first). */
+void gs_cfd_transport(gs_cfd *g);
 /* Fill ef from eps. */
 void gs_cfd_face_void_fractions(gs_cfd *g);
 size_t gs_cfd_face_index(const gs_cfd *g, int axis, int i, int j, int k);

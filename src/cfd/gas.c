@@ -52,6 +52,8 @@ gs_cfd *gs_cfd_create(const gs_cfd_params *p, gs_error *err) {
          (g->k[a] = gs_calloc(g->nface[a], sizeof(double), err)) &&
          (g->kv[a] = gs_calloc(g->nface[a], sizeof(double), err)) &&
          (g->a[a] = gs_calloc(g->nface[a], sizeof(double), err)) &&
+         (g->dg[a] = gs_calloc(g->nface[a], sizeof(double), err)) &&
+         (g->ex[a] = gs_calloc(g->nface[a], sizeof(double), err)) &&
          (g->ef[a] = gs_calloc(g->nface[a], sizeof(double), err));
   }
   if (ok) ok = (g->ps = gs_cfd_pressure_create(g->n, err)) != NULL;
@@ -80,6 +82,8 @@ void gs_cfd_free(gs_cfd *g) {
     free(g->k[a]);
     free(g->kv[a]);
     free(g->a[a]);
+    free(g->dg[a]);
+    free(g->ex[a]);
     free(g->ef[a]);
     free(g->st_face[a]);
   }
@@ -139,21 +143,33 @@ int gs_cfd_gas_step(gs_cfd *g, gs_error *err) {
   memset(g->nb, 0, 6 * g->ncell * sizeof(double));
   memset(g->diag, 0, g->ncell * sizeof(double));
   memset(g->rhs, 0, g->ncell * sizeof(double));
-  /* predictor: u* with the drag implicit, stored in u; a = eps_f / A */
+  /* the boundary faces: walls at rest, the distributor's superficial velocity */
   for (int a = 0; a < 3; a++) {
     const int m[3] = {n0 + (a == 0), n1 + (a == 1), n2 + (a == 2)};
     for (int k = 0; k < m[2]; k++)
       for (int j = 0; j < m[1]; j++)
+        for (int i = 0; i < m[0]; i++)
+          if (!gs_cfd_face_solved(g, a, i, j, k)) {
+            const size_t f = gs_cfd_face_index(g, a, i, j, k);
+            g->u[a][f] = a == 2 ? g->prm.u_inlet / g->ef[a][f] : 0;
+            g->a[a][f] = 0;
+          }
+  }
+  gs_cfd_transport(g);
+  /* predictor: u* with drag, convection and viscous diagonals implicit,
+   * stored in u; a = eps_f / A */
+  for (int a = 0; a < 3; a++) {
+    const int m[3] = {n0 + (a == 0), n1 + (a == 1), n2 + (a == 2)};
+#pragma omp parallel for collapse(2) schedule(static) if (g->nface[a] >= 4096)
+    for (int k = 0; k < m[2]; k++)
+      for (int j = 0; j < m[1]; j++)
         for (int i = 0; i < m[0]; i++) {
+          if (!gs_cfd_face_solved(g, a, i, j, k)) continue;
           const size_t f = gs_cfd_face_index(g, a, i, j, k);
           const double ef = g->ef[a][f];
-          if (!gs_cfd_face_solved(g, a, i, j, k)) {
-            g->u[a][f] = a == 2 ? g->prm.u_inlet / ef : 0;
-            g->a[a][f] = 0;
-            continue;
-          }
-          const double A = ef * rho / dt + g->k[a][f];
-          g->u[a][f] = (ef * rho * g->u[a][f] / dt + ef * rho * g->prm.gravity[a] + g->kv[a][f]) / A;
+          const double A = ef * rho / dt + g->k[a][f] + g->dg[a][f];
+          g->u[a][f] = (ef * rho * g->u[a][f] / dt + ef * rho * g->prm.gravity[a] + g->kv[a][f] +
+                        g->ex[a][f]) / A;
           g->a[a][f] = ef / A;
         }
   }

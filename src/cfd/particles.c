@@ -269,7 +269,7 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
           else if (a == 2) /* the inlet: the gradient of the face above */
             gr = g->n[2] > 1 ? (g->p[cup + stride] - g->p[cup]) / g->h[a] : -g->p[cup] / (0.5 * g->h[a]);
           else
-            gr = 0; /* free-slip wall: no normal pressure gradient */
+            gr = 0; /* a wall: no flow through it, no gradient across it */
           grad[a][f] = gr;
         }
   }

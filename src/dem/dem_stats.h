@@ -45,9 +45,11 @@ int gs_dem_stats_sample(gs_dem_stats *s, gs_dem_case *c, gs_error *err);
  * residence.csv and residence_class.csv into dir.  t_steady < 0: the steady
  * state was not detected.  Without a statistics window (start: steady never
  * fired, or no sample in the window) the rates are written as nan with a
- * note in each file's header. */
+ * note in each file's header.  stopped: NULL, or why the run stopped early,
+ * added to every header so tables from a failed run are never mistaken for
+ * a finished run's. */
 int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *dir, double t_end,
-                       double t_steady, gs_error *err);
+                       double t_steady, const char *stopped, gs_error *err);
 /* 1 if the window holds statistics (gs_dem_stats_write writes rates). */
 int gs_dem_stats_have_window(const gs_dem_stats *s, const gs_dem_case *c, double t_end, double t_steady);
 /* The tables' helpers, shared with the LIGGGHTS engine's reduction

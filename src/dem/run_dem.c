@@ -154,6 +154,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   if (!rc) rc = gs_dem_wet_start(c, dir, err);
   if (!rc) rc = gs_dem_health_check(&health, c, 1, err);
   if (!rc) gs_dem_stats_reset(&st, c, 0);
+  const int stepped = !rc; /* from here a failure still writes the tables */
   while (!rc && step <= nsteps) {
     /* events at this step */
     if (!c->start_steady && !stats_on && step >= start_k) {
@@ -326,7 +327,15 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
               "sample_every %.6g s, duration %.6g s): the rates in the tables are nan\n", c->path, c->stats_start,
               c->sample_every, c->duration);
   }
-  if (!rc) rc = gs_dem_stats_write(&st, c, dir, gs_dem_time(d), t_steady, err);
+  if (!rc) {
+    rc = gs_dem_stats_write(&st, c, dir, gs_dem_time(d), t_steady, NULL, err);
+  } else if (stepped) {
+    /* a run stopped part-way (a refusal, a numerical failure, the gas phase)
+     * leaves its collision and impact tables up to there, as its other
+     * outputs; the error reported stays the one that stopped it */
+    gs_error terr = {0};
+    gs_dem_stats_write(&st, c, dir, gs_dem_time(d), t_steady, err->msg, &terr);
+  }
   gs_dem_stats_free(&st);
   free(ser_m);
   free(ser_c);

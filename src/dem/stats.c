@@ -282,16 +282,19 @@ static int write_impact_table(const gs_dem_stats *s, const gs_dem_case *c, const
 }
 
 int gs_dem_stats_write(const gs_dem_stats *s, const gs_dem_case *c, const char *dir, double t_end,
-                       double t_steady, gs_error *err) {
+                       double t_steady, const char *stopped, gs_error *err) {
   const int ncl = s->ncl;
   const double win = t_end - s->t0, ns = s->nsamples ? (double)s->nsamples : 1;
   const int have = gs_dem_stats_have_window(s, c, t_end, t_steady);
   /* why there are no rates, for every file's header */
-  const char *note = have ? ""
-                     : c->start_steady && t_steady < 0
-                         ? "; NO STATISTICS WINDOW: statistics.start is 'steady' and the steady state was not "
-                           "reached, so every rate and mean below is nan"
-                         : "; NO STATISTICS WINDOW: no sample was taken in it, so every rate and mean below is nan";
+  const char *why = have ? ""
+                    : c->start_steady && t_steady < 0
+                        ? "; NO STATISTICS WINDOW: statistics.start is 'steady' and the steady state was not "
+                          "reached, so every rate and mean below is nan"
+                        : "; NO STATISTICS WINDOW: no sample was taken in it, so every rate and mean below is nan";
+  char note[1024];
+  snprintf(note, sizeof note, "%s%s%.600s", why, stopped ? "; RUN STOPPED EARLY, tables up to there: " : "",
+           stopped ? stopped : "");
   gs_dem_counters k;
   gs_dem_get_counters(c->dem, &k);
   gs_csv_out tab;
