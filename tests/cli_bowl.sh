@@ -42,8 +42,8 @@ if command -v "${GRANSIM_LIGGGHTS:-liggghts}" >/dev/null && command -v mpirun >/
   sed -e 's/duration: 0.25,/duration: 0.05, engine: liggghts,/' "$SRC/fuzz/corpus/dem_case/bowl-impeller.yaml" >"$WORK/lig.yaml"
   grep -q 'engine: liggghts' "$WORK/lig.yaml" || fail "fuzz/corpus/dem_case/bowl-impeller.yaml changed"
   run_rc 0 "$BIN" dem "$WORK/lig.yaml" --out "$WORK/lig" --ranks 1 --quiet
-  grep -q "mesh/surface file $WORK/lig/geometry/bowl.stl" "$WORK/lig/liggghts/in.gransim" ||
-    grep -q "mesh/surface file .*/lig/geometry/bowl.stl" "$WORK/lig/liggghts/in.gransim" || fail "the deck does not read geometry/bowl.stl"
+  grep -q "mesh/surface file wall0_bowl.stl" "$WORK/lig/liggghts/in.gransim" || fail "the deck does not read wall0_bowl.stl"
+  cmp -s "$WORK/lig/liggghts/wall0_bowl.stl" "$WORK/lig/geometry/bowl.stl" || fail "the deck's wall0_bowl.stl is not geometry/bowl.stl"
   for f in "$WORK"/lig/liggghts/ex_wall*.txt; do [ ! -s "$f" ] || fail "LIGGGHTS refused facets: $f"; done
   [ "$(tail -1 "$WORK/lig/timeseries.csv" | cut -d, -f2)" = 20 ] || fail "LIGGGHTS lost particles of the bowl"
 fi

@@ -80,6 +80,6 @@ mechanisms:
 output: {times: [0.5, 1]}")
 printf 'time,M0\n0.5,1.0001\n1,1.0002\n' >"$WORK/beta-target.csv"
 run_rc 2 "$BIN" optimise "$beta" --target "$WORK/beta-target.csv" --controls mechanisms.0.daughters.shape=1e299:1e300:log
-stderr_has "the start: the model at mechanisms.0.daughters.shape=3.16" "beta.yaml:8: mechanisms[0].daughters" \
+stderr_has "the start: batch 'target', the model at mechanisms.0.daughters.shape=3.16" "beta.yaml:8: mechanisms[0].daughters" \
   "GSL: error (exceeded max number of iterations, in GSL's beta_inc.c"
 echo "cli_optimise: ok"
