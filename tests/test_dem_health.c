@@ -37,9 +37,38 @@ static int run_pair(double gap, gs_error *err) {
   return rc;
 }
 
+/* Loads case_yaml with `extra` appended; its status and message in err. */
+static int load_with(const char *name, const char *extra, gs_error *err) {
+  char path[600];
+  snprintf(path, sizeof path, "%s/%s.yaml", dt_dir, name);
+  FILE *fp = fopen(path, "w");
+  if (!fp) return -1;
+  fprintf(fp, "%s%s", case_yaml, extra);
+  fclose(fp);
+  *err = (gs_error){0};
+  gs_dem_case *c = gs_dem_case_load(path, err);
+  gs_dem_case_free(c);
+  return c ? GS_OK : err->code;
+}
+
 int main(void) {
   if (dt_scratch_begin("dem-health")) return 1;
   gs_error err = {0};
+
+  /* resources stated before the run (src/dem/resources.c): 10 000 particles
+   * need 3.45 MB at least; 200 frames of them 168 MB */
+  const char *fill = "fill:\n  - {count: 10000, region: {box: {lo: [-0.01, -0.01, -0.01], hi: [0.01, 0.01, 0.01]}}}\n";
+  char extra[800];
+  snprintf(extra, sizeof extra, "%slimits: {memory_gb: 0.003}\n", fill);
+  CHECK(load_with("mem", extra, &err) == GS_EINPUT);
+  CHECK(has(err.msg, "limits: the case asks for 10000 particles (fill and feeds), which need at least 0.00345 GB"));
+  snprintf(extra, sizeof extra, "%slimits: {memory_gb: 0.004}\n", fill);
+  CHECK(load_with("mem-ok", extra, &err) == GS_OK);
+  snprintf(extra, sizeof extra, "%soutput: {vtk_every: 5.0e-7}\nlimits: {output_gb: 0.1}\n", fill);
+  CHECK(load_with("frames", extra, &err) == GS_EINPUT);
+  CHECK(has(err.msg, "the particle frames (output.vtk_every) would take at least 0.169 GB (201 frames of 10000"));
+  snprintf(extra, sizeof extra, "%soutput: {vtk_every: 5.0e-7}\nlimits: {output_gb: 0.2}\n", fill);
+  CHECK(load_with("frames-ok", extra, &err) == GS_OK);
 
   /* 30 % of a radius at the start: refused before the first step, naming both */
   CHECK(run_pair(1.7e-3, &err) == GS_ENUMERIC);

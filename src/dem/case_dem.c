@@ -494,6 +494,7 @@ static int load(gs_dem_case *c, gs_error *err) {
   /* sections read by the layers above when they run the case: `gas` (the
    * gas phase, src/cfd, through gs_dem_case_section) */
   if (!rc) c->gas = gs_cfg_get(root, "gas");
+  if (!rc) rc = gs_dem_case_check_limits(c, root, err);
   if (!rc) rc = gs_cfg_check_unused(root, err);
   /* the time step against the Rayleigh time of the smallest particle */
   if (!rc) {

@@ -92,6 +92,11 @@ struct gs_dem_case_s {
   gs_dem_observer observer;
 };
 
+/* resources.c: the particles the fills and feeds ask for (a lower bound),
+ * and the case against its `limits` (memory, particle frames). */
+double gs_dem_case_particles_asked(const gs_dem_case *c);
+int gs_dem_case_check_limits(const gs_dem_case *c, gs_cfg_node *root, gs_error *err);
+
 /* case_wet.c, wet_run.c: the `spray:` and `granulation:` sections, and the
  * run driver's calls (a case without them just runs the DEM). */
 int gs_dem_wet_read(gs_dem_case *c, gs_cfg_node *root, double rmin, gs_error *err);
