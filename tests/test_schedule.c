@@ -28,7 +28,7 @@ static double sprayed(const char *mech, double end) {
 
 static void test_ratio_pulses(void) {
   /* 1e5 particles of 1e-12 m^3 at 1500 kg/m^3: 1.5e-4 kg of solid; L/S 0.3 */
-  const char *mech = "  - type: liquid_addition\n    liquid_to_solid: 0.3\n    solid_mass: 1.5e-4\n"
+  const char *mech = "  - type: liquid_addition\n    liquid_solid_ratio: 0.3\n    solid_mass: 1.5e-4\n"
                      "    schedule: [{start: 200, end: 320}, {start: 440, end: 560}, {start: 680, end: 800}]\n";
   const double total = 0.3 * 1.5e-4 / 1000;
   const double first = sprayed(mech, 320), all = sprayed(mech, 900);
@@ -56,13 +56,13 @@ static void test_errors(void) {
   EXPECT_INPUT(BAD "    schedule:\n      - {start: 0, end: 10, rate: -1.0e-12}\n", "bad.yaml:10", "rate", "-1.0e-12");
   EXPECT_INPUT(BAD "    rate: 1.0e-12\n    schedule:\n      - {start: 0, end: 10, rate: 1.0e-12}\n", "not both");
   EXPECT_INPUT(BAD "    schedule:\n      - {start: 0, end: 10}\n", "missing key 'rate'");
-  EXPECT_INPUT(BAD "    schedule:\n      - {start: 0, end: 10, rate: 1.0e-12, weight: 2}\n", "weight", "liquid_to_solid");
-  EXPECT_INPUT(BAD "    liquid_to_solid: 0.3\n    solid_mass: 1.0\n    schedule:\n      - {start: 0, end: 10, rate: 1.0e-12}\n",
+  EXPECT_INPUT(BAD "    schedule:\n      - {start: 0, end: 10, rate: 1.0e-12, weight: 2}\n", "weight", "liquid_solid_ratio");
+  EXPECT_INPUT(BAD "    liquid_solid_ratio: 0.3\n    solid_mass: 1.0\n    schedule:\n      - {start: 0, end: 10, rate: 1.0e-12}\n",
                "rate", "weight");
-  EXPECT_INPUT(BAD "    liquid_to_solid: -0.3\n    solid_mass: 1.0\n    schedule:\n      - {start: 0, end: 10}\n",
-               "liquid_to_solid", "-0.3");
-  EXPECT_INPUT(BAD "    liquid_to_solid: 0.3\n    schedule:\n      - {start: 0, end: 10}\n", "missing key 'solid_mass'");
-  EXPECT_INPUT(BAD "    liquid_to_solid: 0.3\n    solid_mass: 1.0\n    schedule:\n      - {start: 0, end: 10, weight: 0}\n",
+  EXPECT_INPUT(BAD "    liquid_solid_ratio: -0.3\n    solid_mass: 1.0\n    schedule:\n      - {start: 0, end: 10}\n",
+               "liquid_solid_ratio", "-0.3");
+  EXPECT_INPUT(BAD "    liquid_solid_ratio: 0.3\n    schedule:\n      - {start: 0, end: 10}\n", "missing key 'solid_mass'");
+  EXPECT_INPUT(BAD "    liquid_solid_ratio: 0.3\n    solid_mass: 1.0\n    schedule:\n      - {start: 0, end: 10, weight: 0}\n",
                "weights are all 0");
   EXPECT_INPUT(BAD "    schedule:\n      - {start: 10, end: 5, rate: 1.0e-12}\n", "end", "5");
 }

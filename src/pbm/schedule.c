@@ -74,10 +74,10 @@ int gs_spray_schedule(gs_cfg_node *node, const gs_grid *g, double **q, size_t *n
   if (gs_cfg_get(node, "rate") || gs_cfg_get(node, "start") || gs_cfg_get(node, "end"))
     return gs_cfg_fail(list, err, "give either 'rate' (with 'start', 'end') or 'schedule', not both");
   double ratio = 0, solid = 0, rho = 0;
-  const int by_ratio = gs_cfg_get(node, "liquid_to_solid") != NULL;
+  const int by_ratio = gs_cfg_get(node, "liquid_solid_ratio") != NULL;
   int rc = gs_schedule_read(list, keys, 2, s, err);
   if (!rc && by_ratio) {
-    rc = gs_cfg_double_range(node, "liquid_to_solid", 1, 0, 0, 1, 10, 0, &ratio, err);
+    rc = gs_cfg_double_range(node, "liquid_solid_ratio", 1, 0, 0, 1, 10, 0, &ratio, err);
     if (!rc) rc = gs_cfg_double_range(node, "solid_mass", 1, 0, 0, 1, 1e6, 0, &solid, err);
     if (!rc) rc = gs_cfg_double_range(node, "liquid_density", 0, 1000, 0, 1, 1e5, 0, &rho, err);
   }
@@ -86,17 +86,17 @@ int gs_spray_schedule(gs_cfg_node *node, const gs_grid *g, double **q, size_t *n
     gs_cfg_node *p = gs_cfg_item(list, i);
     gs_phase *ph = &s->phase[i];
     if (by_ratio && gs_cfg_get(p, "rate"))
-      rc = gs_cfg_fail(gs_cfg_get(p, "rate"), err, "with liquid_to_solid the rates follow from it: give "
+      rc = gs_cfg_fail(gs_cfg_get(p, "rate"), err, "with liquid_solid_ratio the rates follow from it: give "
                        "phases a 'weight' (relative rate) instead");
     else if (!by_ratio && !gs_cfg_get(p, "rate"))
-      rc = gs_cfg_missing(p, "rate", "(liquid volume per second; or give liquid_to_solid and solid_mass)", err);
+      rc = gs_cfg_missing(p, "rate", "(liquid volume per second; or give liquid_solid_ratio and solid_mass)", err);
     else if (!by_ratio && gs_cfg_get(p, "weight"))
-      rc = gs_cfg_fail(gs_cfg_get(p, "weight"), err, "'weight' goes with liquid_to_solid; give a 'rate' alone");
+      rc = gs_cfg_fail(gs_cfg_get(p, "weight"), err, "'weight' goes with liquid_solid_ratio; give a 'rate' alone");
     weighted += ph->value[1] * (ph->end - ph->start);
   }
   if (!rc && by_ratio && !(weighted > 0))
     rc = gs_cfg_fail(list, err, "the phases' weights are all 0: nothing would be sprayed");
-  /* liquid_to_solid: the liquid volume ratio m_s / rho_l, shared by weight x duration */
+  /* liquid_solid_ratio: the liquid volume ratio m_s / rho_l, shared by weight x duration */
   for (size_t i = 0; !rc && by_ratio && i < s->n; i++)
     s->phase[i].value[0] = ratio * solid / rho * s->phase[i].value[1] / weighted;
   /* every compartment sprays the schedule's rate */

@@ -39,7 +39,7 @@ double gs_schedule_next_switch(const gs_schedule *s, double t);
 /* The integral of the first value over all phases. */
 double gs_schedule_integral(const gs_schedule *s);
 /* liquid_addition's `schedule` (node: the mechanism's map): phases with a
- * `rate` each (m^3/s), or, with `liquid_to_solid` and `solid_mass` (and
+ * `rate` each (m^3/s), or, with `liquid_solid_ratio` and `solid_mass` (and
  * `liquid_density`), phases with a relative `weight` sharing the liquid
  * ratio * solid_mass / liquid_density by weight x duration.  *q: one factor
  * per compartment (1: every compartment sprays the schedule), allocated. */
