@@ -82,8 +82,11 @@ static int carried_create(gs_cfg_node *node, const gs_model *m, void **self, int
 static double cell_weight(const carried_t *C, const gs_model *m, const gs_eval *ev, const double *y, size_t comp,
                           const double *N, size_t c) {
   const double s = m->grid.volume[c];
+  /* cells at the solver's noise floor hold no granules to wet: N there is
+   * round-off of either sign, and a share of it would put the spray of a
+   * compartment the material has not reached on a tiny or negative weight */
+  if (!(N[c] > ev->noise_floor)) return 0;
   if (!C->share.type->needs_gross) return N[c] * C->share.type->weight(&C->share, s, s);
-  if (!(N[c] > 0)) return 0;
   double carried = 0;
   for (int q = 0; q < m->ncarried; q++) carried += gs_eval_carried_c(m, ev, y, comp, q)[c];
   return N[c] * C->share.type->weight(&C->share, s, s + fmax(carried, 0) / N[c]);
