@@ -274,7 +274,11 @@ static void test_many_compartments(void) {
          NC, rep.t_end, rep.stats.steps, rep.stats.rhs_evals, rep.worst_coupling, rep.max_balance_error);
   CHECK(rc == GS_OK);
   CHECK(rep.t_end == (full ? 85.0 : 14.0));
-  CHECK(rep.worst_coupling < 1e-12);
+  /* per stretch, relative to what crossed: measured 4.7e-13 to 14 s and 3.7e-12
+   * over 85 s (the far compartments' first stretches pass little, summed over
+   * many steps); a coupling that lost volume would show the integrator's
+   * tolerance, 1e-6 */
+  CHECK(rep.worst_coupling < 1e-11);
   CHECK(rep.max_balance_error < 1e-12);
   free(y);
   gs_case_free(&c);
