@@ -15,6 +15,20 @@
 #define SPRAY_RATE 3.645833e-7
 #define SPRAY_START 10.0
 
+/* A file's whole text (malloc'ed; empty if unreadable), or NULL when it
+ * cannot be opened. */
+static char *cx_read_text(const char *path) {
+  FILE *fp = fopen(path, "rb");
+  if (!fp) return NULL;
+  fseek(fp, 0, SEEK_END);
+  long n = ftell(fp);
+  rewind(fp);
+  char *s = calloc((size_t)n + 1, 1);
+  if (fread(s, 1, (size_t)n, fp) != (size_t)n) s[0] = '\0';
+  fclose(fp);
+  return s;
+}
+
 /* The worst errors seen over a walk (maxima, and the most negative density). */
 typedef struct {
   double solid, liquid, ledger, lost, most_negative;

@@ -98,18 +98,6 @@ static double fed_rate(gs_case *c, int k) {
   return rate;
 }
 
-static char *read_text(const char *path) {
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return NULL;
-  fseek(fp, 0, SEEK_END);
-  long n = ftell(fp);
-  rewind(fp);
-  char *s = calloc((size_t)n + 1, 1);
-  if (fread(s, 1, (size_t)n, fp) != (size_t)n) s[0] = '\0';
-  fclose(fp);
-  return s;
-}
-
 /* The case's integrator on the probed system (tl_advance_to). */
 typedef struct {
   gs_case *c;
@@ -127,7 +115,7 @@ int main(void) {
   const char *src = getenv("GRANSIM_SOURCE_DIR");
   char path[1024];
   snprintf(path, sizeof path, "%s/examples/corimix-continuous.yaml", src ? src : "..");
-  char *text = read_text(path);
+  char *text = cx_read_text(path);
   CHECK(text != NULL);
   if (!text) return 1;
   /* the closed forms below use these values of the example */

@@ -82,8 +82,11 @@ static int carried_create(gs_cfg_node *node, const gs_model *m, void **self, int
 static double cell_weight(const carried_t *C, const gs_model *m, const gs_eval *ev, const double *y, size_t comp,
                           const double *N, size_t c) {
   const double s = m->grid.volume[c];
-  if (!C->share.type->needs_gross) return N[c] * C->share.type->weight(&C->share, s, s);
+  (void)ev;
+  /* round-off below zero holds no granules: a negative weight would take
+   * liquid away while others receive more than the spray */
   if (!(N[c] > 0)) return 0;
+  if (!C->share.type->needs_gross) return N[c] * C->share.type->weight(&C->share, s, s);
   double carried = 0;
   for (int q = 0; q < m->ncarried; q++) carried += gs_eval_carried_c(m, ev, y, comp, q)[c];
   return N[c] * C->share.type->weight(&C->share, s, s + fmax(carried, 0) / N[c]);
@@ -98,9 +101,15 @@ static void spray_rates(void *self, const gs_model *m, const gs_eval *ev, size_t
   const double *N = gs_eval_numbers_c(m, ev, y, comp);
   const double solid = gs_dot_strided(N, g->volume, 1, g->ncells);
   const double q = gs_liquid_inflow_rate(&C->inflow, comp, solid);
+  /* a compartment the material has not reached holds only the tanks-in-series
+   * tail at the solver's noise floor: no granule to wet, and the whole spray
+   * on a weight of round-off would load them with 1e20 times their volume */
+  int reached = 0;
+  for (size_t c = 0; c < g->ncells && !reached; c++) reached = N[c] > ev->noise_floor;
+  if (!reached || q == 0.0) return;
   double wsum = 0;
   for (size_t c = 0; c < g->ncells; c++) wsum += cell_weight(C, m, ev, y, comp, N, c);
-  if (!(wsum > 0) || q == 0.0) return;
+  if (!(wsum > 0)) return;
   double per = q / wsum, *dL = gs_eval_carried(m, ev, dydt, comp, C->liquid);
   for (size_t c = 0; c < g->ncells; c++) dL[c] += per * cell_weight(C, m, ev, y, comp, N, c);
   gs_eval_ledger(m, ev, dledger, comp)[g->dim + C->liquid] += q;
