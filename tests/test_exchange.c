@@ -153,6 +153,7 @@ static void test_bad_input(void) {
   BAD("rates: [[0, -1], [1, 0]]", ">= 0", "rates[0][1]");
   BAD("rates: [[0, 1], [1, 0]], links: []", "exactly one of 'rates'");
   BAD("discharge: 1", "exactly one of 'rates'");
+  BAD("file: no-such-fragment.yaml", "no-such-fragment.yaml");
   BAD("links: [{from: 1, to: 1, rate: 1}]", "to itself");
   BAD("links: [{from: 1, to: 3, rate: 1}]", "to");
   BAD("links: [{from: 1, to: 2}]", "exactly one of 'rate'");

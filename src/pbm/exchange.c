@@ -5,6 +5,7 @@
  *          particles move to j (diagonal 0), as `gransim compartments`
  *          writes it; or
  *   links: a list of {from, to, rate | residence_time}, the sparse form;
+ *   file:  the fragment `gransim compartments` writes (its `rates`);
  *   discharge: optional rate [1/s] per compartment at which particles leave
  *          the system as product.
  * dN_i/dt = -(sum_j K_ij + d_i) N_i + sum_j K_ji N_j, the same for carried
@@ -87,6 +88,27 @@ static int read_links(gs_cfg_node *links, size_t ncomp, double *K, gs_error *err
   return GS_OK;
 }
 
+/* The rates of a fragment written by `gransim compartments` (its
+ * `compartments` and `rates`; the file's other keys are for the reader). */
+static int read_fragment(gs_cfg_node *fn, const char *dir, size_t ncomp, double *K, gs_error *err) {
+  const char *name = gs_cfg_scalar(fn);
+  if (!name || !*name) return gs_cfg_fail(fn, err, "expected a file name (a fragment of gransim compartments)");
+  char path[2048];
+  snprintf(path, sizeof path, "%s%s%s", name[0] == '/' ? "" : dir, name[0] == '/' ? "" : "/", name);
+  gs_cfg *cfg = gs_cfg_load_file(path, err);
+  if (!cfg) return GS_EINPUT;
+  gs_cfg_node *root = gs_cfg_root(cfg), *mat = NULL;
+  long n = 0;
+  int rc = root ? gs_cfg_require_kind(root, GS_CFG_MAP, err) : gs_cfg_fail(fn, err, "%s is empty", path);
+  if (!rc) rc = gs_cfg_long_range(root, "compartments", 1, 1, 1, 1000000, &n, err);
+  if (!rc && (size_t)n != ncomp)
+    rc = gs_cfg_fail(fn, err, "%s has %ld compartments, the grid %zu (set grid.compartments: %ld)", path, n, ncomp, n);
+  if (!rc) rc = gs_cfg_seq_req(root, "rates", &mat, err);
+  if (!rc) rc = read_matrix(mat, ncomp, K, err);
+  gs_cfg_free(cfg);
+  return rc;
+}
+
 /* Incoming links per compartment (CSR by destination) and totals out. */
 static int build(exchange_t *X, const double *K, const double *discharge, gs_error *err) {
   const size_t n = X->ncomp;
@@ -121,10 +143,12 @@ static int exchange_create(gs_cfg_node *node, const gs_model *m, void **self, gs
   int rc = X && K ? GS_OK : GS_ENOMEM;
   if (!rc) X->ncomp = n;
   gs_cfg_node *mat = rc ? NULL : gs_cfg_get(node, "rates"), *links = rc ? NULL : gs_cfg_get(node, "links");
-  if (!rc && !!mat == !!links)
-    rc = gs_cfg_fail(node, err, "give exactly one of 'rates' (a matrix, row = from) or 'links' "
-                                "(a list of {from, to, rate | residence_time})");
-  if (!rc) rc = mat ? read_matrix(mat, n, K, err) : read_links(links, n, K, err);
+  gs_cfg_node *file = rc ? NULL : gs_cfg_get(node, "file");
+  if (!rc && !!mat + !!links + !!file != 1)
+    rc = gs_cfg_fail(node, err, "give exactly one of 'rates' (a matrix, row = from), 'links' "
+                                "(a list of {from, to, rate | residence_time}) or 'file' (a fragment of "
+                                "gransim compartments)");
+  if (!rc) rc = mat ? read_matrix(mat, n, K, err) : links ? read_links(links, n, K, err) : read_fragment(file, m->dir, n, K, err);
   if (!rc && gs_cfg_get(node, "discharge"))
     rc = (discharge = gs_calloc(n, sizeof(double), err)) ? gs_cfg_per_comp(node, "discharge", 0, 0, 0, 0, n, discharge, err) : GS_ENOMEM;
   if (!rc) rc = gs_cfg_check_unused(node, err);
