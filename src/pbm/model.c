@@ -14,14 +14,14 @@
 extern const gs_mech_type gs_mech_aggregation, gs_mech_breakage, gs_mech_growth,
     gs_mech_liquid_addition, gs_mech_consolidation, gs_mech_feed, gs_mech_transfer, gs_mech_spray,
     gs_mech_pore_consolidation, gs_mech_layering, gs_mech_nucleation, gs_mech_drying,
-    gs_mech_fluid_bed, gs_mech_exchange;
+    gs_mech_fluid_bed, gs_mech_exchange, gs_mech_impeller_schedule;
 
 /* Adding a mechanism is one file and one line here. */
 static const gs_mech_type *const registry[] = {
     &gs_mech_aggregation, &gs_mech_breakage, &gs_mech_growth, &gs_mech_liquid_addition,
     &gs_mech_consolidation, &gs_mech_feed, &gs_mech_transfer, &gs_mech_spray,
     &gs_mech_pore_consolidation, &gs_mech_layering, &gs_mech_nucleation, &gs_mech_drying,
-    &gs_mech_fluid_bed, &gs_mech_exchange, NULL};
+    &gs_mech_fluid_bed, &gs_mech_exchange, &gs_mech_impeller_schedule, NULL};
 
 const gs_mech_type *const *gs_mech_types(void) { return registry; }
 
