@@ -11,7 +11,7 @@ _gransim() {
     words=("${COMP_WORDS[@]}")
     cword=$COMP_CWORD
   fi
-  local commands="run check list validate validate-cfd validate-fit plot sweep fit sensitivity optimise dem dem-reduce couple geometry"
+  local commands="run check list validate validate-cfd validate-fit plot sweep fit sensitivity optimise dem dem-reduce compartments couple geometry"
   if [ "$cword" -eq 1 ]; then
     COMPREPLY=($(compgen -W "$commands --help --version" -- "$cur"))
     return
@@ -31,6 +31,7 @@ _gransim() {
     optimise) opts="--target --controls --weights --method --max-runs --tol --help" ;;
     dem) opts="--out --check --quiet --threads --engine --ranks --launcher --dry-run --reduce --help" ;;
     dem-reduce) opts="--out --impacts --E --nu --rho --e --wall-E --wall-nu --contact-time --min-speed --edges --measure --prefix --contacts --help" ;;
+    compartments) opts="--out --clusters --max-clusters --time-step --start --velocity-weight --seed --help" ;;
     couple) opts="--out --check --resume --quiet --threads --help" ;;
     geometry) opts="--out --help" ;;
     *) return ;;
@@ -42,7 +43,7 @@ _gransim() {
   fi
   case $prev in
     --out)
-      if [ "${words[1]}" = validate ] || [ "${words[1]}" = validate-cfd ] || [ "${words[1]}" = validate-fit ] || [ "${words[1]}" = dem-reduce ]; then
+      if [ "${words[1]}" = validate ] || [ "${words[1]}" = validate-cfd ] || [ "${words[1]}" = validate-fit ] || [ "${words[1]}" = dem-reduce ] || [ "${words[1]}" = compartments ]; then
         COMPREPLY=($(compgen -f -- "$cur"))
       else
         COMPREPLY=($(compgen -d -- "$cur"))
@@ -62,13 +63,16 @@ _gransim() {
     --design) COMPREPLY=($(compgen -W "lhs:" -- "$cur")); return ;;
     --threads | --ranks | --seed | --levels | --bootstrap | --conf | --max-runs | --tol | --max-loss | \
       --set | --range | --params | --controls | --weights | --outputs | --only | --launcher | --edges | \
-      --prefix | --E | --nu | --rho | --e | --wall-E | --wall-nu | --contact-time | --min-speed)
+      --prefix | --E | --nu | --rho | --e | --wall-E | --wall-nu | --contact-time | --min-speed | \
+      --clusters | --max-clusters | --time-step | --start | --velocity-weight)
       return ;;
   esac
   if [[ $cur == -* ]]; then
     COMPREPLY=($(compgen -W "$opts" -- "$cur"))
   elif [ "${words[1]}" = dem-reduce ]; then
     COMPREPLY=($(compgen -d -- "$cur"))
+  elif [ "${words[1]}" = compartments ]; then
+    COMPREPLY=($(compgen -f -- "$cur"))
   else
     COMPREPLY=($(compgen -f -X '!*.yaml' -- "$cur") $(compgen -f -X '!*.yml' -- "$cur") $(compgen -d -- "$cur"))
   fi

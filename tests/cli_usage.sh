@@ -72,7 +72,7 @@ expect_section() {
   [ "$got" = "$* " ] || fail "gransim list: under '$heading' expected '$*', got '$got'"
 }
 expect_section "aggregation kernels:" constant sum product madec table brownian semi_mechanistic
-expect_section "mechanisms:" aggregation breakage growth liquid_addition consolidation feed transfer spray pore_consolidation layering nucleation drying fluid_bed
+expect_section "mechanisms:" aggregation breakage growth liquid_addition consolidation feed transfer spray pore_consolidation layering nucleation drying fluid_bed exchange impeller_schedule
 expect_section "breakage selection functions:" power shear dem_impact
 expect_section "daughter distributions:" uniform halves power beta
 expect_section "integrators (solver.method):" auto rk cvode euler

@@ -9,7 +9,7 @@
 # writes while it waits, the whole result.h5 and summary.csv are checked
 # identical to the serial run's); a 2-D case with the
 # adaptive Euler of Sampat et al. (2018) the same; only rank 0 prints; cvode and more ranks than
-# compartments are refused with a message; an Euler step that goes negative on
+# compartments are refused with a message, and so is an exchange network; an Euler step that goes negative on
 # rank 1 only stops every rank with status 1 and rank 1's message, without
 # hanging; so does a non-finite rate on rank 1 only under rk, and a result
 # file that cannot grow (rank 0's writes fail mid-run); a 2-rank run killed
@@ -61,6 +61,17 @@ same_on_two_ranks() {
 run_rc 1 "${MPI[@]}" -np 2 "$BIN" run "$SRC/examples/corimix-continuous.yaml" --out "$WORK/pc2" --quiet
 stderr_has "solver.steps: per_compartment runs in one process"
 no_result_files "$WORK/pc2"
+# an exchange network reads every compartment, which runs in one process too
+cat >"$WORK/net.yaml" <<'EOF'
+grid: {compartments: 2, axes: [{name: v, type: geometric, min: 1, ratio: 2, cells: 4}]}
+initial: {type: cell, number: 10, index: [1]}
+mechanisms: [{type: exchange, rates: [[0, 1], [2, 0]]}]
+output: {end: 1}
+EOF
+run_rc 1 "${MPI[@]}" -np 2 "$BIN" run "$WORK/net.yaml" --out "$WORK/net2" --quiet
+stderr_has "exchange network couples every compartment"
+no_result_files "$WORK/net2"
+run_rc 0 "$BIN" run "$WORK/net.yaml" --out "$WORK/net1" --quiet
 mkdir -p "$WORK/data"
 cp "$SRC/examples/data/"*.csv "$WORK/data/"
 ex="$WORK/corimix-shared.yaml"

@@ -79,6 +79,10 @@ typedef struct gs_mech_type {
   /* Pages (GS_APART) it keeps per compartment, for the memory a case is
    * estimated to need before it is built (limits.memory_gb). */
   int pages_per_compartment;
+  /* 1: its rates read the state of any compartment (an exchange network),
+   * not only comp's and the one upstream, so it runs with shared steps on
+   * one process (the other strategies pack compartments apart). */
+  int couples_all;
   /* ---- scalar state (optional) ----
    * A mechanism may carry scalars per compartment in the ODE state (a fluid
    * bed's enthalpy and vapour, and the integrals of its flows, which make
@@ -299,6 +303,8 @@ double gs_model_held(const gs_model *m, const double *y, size_t comp, int k);
  * one (the sum of the mechanisms' outflow_rate; 0 without any).  The inflow
  * of comp + 1 is k times comp's numbers and carried totals. */
 double gs_model_transfer_rate(const gs_model *m, size_t comp);
+/* 1 if some mechanism reads every compartment's state (gs_mech_type.couples_all). */
+int gs_model_couples_all(const gs_model *m);
 /* Add a mechanism by type name, reading its parameters from node. */
 int gs_model_add_mechanism(gs_model *m, const char *type, gs_cfg_node *node, const char *label,
                            gs_error *err);

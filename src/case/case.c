@@ -441,6 +441,10 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, const double *accuracy, gs_e
     return gs_cfg_fail(gs_cfg_get(solver, "steps"), err,
                        "per_compartment steps cannot carry the mechanisms' scalar state (a fluid "
                        "bed's balances): use steps: shared");
+  if (!rc && c->per_compartment && gs_model_couples_all(m))
+    return gs_cfg_fail(gs_cfg_get(solver, "steps"), err,
+                       "per_compartment steps need flow in series (transfer); an exchange network "
+                       "couples every compartment: use steps: shared");
   if (!rc && solver) rc = gs_cfg_check_unused(solver, err);
   if (!rc) rc = gs_integrator_create(&c->integrator_setup, &c->ode, &c->integrator, err);
   if (!rc && c->per_compartment && !c->integrator.type->per_compartment)

@@ -8,6 +8,7 @@ int gs_cmd_validate_cfd(int argc, char **argv); /* src/cli/validate_cfd.c */
 int gs_cmd_validate_fit(int argc, char **argv); /* src/cli/validate_fit.c */
 int gs_cmd_dem(int argc, char **argv);
 int gs_cmd_dem_reduce(int argc, char **argv); /* src/cli/dem_reduce.c */
+int gs_cmd_compartments(int argc, char **argv); /* src/cli/compartments.c */
 int gs_cmd_sweep(int argc, char **argv);      /* src/cli/sweep.c */
 int gs_cmd_fit(int argc, char **argv);        /* src/cli/fit.c */
 /* Coupled PBM-DEM cases (src/cli/couple_cmd.c). */

@@ -1,4 +1,4 @@
-/* The gransim command: subcommands run, check, list, validate, validate-cfd, validate-fit, sweep, fit, sensitivity, optimise, dem, dem-reduce, geometry, ... */
+/* The gransim command: subcommands run, check, list, validate, validate-cfd, validate-fit, sweep, fit, sensitivity, optimise, dem, dem-reduce, compartments, geometry, ... */
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -59,6 +59,8 @@ static void usage(FILE *fp) {
           "  dem CASE --out DIR     run a DEM case (collision and impact tables for the PBM);\n"
           "                         with a `gas` section, a CFD-DEM run of a fluid bed\n"
           "  dem-reduce DIR         reduce LIGGGHTS dumps to collision/impact rates (--out TABLE)\n"
+          "  compartments FRAMES --out FRAGMENT.yaml\n"
+          "                         zones and exchange rates from DEM particle frames (k-means)\n"
           "  geometry CASE --out DIR  write a case's generated walls (bowl, impeller) as STL\n"
           "  couple CASE --out DIR  run a coupled PBM-DEM case (coupling: {mode: one_way}): the DEM\n"
           "                         with classes from the PBM grid, then the PBM with its tables\n\n"
@@ -320,6 +322,7 @@ int main(int argc, char **argv) {
   if (!strcmp(argv[1], "validate-fit")) return gs_cmd_validate_fit(argc - 1, argv + 1);
   if (!strcmp(argv[1], "dem")) return gs_cmd_dem(argc - 1, argv + 1);
   if (!strcmp(argv[1], "dem-reduce")) return gs_cmd_dem_reduce(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "compartments")) return gs_cmd_compartments(argc - 1, argv + 1);
   if (!strcmp(argv[1], "geometry")) return gs_cmd_geometry(argc - 1, argv + 1);
   if (!strcmp(argv[1], "sweep")) { /* under mpirun the ranks share the runs */
     gs_parallel_init(&argc, &argv);

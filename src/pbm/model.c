@@ -14,14 +14,14 @@
 extern const gs_mech_type gs_mech_aggregation, gs_mech_breakage, gs_mech_growth,
     gs_mech_liquid_addition, gs_mech_consolidation, gs_mech_feed, gs_mech_transfer, gs_mech_spray,
     gs_mech_pore_consolidation, gs_mech_layering, gs_mech_nucleation, gs_mech_drying,
-    gs_mech_fluid_bed;
+    gs_mech_fluid_bed, gs_mech_exchange, gs_mech_impeller_schedule;
 
 /* Adding a mechanism is one file and one line here. */
 static const gs_mech_type *const registry[] = {
     &gs_mech_aggregation, &gs_mech_breakage, &gs_mech_growth, &gs_mech_liquid_addition,
     &gs_mech_consolidation, &gs_mech_feed, &gs_mech_transfer, &gs_mech_spray,
     &gs_mech_pore_consolidation, &gs_mech_layering, &gs_mech_nucleation, &gs_mech_drying,
-    &gs_mech_fluid_bed, NULL};
+    &gs_mech_fluid_bed, &gs_mech_exchange, &gs_mech_impeller_schedule, NULL};
 
 const gs_mech_type *const *gs_mech_types(void) { return registry; }
 
@@ -198,6 +198,12 @@ double gs_model_transfer_rate(const gs_model *m, size_t comp) {
   for (size_t i = 0; i < m->nmech; i++)
     if (m->mech[i].type->outflow_rate) k += m->mech[i].type->outflow_rate(m->mech[i].self, comp);
   return k;
+}
+
+int gs_model_couples_all(const gs_model *m) {
+  for (size_t i = 0; i < m->nmech; i++)
+    if (m->mech[i].type->couples_all) return 1;
+  return 0;
 }
 
 int gs_model_has_preconditioner(const gs_model *m) {

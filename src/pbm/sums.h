@@ -29,4 +29,9 @@ static inline double gs_sum(const double *restrict v, size_t n) {
   for (; c < n; c++) s[c % 4] += v[c];
   return (s[0] + s[1]) + (s[2] + s[3]);
 }
+
+/* dst[c] += f * v[c]: a compartment's rates moved by a first-order flow. */
+static inline void gs_add_scaled(double *restrict dst, const double *restrict v, double f, size_t n) {
+  for (size_t c = 0; c < n; c++) dst[c] += f * v[c];
+}
 #endif

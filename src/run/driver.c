@@ -214,6 +214,9 @@ int gs_case_run(gs_case *c, const gs_run_options *opt_in, double *yout, gs_run_r
   if (!rc && run.dist.size > 1 && c->model.nscalar)
     rc = gs_error_set(err, GS_EINPUT, "this case's mechanisms carry scalar state (a fluid bed's "
                                       "balances), which runs on one process: run it without mpirun");
+  if (!rc && run.dist.size > 1 && gs_model_couples_all(&c->model))
+    rc = gs_error_set(err, GS_EINPUT, "this case's exchange network couples every compartment, "
+                                      "which runs on one process: run it without mpirun");
   if (rc) {
     free(run.Y);
     free(run.resume_state);
