@@ -239,17 +239,21 @@ static int choose_method(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_erro
   static const char *const methods[] = {"pairs", "fft", "auto", NULL};
   int method = METHOD_PAIRS;
   int rc = gs_cfg_enum_opt(node, "method", methods, METHOD_PAIRS, &method, err);
+  double tol = 0;
+  if (!rc) rc = gs_cfg_double_range(node, "rank_tolerance", 0, 0, 0, 1, 1, 1, &tol, err);
+  if (!rc && tol > 0 && method == METHOD_PAIRS)
+    rc = gs_cfg_fail(gs_cfg_get(node, "rank_tolerance"), err, "applies to method fft or auto, not pairs");
   if (rc || method == METHOD_PAIRS) return rc;
   const char *why = A->scheme != FIXED_PIVOT ? "needs redistribution: fixed_pivot"
                     : A->wet != WET_OFF      ? "does not take wet"
                     : m->ncarried            ? "does not move carried quantities (grid.carried)"
-                                             : gs_agg_fft_unusable(&m->grid, &A->kernel);
+                                             : gs_agg_fft_unusable(&m->grid, &A->kernel, tol);
   if (why && method == METHOD_FFT) {
     gs_cfg_node *mn = gs_cfg_get(node, "method");
     return gs_cfg_fail(mn ? mn : node, err, "fft %s; use method: pairs or auto", why);
   }
   if (why || (method == METHOD_AUTO && m->grid.ncells < FFT_MIN_CELLS)) return GS_OK;
-  return gs_agg_fft_create(&m->grid, &A->kernel, m->nslots, &A->fft, err);
+  return gs_agg_fft_create(&m->grid, &A->kernel, tol, m->nslots, &A->fft, err);
 }
 
 static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err) {
