@@ -17,6 +17,7 @@
  *    does to 1e-7;
  *  - refusals: rank_tolerance with method pairs, out of range, grid too large. */
 #include <gsl/gsl_eigen.h>
+#include <unistd.h>
 
 #include "kernel/lowrank.h"
 #include "pbm/aggregation_fft.h"
@@ -33,16 +34,40 @@ typedef struct {
 } fix;
 
 static char *case_yaml(int dim, int n, const char *kyaml, const char *method) {
-  char *second = dim == 1 ? tl_fmt("%s", "")
-                          : tl_fmt(", {name: liquid, type: linear, min: 0.05, max: 0.6, cells: %d}", n);
-  char *yaml = tl_fmt("grid: {axes: [{name: solid, type: linear, min: 0.25, max: 2, cells: %d}%s]}\n"
+  /* dim 3: the semi-mechanistic kernel's axes in SI (granules of ~0.1 mm) */
+  char *axes = dim == 1 ? tl_fmt("{name: solid, type: linear, min: 0.25, max: 2, cells: %d}", n)
+               : dim == 2 ? tl_fmt("{name: solid, type: linear, min: 0.25, max: 2, cells: %d},"
+                                   " {name: liquid, type: linear, min: 0.05, max: 0.6, cells: %d}", n, n)
+                          : tl_fmt("{name: solid, type: linear, min: 2.0e-13, max: 4.0e-12, cells: %d},"
+                                   " {name: liquid, type: linear, min: 1.0e-14, max: 1.0e-12, cells: %d},"
+                                   " {name: gas, type: linear, min: 1.0e-14, max: 1.0e-12, cells: %d}", n, n, n);
+  char *yaml = tl_fmt("grid: {axes: [%s]}\n"
                       "initial: {type: cell, number: 1, index: [%s]}\n"
                       "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, negligible: 0,"
                       " %s, kernel: %s}\n"
                       "output: {end: 1}\n",
-                      n, second, dim == 2 ? "1, 1" : "1", method, kyaml);
-  free(second);
+                      axes, dim == 3 ? "1, 1, 1" : dim == 2 ? "1, 1" : "1", method, kyaml);
+  free(axes);
   return yaml;
+}
+
+/* A kernel table of nclass classes over volumes [0.2, 2.1] (the 1-D grid's
+ * cells map onto them), C_ij = (i + 1)(j + 1) when rank1, else a fixed-seed
+ * random symmetric matrix; returns the kernel's YAML (malloc'ed). */
+static char *table_kernel(int nclass, int rank1, const char *path) {
+  FILE *f = fopen(path, "w");
+  if (!f) return NULL;
+  fprintf(f, "edges");
+  for (int i = 0; i <= nclass; i++) fprintf(f, ", %.17g", 0.2 + 1.9 * i / nclass);
+  fprintf(f, "\n");
+  tl_rng r = {5};
+  double C[16][16];
+  for (int i = 0; i < nclass; i++)
+    for (int j = 0; j <= i; j++) C[i][j] = C[j][i] = rank1 ? (i + 1.0) * (j + 1.0) : tl_uniform(&r);
+  for (int i = 0; i < nclass; i++)
+    for (int j = 0; j < nclass; j++) fprintf(f, "%.17g%s", C[i][j], j + 1 < nclass ? ", " : "\n");
+  fclose(f);
+  return tl_fmt("{type: table, file: %s, beta0: 1.5}", path);
 }
 
 static int fix_make(int dim, int n, const char *kyaml, fix *f) {
@@ -142,17 +167,27 @@ static double rebuild_error(const gs_kernel *k, size_t n, const gs_kernel_lowran
 }
 
 static void test_exact_ranks(void) {
-  static const struct {
+  char path[2][64];
+  char *tables[2];
+  for (int i = 0; i < 2; i++) {
+    snprintf(path[i], sizeof path[i], "/tmp/gs_lowrank_table_%d_%ld.csv", i, (long)getpid());
+    tables[i] = table_kernel(5, i == 0, path[i]);
+    CHECK(tables[i] != NULL);
+  }
+  const struct {
     const char *kernel;
-    int dim, rank;
+    int dim, rank, lowrank; /* lowrank: no exact form of its own */
   } cases[] = {
-      {"{type: constant, beta0: 1.5}", 1, 1},
-      {"{type: product, beta0: 1.5}", 2, 1},
-      {"{type: sum, beta0: 1.5}", 2, 2},
-      {"{type: brownian, beta0: 1.5}", 1, 3},
-      {"{type: brownian, beta0: 1.5}", 2, 3},
+      {"{type: constant, beta0: 1.5}", 1, 1, 0},
+      {"{type: product, beta0: 1.5}", 2, 1, 0},
+      {"{type: sum, beta0: 1.5}", 2, 2, 0},
+      {"{type: brownian, beta0: 1.5}", 1, 3, 1},
+      {"{type: brownian, beta0: 1.5}", 2, 3, 1},
       /* (V + V') c (1 - c/2), c = c_a + c_b: degree 1 in V, 2 in c */
-      {"{type: madec, beta0: 1.5, liquid_content: fraction}", 2, 6},
+      {"{type: madec, beta0: 1.5, liquid_content: fraction}", 2, 6, 1},
+      /* cells take their class's entries: the rank of C */
+      {tables[0], 1, 1, 1},
+      {tables[1], 1, 5, 1},
   };
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     fix f;
@@ -167,7 +202,8 @@ static void test_exact_ranks(void) {
     CHECK(lr.rank == cases[i].rank);
     CHECK(e <= 1e-13);
     gs_kernel_lowrank_free(&lr);
-    if (cases[i].rank >= 3) { /* Brownian, Madec through the FFT: no truncation, so round-off alone */
+    if (cases[i].lowrank) {
+      /* the kernels without an exact form through the FFT: no truncation, so round-off alone */
       cmp_t o;
       if (!compare(&f, 1e-10, &o)) {
         printf("  FFT - pairs: largest rate %.3g, totals %.3g; conservation: number %.3g, volume %.3g\n", o.diff,
@@ -238,6 +274,9 @@ static void test_tolerances(void) {
       {"brownian free_molecular, 1-D 400 cells", "{type: brownian, regime: free_molecular, beta0: 1}", 1, 400},
       {"madec alpha 0.8 delta 1.5, 2-D 24 x 24 cells",
        "{type: madec, beta0: 1, alpha: 0.8, delta: 1.5, liquid_content: fraction}", 2, 24},
+      {"semi_mechanistic, 3-D 8 x 8 x 8 cells",
+       "{type: semi_mechanistic, beta0: 5.0e-9, velocity: 0.5, viscosity: 0.01, contact_angle: 60,"
+       " solid_density: 1500, critical_saturation: 0.05}", 3, 8},
   };
   /* not below 1e-8: the SVDs' round-off (1e-16 of the largest singular
    * value, a few hundred of them) would decide the rank */
