@@ -839,6 +839,17 @@ static void agg_rhs(void *self, const gs_model *m, const gs_eval *ev, size_t com
   compartment_rates(self, m, ev, comp, t, y, dydt, dledger, NULL, NULL);
 }
 
+/* The low-rank form's rank and error, which the tolerance chose */
+static int agg_describe(void *self, char *msg, size_t n) {
+  const agg_t *A = self;
+  double e = 0;
+  const int rank = A->fft ? gs_agg_fft_rank(A->fft, &e) : 0;
+  if (!rank) return 0;
+  snprintf(msg, n, "method fft with a low-rank kernel form of rank %d (truncation error %.2g of the kernel matrix, "
+           "Frobenius)", rank, e);
+  return 1;
+}
+
 static void agg_number_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp,
                              double t, const double *y, double *birth, double *death) {
   compartment_rates(self, m, ev, comp, t, y, NULL, NULL, birth, death);
@@ -850,6 +861,7 @@ const gs_mech_type gs_mech_aggregation = {
     .create = agg_create,
     .rates = agg_rhs,
     .number_rates = agg_number_rates,
+    .describe = agg_describe,
     .free = agg_free,
     .pages_per_compartment = 3, /* wet_ok, cs, span */
 };
