@@ -344,6 +344,38 @@ static void test_run(void) {
     }
 }
 
+/* method auto with rank_tolerance: the FFT while the rank is at most
+ * cells / 64, else the pairs; the choice shows as rates identical bit for
+ * bit to one method's.  Free-molecular Brownian on 400 cells: rank 6 at
+ * 1e-8 (<= 6: FFT), 7 at 1e-10 (> 6: pairs). */
+static void test_auto(void) {
+  const char *k = "{type: brownian, regime: free_molecular, beta0: 1}";
+  const double tols[2] = {1e-8, 1e-10};
+  for (int i = 0; i < 2; i++) {
+    gs_case c[3];
+    double *d[3], *dl[3];
+    char methods[3][96];
+    snprintf(methods[0], sizeof methods[0], "method: auto, rank_tolerance: %g", tols[i]);
+    snprintf(methods[1], sizeof methods[1], "method: pairs");
+    snprintf(methods[2], sizeof methods[2], "method: fft, rank_tolerance: %g", tols[i]);
+    int ok = 1;
+    for (int s = 0; s < 3; s++) {
+      if (tl_rates_at_start(case_yaml(1, 400, k, methods[s]), &c[s], &d[s], &dl[s])) {
+        ok = 0;
+        continue;
+      }
+    }
+    CHECK(ok);
+    if (!ok) continue;
+    const size_t nc = c[0].model.grid.ncells;
+    const int same_pairs = !memcmp(d[0], d[1], nc * sizeof(double));
+    const int same_fft = !memcmp(d[0], d[2], nc * sizeof(double));
+    printf("auto, rank_tolerance %g, 400 cells: same as pairs %d, same as fft %d\n", tols[i], same_pairs, same_fft);
+    CHECK(i == 0 ? same_fft && !same_pairs : same_pairs && !same_fft);
+    for (int s = 0; s < 3; s++) tl_rates_free(&c[s], d[s], dl[s]);
+  }
+}
+
 static void test_refusals(void) {
   EXPECT_INPUT("grid: {axes: [{name: v, type: linear, min: 0.5, max: 1, cells: 8}]}\n"
                "initial: {type: cell, number: 1, index: [1]}\n"
@@ -369,6 +401,7 @@ int main(void) {
   test_exact_ranks();
   test_tolerances();
   test_run();
+  test_auto();
   test_refusals();
   TEST_EXIT();
 }

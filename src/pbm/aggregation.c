@@ -50,6 +50,11 @@ enum { METHOD_PAIRS = 0, METHOD_FFT = 1, METHOD_AUTO = 2 };
 /* method auto: the FFT from this many cells per compartment on (the
  * crossover measured by bench/bench_aggfft.c, docs/performance.md) */
 #define FFT_MIN_CELLS 256
+/* method auto with a low-rank kernel form: the FFT while rank <= cells /
+ * LOWRANK_CELLS_PER_TERM.  Each term costs one transform more, and the
+ * FFT's lead over the pairs grows with the grid (15x at 256 cells, 50x at
+ * 1024, 700x at 4096 for one term); this keeps it about 6x or more. */
+#define LOWRANK_CELLS_PER_TERM 64
 
 /* Per compartment, the choices made once per time value; a page each
  * (GS_APART), as threads evaluating neighbouring compartments at once write
@@ -253,7 +258,12 @@ static int choose_method(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_erro
     return gs_cfg_fail(mn ? mn : node, err, "fft %s; use method: pairs or auto", why);
   }
   if (why || (method == METHOD_AUTO && m->grid.ncells < FFT_MIN_CELLS)) return GS_OK;
-  return gs_agg_fft_create(&m->grid, &A->kernel, tol, m->nslots, &A->fft, err);
+  rc = gs_agg_fft_create(&m->grid, &A->kernel, tol, m->nslots, &A->fft, err);
+  if (!rc && method == METHOD_AUTO && gs_agg_fft_rank(A->fft, NULL) > (int)(m->grid.ncells / LOWRANK_CELLS_PER_TERM)) {
+    gs_agg_fft_free(A->fft); /* too many terms to pay: the pairs */
+    A->fft = NULL;
+  }
+  return rc;
 }
 
 static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err) {
