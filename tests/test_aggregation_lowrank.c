@@ -15,6 +15,9 @@
  *    printed as the table of docs/validation.md;
  *  - a whole run (Madec, 2-D) with rank_tolerance 1e-8 ends where the pairs'
  *    does to 1e-7;
+ *  - method auto takes the low-rank FFT while rank <= cells / 64, else pairs;
+ *  - (compartments with their own beta0, one decomposition each, under two
+ *    threads: test_aggregation_fft.c, test_compartments_threads);
  *  - refusals: rank_tolerance with method pairs, out of range, grid too large. */
 #include <gsl/gsl_eigen.h>
 #include <unistd.h>
