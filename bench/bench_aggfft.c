@@ -7,7 +7,9 @@
  * the largest rate) and the exponent of the cost between successive sizes.
  * The pair scheme keeps per axis a table of where each sum of two pivots
  * lands (n^2 entries): in 1-D it runs up to 4096 cells only (128 MB).
- * Usage: bench_aggfft [max pair cells in 2-D, default 65536] */
+ * Then low-rank kernel forms (rank_tolerance 1e-8) against the pairs in 2-D:
+ * Brownian (free molecular) and Madec, with the set-up time and the rank.
+ * Usage: bench_aggfft [max pair cells in 2-D, default 65536 [lowrank: that series alone]] */
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
@@ -25,16 +27,17 @@ static double now(void) {
 
 /* Seconds per right-hand side of the case (rates into d), or NAN if it
  * does not build. */
-static double time_rhs(int dim, int n, const char *method, double *d) {
+static double time_rhs(int dim, int n, const char *method, const char *kernel, double *d,
+                       double *setup) {
   char yaml[1024];
   snprintf(yaml, sizeof yaml,
-           "grid: {axes: [{name: s, type: linear, min: 0, max: 1, cells: %d}%s]}\n"
+           "grid: {axes: [{name: s, type: linear, min: %s, max: 1, cells: %d}%s]}\n"
            "initial: {type: cell, number: 1, index: [%s]}\n"
            "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: %s,"
-           " kernel: {type: constant, beta0: 1}}\n"
+           " kernel: %s}\n"
            "output: {end: 1}\n",
-           n, dim == 2 ? ", {name: l, type: linear, min: 0, max: 1, cells: AXIS2}" : "",
-           dim == 2 ? "1, 1" : "1", method);
+           setup ? "0.05" : "0", n, dim == 2 ? ", {name: l, type: linear, min: 0, max: 1, cells: AXIS2}" : "",
+           dim == 2 ? "1, 1" : "1", method, kernel);
   char *p = strstr(yaml, "AXIS2");
   if (p) { /* the second axis has the same cells */
     char tail[1024];
@@ -45,7 +48,10 @@ static double time_rhs(int dim, int n, const char *method, double *d) {
   gs_cfg *cfg = gs_cfg_load_string(yaml, "bench.yaml", &err);
   gs_case c;
   memset(&c, 0, sizeof c);
-  if (!cfg || gs_case_from_cfg(cfg, &c, &err)) {
+  const double t_build = now();
+  const int failed = !cfg || gs_case_from_cfg(cfg, &c, &err);
+  if (setup) *setup = now() - t_build;
+  if (failed) {
     fprintf(stderr, "case did not build: %s\n", err.msg);
     return NAN;
   }
@@ -83,8 +89,8 @@ static void series(int dim, const int *ns, int count, size_t max_pairs) {
     const size_t cells = dim == 2 ? (size_t)n * (size_t)n : (size_t)n;
     double *d[2] = {calloc(cells, sizeof(double)), calloc(cells, sizeof(double))};
     double t[2];
-    t[1] = time_rhs(dim, n, "fft", d[1]);
-    t[0] = cells <= max_pairs ? time_rhs(dim, n, "pairs", d[0]) : NAN;
+    t[1] = time_rhs(dim, n, "fft", "{type: constant, beta0: 1}", d[1], NULL);
+    t[0] = cells <= max_pairs ? time_rhs(dim, n, "pairs", "{type: constant, beta0: 1}", d[0], NULL) : NAN;
     double scale = 0, diff = 0;
     for (size_t k = 0; k < cells && !isnan(t[0]); k++) {
       scale = fmax(scale, fabs(d[0][k]));
@@ -102,13 +108,65 @@ static void series(int dim, const int *ns, int count, size_t max_pairs) {
   }
 }
 
+/* Low-rank forms (rank_tolerance 1e-8) of kernels without an exact one, 2-D,
+ * against the pair loop: the rank decides whether the FFT pays; the set-up
+ * (the kernel matrix's eigendecomposition, O(cells^3)) is timed apart. */
+static void lowrank_series(const char *name, const char *kernel, const int *ns, int count) {
+  printf("2-D, %s, fixed pivot, rank_tolerance 1e-8, one right-hand side:\n", name);
+  printf("  %8s %8s %12s %12s %9s %10s %12s %6s\n", "n/axis", "cells", "pairs [s]", "fft [s]", "pairs/fft",
+         "difference", "set-up [s]", "rank");
+  for (int i = 0; i < count; i++) {
+    const int n = ns[i];
+    const size_t cells = (size_t)n * (size_t)n;
+    double *d[2] = {calloc(cells, sizeof(double)), calloc(cells, sizeof(double))};
+    char method[64];
+    snprintf(method, sizeof method, "fft, rank_tolerance: 1.0e-8");
+    double setup = NAN, unused = NAN;
+    double t1 = time_rhs(2, n, method, kernel, d[1], &setup);
+    double t0 = time_rhs(2, n, "pairs", kernel, d[0], &unused);
+    /* the rank: from a case built again (cheap next to the timing) */
+    char yaml[512];
+    snprintf(yaml, sizeof yaml,
+             "grid: {axes: [{name: s, type: linear, min: 0.05, max: 1, cells: %d}, {name: l, type: linear, min: 0,"
+             " max: 1, cells: %d}]}\ninitial: {type: cell, number: 1, index: [1, 1]}\nmechanisms:\n  - {type: aggregation,"
+             " redistribution: fixed_pivot, method: %s, kernel: %s}\noutput: {end: 1}\n", n, n, method, kernel);
+    gs_error err = {0};
+    gs_cfg *cfg = gs_cfg_load_string(yaml, "bench.yaml", &err);
+    gs_case c;
+    memset(&c, 0, sizeof c);
+    char notes[1024] = "";
+    int rank = -1;
+    if (cfg && !gs_case_from_cfg(cfg, &c, &err)) {
+      const char *r = gs_model_notes(&c.model, notes, sizeof notes) ? strstr(notes, "of rank ") : NULL;
+      if (r) rank = atoi(r + 8);
+      gs_case_free(&c);
+    }
+    double scale = 0, diff = 0;
+    for (size_t k = 0; k < cells; k++) {
+      scale = fmax(scale, fabs(d[0][k]));
+      diff = fmax(diff, fabs(d[1][k] - d[0][k]));
+    }
+    printf("  %8d %8zu %12.4g %12.4g %9.3g %10.2g %12.4g %6d\n", n, cells, t0, t1, t0 / t1, diff / scale, setup, rank);
+    free(d[0]);
+    free(d[1]);
+  }
+}
+
 int main(int argc, char **argv) {
   size_t max_pairs = argc > 1 ? (size_t)atol(argv[1]) : 65536;
   omp_set_num_threads(1);
+  setvbuf(stdout, NULL, _IOLBF, 0); /* lines as they come: the series take minutes */
+  const int only_lowrank = argc > 2 && !strcmp(argv[2], "lowrank");
   const int n2[] = {8, 16, 32, 64, 128, 256};
-  series(2, n2, 6, max_pairs);
   const int n1[] = {128, 256, 512, 1024, 2048, 4096, 8192, 16384, 32768, 65536};
-  series(1, n1, 10, max_pairs);
-  printf("exp: cost exponent in n against the size above (n^d log n: a little above d for the FFT)\n");
+  if (!only_lowrank) {
+    series(2, n2, 6, max_pairs);
+    series(1, n1, 10, max_pairs);
+    printf("exp: cost exponent in n against the size above (n^d log n: a little above d for the FFT)\n");
+  }
+  const int nl[] = {16, 32}; /* the set-up is O(cells^3): 2 304 cells take minutes on a loaded VM */
+  lowrank_series("brownian free_molecular", "{type: brownian, regime: free_molecular, beta0: 1}", nl, 2);
+  lowrank_series("madec alpha 0.8 delta 1.5", "{type: madec, beta0: 1, alpha: 0.8, delta: 1.5, liquid_content: fraction, liquid_axis: l}",
+                 nl, 2);
   return 0;
 }

@@ -202,21 +202,23 @@ static void test_auto(void) {
 
 /* Four compartments with their own beta0, evaluated by two threads (each
  * with its own FFT scratch): the FFT's rates equal the pairs' in every
- * compartment. */
-static void test_compartments_threads(void) {
+ * compartment; for the sum kernel, and for the continuum Brownian kernel
+ * through its low-rank form (exact rank 3, one decomposition per
+ * compartment). */
+static void test_compartments_threads(const char *kernel, const char *fft) {
   omp_set_num_threads(2);
   gs_case c[2];
   double *d[2], *dl[2];
-  const char *methods[2] = {"pairs", "fft"};
+  const char *methods[2] = {"pairs", fft};
   int ok = 1;
   for (int s = 0; s < 2; s++) {
     char *yaml = tl_fmt("grid: {compartments: 4, axes: [{name: s, type: linear, min: 0, max: 2, cells: 12},"
                         " {name: l, type: linear, min: 0, max: 1, cells: 12}]}\n"
                         "initial: {type: cell, number: 1, index: [1, 1]}\n"
                         "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: %s,"
-                        " negligible: 0, kernel: {type: sum, beta0: [1, 2, 3, 4]}}\n"
+                        " negligible: 0, kernel: {type: %s, beta0: [1, 2, 3, 4]}}\n"
                         "output: {end: 1}\n",
-                        methods[s]);
+                        methods[s], kernel);
     if (tl_case(yaml, &c[s])) {
       ok = 0;
       free(yaml);
@@ -242,7 +244,7 @@ static void test_compartments_threads(void) {
     }
     worst = fmax(worst, diff / scale);
   }
-  printf("4 compartments, beta0 1..4, 2 threads: FFT - pairs, largest rate %.3g\n", worst);
+  printf("4 compartments, %s kernel, beta0 1..4, 2 threads: %s - pairs, largest rate %.3g\n", kernel, fft, worst);
   CHECK(worst <= 1e-12);
   for (int s = 0; s < 2; s++) tl_rates_free(&c[s], d[s], dl[s]);
 }
@@ -279,7 +281,8 @@ int main(void) {
   test_t1_discrete();
   test_unreached_cells();
   test_auto();
-  test_compartments_threads();
+  test_compartments_threads("sum", "fft");
+  test_compartments_threads("brownian", "fft, rank_tolerance: 1.0e-10");
   test_refusals();
   TEST_EXIT();
 }

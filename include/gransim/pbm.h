@@ -104,6 +104,10 @@ typedef struct gs_mech_type {
    * relative error, and in msg (n bytes) what it is. */
   double (*balance)(void *self, const gs_model *m, size_t comp, const double *y, char *msg,
                     size_t n);
+  /* Optional: what the run log and result.h5 should say about how it was
+   * set up (a choice made for the case, e.g. aggregation's low-rank kernel
+   * form and its rank), written into msg (n bytes); 0 when there is nothing. */
+  int (*describe)(void *self, char *msg, size_t n);
 } gs_mech_type;
 
 typedef struct gs_mech_column {
@@ -332,6 +336,9 @@ void gs_mech_rhs(const gs_model *m, const gs_mechanism *mech, const gs_eval *ev,
 int gs_model_ncolumns(const gs_model *m);
 const gs_mech_column *gs_model_column(const gs_model *m, int i);
 void gs_model_report(const gs_model *m, size_t comp, double t, const double *y, double *values);
+/* The mechanisms' notes (gs_mech_type.describe), one line each led by the
+ * mechanism's label, into msg (n bytes); returns how many. */
+int gs_model_notes(const gs_model *m, char *msg, size_t n);
 /* Set every mechanism's initial scalars in the full state y (numbers and
  * carried already there) and their absolute accuracies (nscalar per
  * compartment, ncomp compartments, into accuracy). */

@@ -182,6 +182,9 @@ static int cmd_run(int argc, char **argv) {
   const gs_integrator_type *it = c.integrator.type;
   if (!rc && rank == 0 && it->describe && it->describe(c.integrator.self, note, sizeof note))
     fprintf(stderr, "gransim: %s\n", note);
+  char notes[4096]; /* the mechanisms' choices (aggregation: the rank of a low-rank kernel) */
+  if (!rc && rank == 0 && gs_model_notes(&c.model, notes, sizeof notes) > 0)
+    for (char *line = strtok(notes, "\n"); line; line = strtok(NULL, "\n")) fprintf(stderr, "gransim: %s\n", line);
   gs_case_free(&c);
   return rc ? 1 : 0;
 }

@@ -641,6 +641,9 @@ static int build_skeleton(gs_output *o, const gs_model *m, const char *text, con
   if (o->file < 0) return h5_error(err, o->h5_path, "create the file");
   int rc = write_grid(o, &m->grid, err);
   if (!rc) rc = write_case(o, text, name, err);
+  char notes[4096];
+  if (!rc && gs_model_notes(m, notes, sizeof notes) > 0 && gs_h5_str_attr(o->file, "mechanism_notes", notes) < 0)
+    rc = h5_error(err, o->h5_path, "write the attribute mechanism_notes of /");
   if (!rc) rc = write_discretisation(o, m, err);
   if (!rc) rc = create_all_series(o, err);
   return rc;

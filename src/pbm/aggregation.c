@@ -50,6 +50,11 @@ enum { METHOD_PAIRS = 0, METHOD_FFT = 1, METHOD_AUTO = 2 };
 /* method auto: the FFT from this many cells per compartment on (the
  * crossover measured by bench/bench_aggfft.c, docs/performance.md) */
 #define FFT_MIN_CELLS 256
+/* method auto with a low-rank kernel form: the FFT while rank <= cells /
+ * LOWRANK_CELLS_PER_TERM.  Each term costs one transform more, and the
+ * FFT's lead over the pairs grows with the grid (15x at 256 cells, 50x at
+ * 1024, 700x at 4096 for one term); this keeps it about 6x or more. */
+#define LOWRANK_CELLS_PER_TERM 64
 
 /* Per compartment, the choices made once per time value; a page each
  * (GS_APART), as threads evaluating neighbouring compartments at once write
@@ -239,17 +244,26 @@ static int choose_method(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_erro
   static const char *const methods[] = {"pairs", "fft", "auto", NULL};
   int method = METHOD_PAIRS;
   int rc = gs_cfg_enum_opt(node, "method", methods, METHOD_PAIRS, &method, err);
+  double tol = 0;
+  if (!rc) rc = gs_cfg_double_range(node, "rank_tolerance", 0, 0, 0, 1, 1, 1, &tol, err);
+  if (!rc && tol > 0 && method == METHOD_PAIRS)
+    rc = gs_cfg_fail(gs_cfg_get(node, "rank_tolerance"), err, "applies to method fft or auto, not pairs");
   if (rc || method == METHOD_PAIRS) return rc;
   const char *why = A->scheme != FIXED_PIVOT ? "needs redistribution: fixed_pivot"
                     : A->wet != WET_OFF      ? "does not take wet"
                     : m->ncarried            ? "does not move carried quantities (grid.carried)"
-                                             : gs_agg_fft_unusable(&m->grid, &A->kernel);
+                                             : gs_agg_fft_unusable(&m->grid, &A->kernel, tol);
   if (why && method == METHOD_FFT) {
     gs_cfg_node *mn = gs_cfg_get(node, "method");
     return gs_cfg_fail(mn ? mn : node, err, "fft %s; use method: pairs or auto", why);
   }
   if (why || (method == METHOD_AUTO && m->grid.ncells < FFT_MIN_CELLS)) return GS_OK;
-  return gs_agg_fft_create(&m->grid, &A->kernel, m->nslots, &A->fft, err);
+  rc = gs_agg_fft_create(&m->grid, &A->kernel, tol, m->nslots, &A->fft, err);
+  if (!rc && method == METHOD_AUTO && gs_agg_fft_rank(A->fft, NULL) > (int)(m->grid.ncells / LOWRANK_CELLS_PER_TERM)) {
+    gs_agg_fft_free(A->fft); /* too many terms to pay: the pairs */
+    A->fft = NULL;
+  }
+  return rc;
 }
 
 static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err) {
@@ -835,6 +849,17 @@ static void agg_rhs(void *self, const gs_model *m, const gs_eval *ev, size_t com
   compartment_rates(self, m, ev, comp, t, y, dydt, dledger, NULL, NULL);
 }
 
+/* The low-rank form's rank and error, which the tolerance chose */
+static int agg_describe(void *self, char *msg, size_t n) {
+  const agg_t *A = self;
+  double e = 0;
+  const int rank = A->fft ? gs_agg_fft_rank(A->fft, &e) : 0;
+  if (!rank) return 0;
+  snprintf(msg, n, "method fft with a low-rank kernel form of rank %d (truncation error %.2g of the kernel matrix, "
+           "Frobenius)", rank, e);
+  return 1;
+}
+
 static void agg_number_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp,
                              double t, const double *y, double *birth, double *death) {
   compartment_rates(self, m, ev, comp, t, y, NULL, NULL, birth, death);
@@ -846,6 +871,7 @@ const gs_mech_type gs_mech_aggregation = {
     .create = agg_create,
     .rates = agg_rhs,
     .number_rates = agg_number_rates,
+    .describe = agg_describe,
     .free = agg_free,
     .pages_per_compartment = 3, /* wet_ok, cs, span */
 };

@@ -27,6 +27,7 @@
 #include <string.h>
 
 #include "gransim/pbm.h"
+#include "kernel/lowrank.h"
 #include "kernel/size_measure.h"
 #include "pbm/aggregation_fft.h"
 
@@ -50,15 +51,26 @@ typedef struct {
   double *real;         /* nreal: padded input, then the births */
   fftw_complex *spec[2]; /* ncplx each: transforms of phi_m N */
   fftw_complex *acc;    /* ncplx: sum of the terms' products */
+  double *mom;          /* the moments sum_c phi_m(c) N_c, one per phi */
 } slot_t;
+
+/* The separable form of the kernel in a set of compartments: terms
+ * c_t phi_m1(a) phi_m2(b) */
+typedef struct {
+  int nphi, nterm;
+  double *phi;             /* nphi x ncells */
+  term *t;
+  double rel_err;          /* low rank: Frobenius error of the terms dropped */
+} form_set;
 
 struct gs_agg_fft {
   int dim, off;            /* real axes at padded positions off..2 */
   size_t n[3], M[3], stride[3], ncells, nreal, ncplx;
-  const double *coef;      /* per compartment, owned by the kernel */
-  int nphi, nterm;
-  double *phi[2];          /* ncells each */
-  term t[2];
+  const double *coef;      /* per compartment, owned by the kernel or own_coef */
+  double *own_coef;        /* low rank: ones (beta0 is inside the terms) */
+  int lowrank;             /* terms of the truncated eigendecomposition */
+  int nset;                /* one form, or one per compartment */
+  form_set *set;
   axis_map map[3];         /* 2 n[q] - 1 entries each */
   fftw_plan fwd, inv;
   int nslots;
@@ -76,14 +88,34 @@ static int axis_uniform(const gs_axis *ax) {
   return 1;
 }
 
-const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k) {
+/* The kernel's own exact separable form (constant, sum, product) */
+static int exact_form(const gs_kernel *k) {
+  gs_kernel_form f;
+  if (!k->type->form) return 0;
+  k->type->form(k->self, &f);
+  return f.exact;
+}
+
+const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k, double rank_tolerance) {
   for (int q = 0; q < g->dim; q++)
     if (!axis_uniform(&g->axis[q])) return "needs equally spaced pivots on every axis (type: linear)";
-  if (!k->type->form) return "needs a kernel of separable form (constant, sum or product)";
-  gs_kernel_form f;
-  k->type->form(k->self, &f);
-  if (!f.exact) return "needs a kernel of separable form (constant, sum or product)";
+  if (exact_form(k)) return NULL;
+  if (!(rank_tolerance > 0))
+    return "needs a kernel of separable form (constant, sum or product) or rank_tolerance for a low-rank form";
+  if (g->ncells > GS_LOWRANK_MAX_CELLS)
+    return "with a low-rank kernel form needs at most " GS_LOWRANK_MAX_CELLS_TEXT " cells per compartment";
   return NULL;
+}
+
+int gs_agg_fft_rank(const gs_agg_fft *F, double *rel_err) {
+  int rank = 0;
+  double e = 0;
+  for (int s = 0; s < F->nset; s++) {
+    if (F->set[s].nterm > rank) rank = F->set[s].nterm;
+    e = fmax(e, F->set[s].rel_err);
+  }
+  if (rel_err) *rel_err = e;
+  return F->lowrank ? rank : 0;
 }
 
 void gs_agg_fft_free(gs_agg_fft *F) {
@@ -93,6 +125,7 @@ void gs_agg_fft_free(gs_agg_fft *F) {
     fftw_free(F->slot[s].spec[0]);
     fftw_free(F->slot[s].spec[1]);
     fftw_free(F->slot[s].acc);
+    free(F->slot[s].mom);
   }
   free(F->slot);
   if (F->fwd) fftw_destroy_plan(F->fwd);
@@ -104,8 +137,12 @@ void gs_agg_fft_free(gs_agg_fft *F) {
     free(F->map[q].excess);
     free(F->map[q].state);
   }
-  free(F->phi[0]);
-  free(F->phi[1]);
+  for (int s = 0; F->set && s < F->nset; s++) {
+    free(F->set[s].phi);
+    free(F->set[s].t);
+  }
+  free(F->set);
+  free(F->own_coef);
   free(F);
 }
 
@@ -142,39 +179,63 @@ static int build_map(gs_agg_fft *F, const gs_grid *g, int q, gs_error *err) {
   return GS_OK;
 }
 
-/* phi and the terms of the kernel's separable form */
-static int build_terms(gs_agg_fft *F, const gs_grid *g, const gs_kernel *k, gs_error *err) {
+/* phi and the terms of the kernel's own separable form */
+static int build_exact(gs_agg_fft *F, const gs_grid *g, const gs_kernel *k, gs_error *err) {
   gs_kernel_form f;
   k->type->form(k->self, &f);
   F->coef = f.coef;
-  F->nphi = f.kind == GS_KERNEL_FORM_SUM ? 2 : 1;
-  for (int m = 0; m < F->nphi; m++)
-    if (!(F->phi[m] = gs_malloc(F->ncells * sizeof(double), err))) return GS_ENOMEM;
+  form_set *S = &F->set[0];
+  S->nphi = f.kind == GS_KERNEL_FORM_SUM ? 2 : 1;
+  S->nterm = f.kind == GS_KERNEL_FORM_SUM ? 2 : 1;
+  S->phi = gs_malloc((size_t)S->nphi * F->ncells * sizeof(double), err);
+  S->t = gs_malloc((size_t)S->nterm * sizeof(term), err);
+  if (!S->phi || !S->t) return GS_ENOMEM;
   for (size_t c = 0; c < F->ncells; c++) {
     double u = gs_size_of(f.axes, g->dim, g->x + c * (size_t)g->dim);
     if (f.kind == GS_KERNEL_FORM_CONSTANT) {
-      F->phi[0][c] = 1.0;
+      S->phi[c] = 1.0;
     } else if (f.kind == GS_KERNEL_FORM_PRODUCT) {
-      F->phi[0][c] = u;
+      S->phi[c] = u;
     } else {
-      F->phi[0][c] = 1.0;
-      F->phi[1][c] = u;
+      S->phi[c] = 1.0;
+      S->phi[F->ncells + c] = u;
     }
   }
   if (f.kind == GS_KERNEL_FORM_SUM) { /* u(a) + u(b) */
-    F->nterm = 2;
-    F->t[0] = (term){1.0, 1, 0};
-    F->t[1] = (term){1.0, 0, 1};
+    S->t[0] = (term){1.0, 1, 0};
+    S->t[1] = (term){1.0, 0, 1};
   } else {
-    F->nterm = 1;
-    F->t[0] = (term){1.0, 0, 0};
+    S->t[0] = (term){1.0, 0, 0};
   }
   return GS_OK;
 }
 
-int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, int nslots, gs_agg_fft **out,
-                      gs_error *err) {
-  const char *why = gs_agg_fft_unusable(g, k);
+/* The truncated eigendecomposition of the kernel matrix (kernel/lowrank.c)
+ * per set of compartments: terms lambda_r v_r(a) v_r(b), beta0 inside. */
+static int build_lowrank(gs_agg_fft *F, const gs_grid *g, const gs_kernel *k, double tol,
+                         gs_error *err) {
+  if (!(F->own_coef = gs_malloc(g->ncomp * sizeof(double), err))) return GS_ENOMEM;
+  for (size_t z = 0; z < g->ncomp; z++) F->own_coef[z] = 1.0;
+  F->coef = F->own_coef;
+  for (int s = 0; s < F->nset; s++) {
+    gs_kernel_lowrank lr;
+    int rc = gs_kernel_lowrank_build(k, F->ncells, (size_t)s, tol, &lr, err);
+    if (rc) return rc;
+    form_set *S = &F->set[s];
+    S->nphi = S->nterm = lr.rank;
+    S->rel_err = lr.rel_err;
+    S->phi = lr.vec; /* taken over */
+    S->t = gs_malloc((size_t)(lr.rank ? lr.rank : 1) * sizeof(term), err);
+    for (int r = 0; S->t && r < lr.rank; r++) S->t[r] = (term){lr.lambda[r], r, r};
+    free(lr.lambda);
+    if (!S->t) return GS_ENOMEM;
+  }
+  return GS_OK;
+}
+
+int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, double rank_tolerance, int nslots,
+                      gs_agg_fft **out, gs_error *err) {
+  const char *why = gs_agg_fft_unusable(g, k, rank_tolerance);
   if (why) return gs_error_set(err, GS_EINPUT, "aggregation method fft %s", why);
   gs_agg_fft *F = gs_calloc(1, sizeof *F, err);
   if (!F) return GS_ENOMEM;
@@ -196,16 +257,22 @@ int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, int nslots, gs_agg_f
       F->ncplx *= q == 2 ? F->M[q] / 2 + 1 : F->M[q];
     }
   }
-  int rc = build_terms(F, g, k, err);
+  F->lowrank = !exact_form(k);
+  F->nset = F->lowrank && k->type->per_compartment && k->type->per_compartment(k->self) ? (int)g->ncomp : 1;
+  int rc = (F->set = gs_calloc((size_t)F->nset, sizeof(form_set), err)) ? GS_OK : GS_ENOMEM;
+  if (!rc) rc = F->lowrank ? build_lowrank(F, g, k, rank_tolerance, err) : build_exact(F, g, k, err);
   for (int q = 0; !rc && q < 3; q++) rc = build_map(F, g, q, err);
+  int maxphi = 0;
+  for (int s = 0; !rc && s < F->nset; s++) maxphi = F->set[s].nphi > maxphi ? F->set[s].nphi : maxphi;
   F->nslots = nslots > 0 ? nslots : 1;
   if (!rc && !(F->slot = gs_calloc((size_t)F->nslots, sizeof(slot_t), err))) rc = GS_ENOMEM;
   for (int s = 0; !rc && s < F->nslots; s++) {
     slot_t *S = &F->slot[s];
     S->real = fftw_malloc(F->nreal * sizeof(double));
-    for (int m = 0; m < F->nphi; m++) S->spec[m] = fftw_malloc(F->ncplx * sizeof(fftw_complex));
+    for (int m = 0; m < 2; m++) S->spec[m] = fftw_malloc(F->ncplx * sizeof(fftw_complex));
     S->acc = fftw_malloc(F->ncplx * sizeof(fftw_complex));
-    if (!S->real || !S->spec[0] || (F->nphi > 1 && !S->spec[1]) || !S->acc)
+    S->mom = malloc((size_t)(maxphi > 0 ? maxphi : 1) * sizeof(double));
+    if (!S->mom || !S->real || !S->spec[0] || !S->spec[1] || !S->acc)
       rc = gs_error_set(err, GS_ENOMEM, "out of memory for the FFT arrays of aggregation");
   }
   if (!rc) {
@@ -266,34 +333,54 @@ static void place(const gs_agg_fft *F, const double *B, const size_t *klo, const
   for (int k = 0; lost && k < F->dim; k++) lost[k] += lv[F->off + k];
 }
 
+/* phi N into the low corner of the padded array, transformed into spec;
+ * returns the moment sum_c phi(c) N_c */
+static double transform(const gs_agg_fft *F, slot_t *S, const double *phi, const double *N,
+                        fftw_complex *spec) {
+  double mom = 0;
+  for (size_t c = 0; c < F->ncells; c++) mom += phi[c] * N[c];
+  memset(S->real, 0, F->nreal * sizeof(double));
+  for (size_t i0 = 0; i0 < F->n[0]; i0++)
+    for (size_t i1 = 0; i1 < F->n[1]; i1++) {
+      const size_t c = i0 * F->n[1] * F->n[2] + i1 * F->n[2];
+      double *dst = S->real + (i0 * F->M[1] + i1) * F->M[2];
+      for (size_t i2 = 0; i2 < F->n[2]; i2++) dst[i2] = phi[c + i2] * N[c + i2];
+    }
+  fftw_execute_dft_r2c(F->fwd, S->real, spec);
+  return mom;
+}
+
 void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, double *dN,
                       double *lost, double *born, double *dead) {
   slot_t *S = &F->slot[slot > 0 ? slot : 0];
+  const form_set *fs = &F->set[F->nset > 1 ? comp : 0];
   const double coef = F->coef[comp];
-  double mom[2] = {0, 0};
-  for (int m = 0; m < F->nphi; m++) {
-    for (size_t c = 0; c < F->ncells; c++) mom[m] += F->phi[m][c] * N[c];
-    /* phi_m N into the low corner of the padded array */
-    memset(S->real, 0, F->nreal * sizeof(double));
-    for (size_t i0 = 0; i0 < F->n[0]; i0++)
-      for (size_t i1 = 0; i1 < F->n[1]; i1++) {
-        const size_t c = i0 * F->n[1] * F->n[2] + i1 * F->n[2];
-        double *dst = S->real + (i0 * F->M[1] + i1) * F->M[2];
-        for (size_t i2 = 0; i2 < F->n[2]; i2++) dst[i2] = F->phi[m][c + i2] * N[c + i2];
-      }
-    fftw_execute_dft_r2c(F->fwd, S->real, S->spec[m]);
-  }
   /* coef/2 sum_t c_t conv(phi_m1 N, phi_m2 N); FFTW's inverse is unscaled */
   const double scale = 0.5 * coef / (double)F->nreal;
-  for (size_t i = 0; i < F->ncplx; i++) {
-    double re = 0, im = 0;
-    for (int t = 0; t < F->nterm; t++) {
-      const double *a = S->spec[F->t[t].m1][i], *b = S->spec[F->t[t].m2][i];
-      re += F->t[t].c * (a[0] * b[0] - a[1] * b[1]);
-      im += F->t[t].c * (a[0] * b[1] + a[1] * b[0]);
+  double *mom = S->mom;
+  if (!F->lowrank) {
+    for (int m = 0; m < fs->nphi; m++) mom[m] = transform(F, S, fs->phi + (size_t)m * F->ncells, N, S->spec[m]);
+    for (size_t i = 0; i < F->ncplx; i++) {
+      double re = 0, im = 0;
+      for (int t = 0; t < fs->nterm; t++) {
+        const double *a = S->spec[fs->t[t].m1][i], *b = S->spec[fs->t[t].m2][i];
+        re += fs->t[t].c * (a[0] * b[0] - a[1] * b[1]);
+        im += fs->t[t].c * (a[0] * b[1] + a[1] * b[0]);
+      }
+      S->acc[i][0] = scale * re;
+      S->acc[i][1] = scale * im;
     }
-    S->acc[i][0] = scale * re;
-    S->acc[i][1] = scale * im;
+  } else { /* terms lambda_r v_r(a) v_r(b): one transform each, squared */
+    memset(S->acc, 0, F->ncplx * sizeof(fftw_complex));
+    for (int r = 0; r < fs->nterm; r++) {
+      mom[r] = transform(F, S, fs->phi + (size_t)r * F->ncells, N, S->spec[0]);
+      const double c = scale * fs->t[r].c;
+      for (size_t i = 0; i < F->ncplx; i++) {
+        const double *a = S->spec[0][i];
+        S->acc[i][0] += c * (a[0] * a[0] - a[1] * a[1]);
+        S->acc[i][1] += c * (2 * a[0] * a[1]);
+      }
+    }
   }
   fftw_execute_dft_c2r(F->inv, S->acc, S->real);
   double removed = 0;
@@ -306,7 +393,7 @@ void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, dou
       if (2 * idx[q] > khi[q]) khi[q] = 2 * idx[q];
     }
     double r = 0;
-    for (int t = 0; t < F->nterm; t++) r += F->t[t].c * F->phi[F->t[t].m1][c] * mom[F->t[t].m2];
+    for (int t = 0; t < fs->nterm; t++) r += fs->t[t].c * fs->phi[(size_t)fs->t[t].m1 * F->ncells + c] * mom[fs->t[t].m2];
     r *= coef * N[c];
     removed += r;
     if (dN) dN[c] -= r;

@@ -11,12 +11,19 @@
 typedef struct gs_agg_fft gs_agg_fft;
 
 /* NULL if the scheme applies to grid g and kernel k, else why it does not
- * (a phrase for an error message). */
-const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k);
+ * (a phrase for an error message).  rank_tolerance > 0 admits kernels
+ * without an exact separable form through a low-rank one (kernel/lowrank.h)
+ * of that relative Frobenius error; 0: exact forms alone. */
+const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k, double rank_tolerance);
 
 /* Scratch for nslots evaluators that may run at once.  k must outlive it. */
-int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, int nslots, gs_agg_fft **out,
-                      gs_error *err);
+int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, double rank_tolerance, int nslots,
+                      gs_agg_fft **out, gs_error *err);
+
+/* The rank of the low-rank form (the most terms over the compartments; 0
+ * for an exact form) and in *rel_err (NULL: not wanted) the largest
+ * relative Frobenius error of its truncation. */
+int gs_agg_fft_rank(const gs_agg_fft *F, double *rel_err);
 void gs_agg_fft_free(gs_agg_fft *F);
 
 /* Rates of compartment comp with numbers N, in slot `slot`'s scratch:

@@ -133,6 +133,21 @@ void gs_model_report(const gs_model *m, size_t comp, double t, const double *y, 
   }
 }
 
+int gs_model_notes(const gs_model *m, char *msg, size_t n) {
+  int count = 0;
+  size_t used = 0;
+  if (n) msg[0] = '\0';
+  for (size_t i = 0; i < m->nmech; i++) {
+    char note[512];
+    const gs_mechanism *mech = &m->mech[i];
+    if (!mech->type->describe || !mech->type->describe(mech->self, note, sizeof note)) continue;
+    int w = snprintf(msg + used, used < n ? n - used : 0, "%s%s: %s", count ? "\n" : "", mech->label, note);
+    if (w > 0) used = used + (size_t)w < n ? used + (size_t)w : n;
+    count++;
+  }
+  return count;
+}
+
 void gs_model_initial_scalars(const gs_model *m, double *y, double *accuracy) {
   for (size_t i = 0; i < m->nmech; i++) {
     const gs_mechanism *mech = &m->mech[i];
