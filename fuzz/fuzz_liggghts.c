@@ -2,8 +2,10 @@
  * liggghts, src/liggghts): the contact lists of pairs and walls
  * (events_pp.txt, events_wall.txt), a per-atom snapshot (collision<STEP>.atom)
  * and the screen output's thermo lines, reduced into the tables of a small
- * fixed case with two classes and a mesh wall.  The input holds the four
- * files in that order, separated by lines "%%". */
+ * fixed case with two classes and a mesh wall, then a particle frame
+ * (vtk/particles_100.dump, the deck's `dump custom` text frame) converted to
+ * .vtp and .pvd (frames.c).  The input holds the five files in that order,
+ * separated by lines "%%". */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,7 +39,8 @@ static gs_dem_case *setup(void) {
   char sub[512];
   snprintf(sub, sizeof sub, "%s/liggghts/post", dir);
   if (mkdir(dir, 0777) || (snprintf(sub, sizeof sub, "%s/liggghts", dir), mkdir(sub, 0777)) ||
-      (snprintf(sub, sizeof sub, "%s/liggghts/post", dir), mkdir(sub, 0777)))
+      (snprintf(sub, sizeof sub, "%s/liggghts/post", dir), mkdir(sub, 0777)) ||
+      (snprintf(sub, sizeof sub, "%s/vtk", dir), mkdir(sub, 0777)))
     return NULL;
   atexit(clean);
   static const char stl[] = "solid t\n facet normal 0 0 1\n  outer loop\n   vertex -10 -10 0\n   vertex 10 -10 0\n"
@@ -66,12 +69,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   const char *at = (const char *)data, *end = at + size;
   gs_lig_thermo th = {0};
   double cpu_acc[2] = {0, 0};
-  for (int part = 0; part < 4; part++) {
+  for (int part = 0; part < 5; part++) {
     const char *sep = NULL;
     for (const char *p = at; p + 3 <= end && !sep; p++)
       if ((p == at || p[-1] == '\n') && !memcmp(p, "%%\n", 3)) sep = p;
     const char *stop = sep ? sep : end;
     if (part < 3) put(files[part], at, (size_t)(stop - at));
+    else if (part == 4) put("vtk/particles_100.dump", at, (size_t)(stop - at));
     else {
       char *text = fuzz_input_text((const uint8_t *)at, (size_t)(stop - at));
       for (char *line = text ? strtok(text, "\n") : NULL; line; line = strtok(NULL, "\n"))
@@ -82,6 +86,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   }
   gs_error err = {0};
   if (gs_lig_reduce(the_case, dir, &th, &err) && getenv("FUZZ_VERBOSE")) fprintf(stderr, "%s\n", err.msg);
+  gs_error ferr = {0};
+  if (gs_lig_vtk_frames(the_case, dir, &ferr) && getenv("FUZZ_VERBOSE")) fprintf(stderr, "%s\n", ferr.msg);
   free(th.row);
   return 0;
 }

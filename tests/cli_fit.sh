@@ -132,8 +132,16 @@ rel_close "$n" 1.0 1e-6 || { show_output; fail "batches: initial.number = $n, ex
 # the held-out batch's errors are those of the true values: ~1e-9 of the data
 awk '$1 == "mid" && $2 == "d50" { exit !($5 < 1e-6) }' "$WORK/stdout" || { show_output; fail "d50 of the held-out batch"; }
 awk '$1 == "mid" && $2 == "porosity" { exit !($5 < 1e-6) }' "$WORK/stdout" || { show_output; fail "porosity of the held-out batch"; }
-head -1 "$WORK/fit/fitted.csv" | grep -qF "role,batch,time [s],column,d_lo [um],d_hi [um],measured,model" ||
+# measured and model in the unit of their column, the row's unit; the estimates
+# in their keys' (rate 1/s here, beta0's depends on the kernel: "case")
+[ "$(head -1 "$WORK/fit/fitted.csv")" = "role,batch,time [s],column,d_lo [um],d_hi [um],measured [unit],model [unit],unit" ] ||
   fail "fitted.csv header"
+awk -F, 'NR > 1 && !(($4 == "d50" && $9 == "m") || (($4 == "porosity" || $4 == "moisture") && $9 == "1")) { bad = 1 } END { exit bad }' \
+  "$WORK/fit/fitted.csv" || fail "fitted.csv: a value without its column's unit"
+[ "$(head -1 "$WORK/fit/estimates.csv")" = "parameter,estimate [unit],std_error [unit],ci95_lo [unit],ci95_hi [unit],range_lo [unit],range_hi [unit],log_range [1],identifiable [1],unit" ] ||
+  fail "estimates.csv header"
+grep -q '^mechanisms.0.kernel.beta0,.*,case$' "$WORK/fit/estimates.csv" || fail "estimates.csv: beta0's unit"
+grep -q '^initial.number,.*,1$' "$WORK/fit/estimates.csv" || fail "estimates.csv: initial.number's unit"
 [ "$(grep -c '^predict,mid,' "$WORK/fit/fitted.csv")" = 8 ] || fail "fitted.csv: 8 held-out values expected"
 [ "$(grep -c '^fit,' "$WORK/fit/fitted.csv")" = 24 ] || fail "fitted.csv: 24 fitted values expected"
 grep -q '^mechanisms.0.kernel.beta0,0.69999' "$WORK/fit/estimates.csv" || fail "estimates.csv"
@@ -205,11 +213,11 @@ printf '%s\n' "time [s],sieve_0_200000,sieve_200000_300000,sieve_300000_inf" "1,
 printf 'sieves: [0, 0.2, 0.3, .inf]\nbatches: [{name: S, data: sieves.csv}]\n' >"$WORK/sieves.yaml"
 run_rc 0 "$BIN" fit "$start" --batches "$WORK/sieves.yaml" --params mechanisms.0.kernel.beta0=0.01:100:log \
   --out "$WORK/sfit"
-grep -q '^fit,S,4,sieve_300000_inf,300000,inf,0.5,' "$WORK/sfit/fitted.csv" || fail "sieve rows of fitted.csv"
+grep -q '^fit,S,4,sieve_300000_inf,300000,inf,0.5,.*,1$' "$WORK/sfit/fitted.csv" || fail "sieve rows of fitted.csv"
 run_rc 0 "$BIN" plot "$WORK/sfit"
 /usr/bin/python3 "$SRC/tests/plot_check.py" "$WORK/sfit/plots" \
   "fit-psd=sieve size [um]|mass fraction [-]|t = 4 s measured|t = 4 s fitted|S (fitted)" || fail "fit-psd plot"
 run_rc 0 "$BIN" plot "$WORK/fit"
 /usr/bin/python3 "$SRC/tests/plot_check.py" "$WORK/fit/plots" \
-  "fit-parity=porosity (held out)|d50 (fitted)|measured / RMS of the measured column [-]" || fail "fit-parity plot"
+  "fit-parity=porosity [1] (held out)|d50 [m] (fitted)|measured / RMS of the measured column [-]" || fail "fit-parity plot"
 echo "cli_fit: ok"

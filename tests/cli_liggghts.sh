@@ -48,6 +48,7 @@ fill:
   - region: {box: {lo: [-0.008, -0.008, 0.002], hi: [0.008, 0.008, 0.025]}}
     count: 200
 statistics: {start: 0.08, sample_every: 0.0025}
+output: {vtk_every: 0.025}
 YAML
 }
 case_yaml embedded > "$W/e.yaml"
@@ -72,6 +73,15 @@ for t in collisions.csv collision_kernel.csv impacts.csv impact_table.csv impact
   case $t in residence*|timeseries.csv|impact_velocity.csv) ;; *)
     [ "$ne" = "$nl" ] || fail "$t: $ne rows (embedded) vs $nl (liggghts)" ;; esac
 done
+# the particle frames as the embedded engine's: VTK XML (binary, appended) with a .pvd series at
+# the times of vtk_every, as many particles as timeseries.csv and the classes' radii; LIGGGHTS'
+# text frames converted and gone
+grep -q "^dump dvtk all custom 5000 ../vtk/particles_\*.dump id type radius x y z vx vy vz$" \
+  "$W/l/liggghts/in.gransim" || fail "deck: no text frames"
+/usr/bin/python3 "$2/tests/dem_outputs.py" "$W/l" 0.025 1.0e-3,1.5e-3 || fail "liggghts VTK frames"
+[ "$(ls "$W/l/vtk"/particles_*.vtp | wc -l)" = 5 ] && [ -z "$(ls "$W/l/vtk" | grep '\.dump$\|\.vtk$')" ] ||
+  fail "liggghts frames: $(ls "$W/l/vtk")"
+grep -q 'NumberOfPoints="200"' "$W/l/vtk/particles_000004.vtp" || fail "the last frame has not 200 particles"
 # the same classes and numbers (no particle lost); mean speeds within a factor 3 (both fall
 # and settle under gravity; contact rules differ in detail); collision events per class pair and
 # wall impacts per particle within a factor 1.5 where there are more than 100 events (LIGGGHTS'
@@ -272,6 +282,8 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
   { tail -20 "$W/slurm/job.log"; fail "the Slurm recipe"; }
 grep -q "2 by 1 by 1 MPI processor grid\|1 by 2 by 1 MPI processor grid\|1 by 1 by 2 MPI processor grid" \
   "$W/slurm/case/run1/liggghts/log.liggghts" || fail "the recipe did not run on 2 ranks"
+# the reduction of a cluster run makes its frames too
+/usr/bin/python3 "$2/tests/dem_outputs.py" "$W/slurm/case/run1" 0.025 1.0e-3,1.5e-3 || fail "the recipe's VTK frames"
 python3 - "$W/l" "$W/slurm/case/run1" <<'PY'
 import csv, sys
 def rows(p): return list(csv.DictReader(open(p)))

@@ -34,14 +34,20 @@ stderr_has "started by mpirun with 2 ranks"
 run_rc 0 "$BIN" sensitivity "$WORK/hs.yaml" "${R[@]}" --outputs d50,M0 --method morris:2 \
   --out "$WORK/morris" --threads 2 --quiet
 stdout_has "mechanisms.0.kernel.alpha" "6 runs"
-[ "$(head -1 "$WORK/morris/sensitivity.csv")" = "output,key,mu,mu_star,sigma" ] || fail "morris header"
+# the effects are in the output's unit, the row's `unit`; the notes in the sidecar
+[ "$(head -1 "$WORK/morris/sensitivity.csv")" = "output,key,mu [unit],mu_star [unit],sigma [unit],unit" ] ||
+  fail "morris header: $(head -1 "$WORK/morris/sensitivity.csv")"
+awk -F, 'NR > 1 && !(($1 == "d50" && $6 == "m") || ($1 == "M0" && $6 == "1")) { bad = 1 } END { exit bad }' \
+  "$WORK/morris/sensitivity.csv" || fail "morris: a row without its output's unit"
+grep -q '"mu": "the row'"'"'s unit"' "$WORK/morris/sensitivity.json" || fail "morris: no sidecar"
+head -1 "$WORK/morris/sweep.csv" | grep -q ',d50_c1 \[m\],' || fail "the sweep's columns lack their units"
 [ "$(wc -l <"$WORK/morris/sensitivity.csv")" -eq 5 ] || fail "morris: expected 4 rows"
 [ "$(wc -l <"$WORK/morris/sweep.csv")" -eq 7 ] || fail "morris: the sweep has 6 runs"
 
 run_rc 0 "$BIN" sensitivity "$WORK/hs.yaml" "${R[@]}" --outputs d50 --method sobol:16 --seed 2 \
   --bootstrap 50 --out "$WORK/sobol" --threads 2 --quiet
 stdout_has "64 runs" "percentile bootstrap"
-[ "$(head -1 "$WORK/sobol/sensitivity.csv")" = "output,key,S1,S1_lo,S1_hi,ST,ST_lo,ST_hi" ] ||
+[ "$(head -1 "$WORK/sobol/sensitivity.csv")" = "output,key,S1 [1],S1_lo [1],S1_hi [1],ST [1],ST_lo [1],ST_hi [1]" ] ||
   fail "sobol header"
 awk -F, 'NR > 1 && ($3 == "nan" || $6 == "nan" || NF != 8) { bad = 1 } END { exit bad }' \
   "$WORK/sobol/sensitivity.csv" || fail "sobol: a row is not 8 numbers"

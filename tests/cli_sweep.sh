@@ -57,19 +57,31 @@ out=$WORK/grid
 run_rc 0 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --outputs M2 --out "$out" --threads 2
 stderr_has "6 runs: 6 run now, 0 finished before" "4 ok, 2 failed" "$out/sweep.csv"
 stderr_lacks "runs done" # no progress line when stderr is no terminal
-[ "$(head -n 1 "$out/sweep.csv")" = "run,status,$B,output.end,M0,M1_solid,d10_c1,d50_c1,d90_c1,M2_c1,error" ] ||
+# every column but run, status and error with its unit, as summary.csv's (beta0's
+# depends on the kernel: "case", the unit the case file gives it)
+[ "$(head -n 1 "$out/sweep.csv")" = "run,status,$B [case],output.end [s],M0 [1],M1_solid [m^3],d10_c1 [m],d50_c1 [m],d90_c1 [m],M2_c1 [m^6],error" ] ||
   fail "sweep.csv header: $(head -n 1 "$out/sweep.csv")"
+head -n 1 "$out/sweep.csv" | tr ',' '\n' | grep -vxE 'run|status|error|.* \[[^]]+\]' &&
+  fail "sweep.csv: a column without its unit"
+[ "$(head -n 1 "$out/runs.csv")" = "$(head -n 1 "$out/sweep.csv")" ] || fail "runs.csv's header is not sweep.csv's"
 [ "$(wc -l <"$out/sweep.csv")" -eq 7 ] || fail "sweep.csv has $(wc -l <"$out/sweep.csv") lines, expected 7"
 grep -q '^3,error,1,1,nan,.*checks.max_loss' "$out/sweep.csv" || fail "run 3 (beta0 = 1) not recorded as failed"
 grep -q '^6,ok,2e-3,2,' "$out/sweep.csv" || fail "run 6 (beta0 = 2e-3, end 2) missing or failed"
 
 # sweep.h5: the same numbers as sweep.csv (17 digits), nan for the failed runs
 if command -v h5dump >/dev/null 2>&1; then
-  h5dump -y -w 0 -m %.17g -d /outputs/d50_c1 "$out/sweep.h5" |
+  h5dump -A 0 -y -w 0 -m %.17g -d /outputs/d50_c1 "$out/sweep.h5" |
     awk '/DATA \{/ { f = 1; next } f && /\}/ { f = 0 } f' | tr -d ' \n' | tr ',' '\n' >"$WORK/h5col"
   echo >>"$WORK/h5col"
   awk -F, 'NR > 1 { print $8 }' "$out/sweep.csv" >"$WORK/csvcol"
   cmp "$WORK/h5col" "$WORK/csvcol" || fail "sweep.h5's /outputs/d50_c1 differs from sweep.csv's d50_c1"
+  # every dataset's units and dimensions, the units sweep.csv's
+  for a in /outputs/d50_c1/units=m /outputs/M2_c1/units=m^6 /outputs/M0/units=1 \
+    "/params/output.end/units=s" "/params/$B/units=case" /run/units=1 /status/units= \
+    /outputs/d50_c1/dimensions=run "/params/$B/dimensions=run" /error/dimensions=run; do
+    got=$(h5dump -a "${a%%=*}" "$out/sweep.h5" | sed -n 's/^ *(0): "\(.*\)"$/\1/p')
+    [ "$got" = "${a#*=}" ] || fail "sweep.h5 attribute ${a%%=*} is '$got', expected '${a#*=}'"
+  done
 fi
 
 # run 6 again with gransim run: the same final M0, M1, d10, d50, d90, M2
@@ -95,6 +107,17 @@ run_rc 0 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --outputs
 stderr_has "6 runs: 0 run now, 6 finished before"
 stderr_lacks "runs done" # nothing run now
 run_rc 1 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --out "$out" --resume
+stderr_has "cannot resume" "other keys or outputs"
+# a journal of a gransim before the units (header without them) still resumes
+{ head -n 1 "$out/runs.csv" | sed 's/ \[[^]]*\]//g'; sed -n 2,3p "$out/runs.csv"; } >"$WORK/old"
+grep -q '^run,status,mechanisms.0.kernel.beta0,output.end,M0,M1_solid,d10_c1' "$WORK/old" || fail "old header"
+cp "$WORK/old" "$out/runs.csv"
+run_rc 0 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --outputs M2 --out "$out" --resume
+stderr_has "6 runs: 4 run now, 2 finished before"
+cmp "$out/sweep.csv" "$WORK/complete.csv" || fail "the sweep resumed from an old journal differs"
+sed -i '1s/d50_c1/d55_c1/' "$WORK/old"
+cp "$WORK/old" "$out/runs.csv"
+run_rc 1 "$BIN" sweep "$c" --set "$B=1e-3,1,2e-3" --set output.end=1,2 --outputs M2 --out "$out" --resume
 stderr_has "cannot resume" "other keys or outputs"
 cmp "$c" "$out/base-case.yaml" || fail "$out/base-case.yaml is not the case file"
 sed 's/count: 3/count: 4/' "$c" >"$WORK/edited.yaml"

@@ -13,6 +13,7 @@
 #include "check.h"
 #include "gransim/run.h"
 #include "gransim/study.h"
+#include "study/study_internal.h"
 
 static int has(const gs_error *e, const char *sub) {
   if (strstr(e->msg, sub)) return 1;
@@ -94,6 +95,9 @@ static void test_same_as_file(void) {
   CHECK(o.ncol == 1 + 1 + 3 + 2);
   CHECK(!strcmp(o.names[0], "M0") && !strcmp(o.names[1], "M1_solid") &&
         !strcmp(o.names[3], "d50_c1") && !strcmp(o.names[6], "mean_solid_c1"));
+  /* every column's unit, summary.csv's for its statistic */
+  static const char *const want_units[] = {"1", "m^3", "m", "m", "m", "m^6", "m^3"};
+  for (size_t i = 0; i < 7; i++) CHECK(o.units[i] && !strcmp(o.units[i], want_units[i]));
   gs_cfg *fcfg = gs_cfg_load_string(case_text("0.002", "1e-9"), "case.yaml", &e);
   CHECK(gs_case_from_cfg(fcfg, &f, &e) == GS_OK);
   size_t n = c.model.nstate + c.model.nledger;
@@ -229,7 +233,36 @@ static void test_sweep(void) {
   gs_cfg_free(base);
 }
 
+/* The units of varied keys: from the key's last name that is not a list
+ * index (docs/case-files.md's table); "case" where the model decides. */
+static void test_key_units(void) {
+  static const char *const want[][2] = {
+      {"output.end", "s"},
+      {"solver.rtol", "1"},
+      {"output.times.0", "s"},
+      {"mechanisms.2.sieves.1", "m"},
+      {"materials.0.E", "Pa"},
+      {"mechanisms.0.spray_heat_capacity", "J/(kg K)"},
+      {"rotation.rpm", "rpm"},
+      {"mechanisms.0.kernel.beta0", "case"},
+      {"mechanisms.1.rate", "case"},
+      {"grid.axes.0.max", "case"},
+      {"e", "1"},
+      {"0", "case"},
+      {"", "case"},
+  };
+  for (size_t i = 0; i < sizeof want / sizeof *want; i++) {
+    const char *u = gs_study_key_unit(want[i][0]);
+    if (strcmp(u, want[i][1])) fprintf(stderr, "key '%s': unit '%s', expected '%s'\n", want[i][0], u, want[i][1]);
+    CHECK(!strcmp(u, want[i][1]));
+  }
+  char h[64];
+  gs_study_header("d50_c1", "m", h, sizeof h);
+  CHECK(!strcmp(h, "d50_c1 [m]"));
+}
+
 int main(void) {
+  test_key_units();
   test_setter();
   test_same_as_file();
   test_sweep();

@@ -78,6 +78,7 @@ int gs_study_case(const gs_cfg *base, const gs_design *d, size_t r, gs_case *c, 
 typedef struct gs_study_outputs {
   size_t ncol;
   char **names;
+  const char **units; /* per column: its SI unit ("1": dimensionless), summary.csv's */
   int *what;    /* per column: which statistic (internal code) */
   int *index;   /* volume coordinate, where the statistic has one */
   size_t *comp; /* compartment, where it has one */
@@ -85,6 +86,14 @@ typedef struct gs_study_outputs {
   int nvol;
   int nmech_col; /* the mechanisms' summary columns (gs_model_ncolumns) */
 } gs_study_outputs;
+
+/* The SI unit of a case key a study varies, from the last name of the
+ * dotted key that is not a list index (docs/case-files.md, "Units of the
+ * keys": output.end s, solver.rtol 1); GS_STUDY_CASE_UNIT where it depends
+ * on the model (beta0, s0, a `rate`, a grid's `min`) or the name is not in
+ * the table: the unit the case file gives the key. */
+#define GS_STUDY_CASE_UNIT "case"
+const char *gs_study_key_unit(const char *key);
 
 int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *const *extra,
                           size_t nextra, gs_error *err);
@@ -242,6 +251,7 @@ int gs_fit_global_check(const char *method, gs_error *err);
 typedef struct gs_fit_eval {
   size_t nresid;
   double *model, *resid;
+  const char **unit; /* per value: its column's SI unit (static strings) */
   double chi2, r2;
 } gs_fit_eval;
 int gs_fit_evaluate(const gs_cfg *base, const gs_study_axis *params, size_t np, const double *x,
@@ -324,6 +334,9 @@ typedef struct gs_sens_result {
   /* Morris: [out * nin + k]; mean elementary effect, mean of |effects|,
    * their standard deviation (effects per unit of the range) */
   double *mu, *mu_star, *sigma;
+  /* per output: its SI unit (gs_sensitivity_case; NULL from gs_sensitivity,
+   * whose model's units gransim does not know) */
+  char **unit;
 } gs_sens_result;
 
 /* Runs the analysis: GS_EINPUT for no keys, a list instead of a range, N
@@ -340,8 +353,11 @@ int gs_sensitivity(const gs_study_axis *axes, size_t nin, size_t nout, gs_sens_m
 int gs_sensitivity_case(const gs_cfg *base, const gs_study_axis *axes, size_t nin,
                         const char *const *outputs, size_t nout, const gs_sens_options *opt,
                         const gs_sweep_options *sweep, gs_sens_result *res, gs_error *err);
-/* A CSV: Sobol "output,key,S1,S1_lo,S1_hi,ST,ST_lo,ST_hi", Morris
- * "output,key,mu,mu_star,sigma"; a row per output and key. */
+/* A CSV, its header first: Sobol "output,key,S1 [1],S1_lo [1],S1_hi [1],
+ * ST [1],ST_lo [1],ST_hi [1]", Morris "output,key,mu [unit],mu_star [unit],
+ * sigma [unit],unit" (the effects are in the output's unit, the row's
+ * `unit`, per range of the key); a row per output and key; what the columns
+ * mean in the JSON sidecar PATH.json (path ends in .csv). */
 int gs_sens_write_csv(const char *path, const gs_sens_result *r, const gs_study_axis *axes,
                       const char *const *outputs, gs_error *err);
 void gs_sens_result_free(gs_sens_result *r);

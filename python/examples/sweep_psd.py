@@ -28,7 +28,8 @@ case = gransim.Case.from_dict({
     "output": {"end": 10, "count": 11},                              # [s]
 })
 runs = gransim.sweep(case, {"mechanisms.0.kernel.beta0": [5.0e-10, 1.0e-9, 2.0e-9]}, out)
-runs.drop(columns=["path"]).to_csv(os.path.join(out, "sweep.csv"), index=False)
+# the columns with their units, as gransim sweep's sweep.csv ("d50_c1 [m]")
+gransim.with_units(runs.drop(columns=["path"])).to_csv(os.path.join(out, "sweep.csv"), index=False)
 print(runs[["run", "status", "mechanisms.0.kernel.beta0", "M0_c1", "d50_c1"]].to_string(index=False))
 
 fig, ax = plt.subplots(figsize=(7, 4.5))

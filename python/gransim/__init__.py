@@ -15,7 +15,7 @@ gransim's own message.  docs/python.md describes the package.
 from ._library import GransimError, lib as _lib
 from .case import Case
 from .result import Result
-from .study import sweep
+from .study import sweep, with_units
 
 __version__ = _lib.gs_version_number().decode()
 
@@ -25,4 +25,4 @@ def version():
     return _lib.gs_version().decode()
 
 
-__all__ = ["Case", "Result", "GransimError", "sweep", "version", "__version__"]
+__all__ = ["Case", "Result", "GransimError", "sweep", "with_units", "version", "__version__"]

@@ -65,6 +65,7 @@ for name, res, args in [
     ("gs_api_kind_name", _S, [ctypes.c_int]),
     ("gs_api_case_check", ctypes.c_int, [_P, ctypes.c_char_p, ctypes.c_size_t, _E]),
     ("gs_api_case_run", ctypes.c_int, [_P, _S, ctypes.c_int, _E]),
+    ("gs_study_key_unit", _S, [_S]),
 ]:
     f = getattr(lib, name)
     f.restype = res

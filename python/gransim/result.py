@@ -70,6 +70,18 @@ class Result:
         return self._read(table)
 
     @property
+    def summary_units(self):
+        """{column of summary: its SI unit}, from result.h5's `units` attributes."""
+        def units(f):
+            u = {"time": "s"}
+            for name, ds in f["summary"].items():
+                if "units" in ds.attrs:
+                    a = ds.attrs["units"]
+                    u[name] = a.decode() if isinstance(a, bytes) else str(a)
+            return u
+        return self._read(units)
+
+    @property
     def moments(self):
         return self.summary[["time", "compartment", "M0", "M1", "M2"]]
 

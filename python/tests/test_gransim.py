@@ -128,6 +128,13 @@ class Cases(unittest.TestCase):
         self.assertIn("expected a number >= 0", df["error"][1])
         self.assertTrue(math.isnan(df["M0_c1"][1]))
         np.testing.assert_allclose(df["M0_c1"][[0, 2]], [1 / 2, 1 / 3], atol=1e-4)
+        # every column's unit, as gransim sweep writes them
+        u = df.attrs["units"]
+        self.assertEqual((u["M0_c1"], u["d50_c1"], u["M1_c1"], u["run"]), ("1", "m", "m^3", "1"))
+        self.assertEqual(u["mechanisms.0.kernel.beta0"], "case")
+        named = gransim.with_units(df)
+        self.assertIn("d50_c1 [m]", named.columns)
+        self.assertEqual([c for c in named.columns if "[" not in c], ["status", "error", "path"])
 
 
 if __name__ == "__main__":

@@ -34,8 +34,9 @@ static const char *const SENS_HELP =
     "  --resume              continue a killed analysis (same options)\n"
     "  --threads N           runs at once (default: all cores)\n"
     "  --quiet, --progress   as gransim sweep\n\n"
-    "DIR/sensitivity.csv: output,key,S1,S1_lo,S1_hi,ST,ST_lo,ST_hi (sobol) or\n"
-    "output,key,mu,mu_star,sigma (morris), a row per output and key.  docs/studies.md\n";
+    "DIR/sensitivity.csv: output,key,S1 [1],S1_lo [1],S1_hi [1],ST [1],ST_lo [1],ST_hi [1]\n"
+    "(sobol) or output,key,mu [unit],mu_star [unit],sigma [unit],unit (morris: in the\n"
+    "output's unit, the row's unit), a row per output and key.  docs/studies.md\n";
 
 static int usage_error(const char *fmt, const char *a) {
   fprintf(stderr, "gransim sensitivity: ");

@@ -38,7 +38,9 @@ static const char *const SWEEP_HELP =
     "Columns: run (from 1), status (ok or error), the varied keys, M0 and\n"
     "M1_<coordinate> (all compartments), d10_c<j> d50_c<j> d90_c<j> per compartment j,\n"
     "the --outputs columns NAME_c<j>, and error (the message of a failed run, whose\n"
-    "outputs are nan).  A failed run does not stop the others.  docs/studies.md\n";
+    "outputs are nan); each key and output named with its SI unit, d50_c1 [m]\n"
+    "([case]: the unit the case file gives the key).  A failed run does not stop\n"
+    "the others.  docs/studies.md\n";
 
 static int usage_error(const char *fmt, const char *a) {
   fprintf(stderr, "gransim sweep: ");

@@ -69,41 +69,59 @@ static int write_vtp(const char *path, double t, const char *what, size_t n, con
   return GS_OK;
 }
 
-int gs_dem_write_vtp_particles(const gs_dem *d, const char *path, gs_error *err) {
-  gs_dem_view v;
-  gs_dem_get_view(d, &v);
-  size_t n = v.n, m = n ? n : 1;
+int gs_dem_write_vtp_frame(const gs_dem_vtp_frame *f, const char *path, gs_error *err) {
+  const size_t n = f->n, m = n ? n : 1;
   double *xyz = malloc(3 * m * sizeof(double)), *vel = malloc(3 * m * sizeof(double));
   double *liq = malloc(m * sizeof(double));
-  int32_t *cls = malloc(m * sizeof(int32_t));
-  int64_t *id = malloc(m * sizeof(int64_t)), *conn = malloc(m * sizeof(int64_t)),
-          *offs = malloc(m * sizeof(int64_t));
+  int64_t *conn = malloc(m * sizeof(int64_t)), *offs = malloc(m * sizeof(int64_t));
   int rc = GS_OK;
-  if (!xyz || !vel || !liq || !cls || !id || !conn || !offs) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  if (!xyz || !vel || !liq || !conn || !offs) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   for (size_t i = 0; !rc && i < n; i++) {
-    xyz[3 * i] = v.x[i], xyz[3 * i + 1] = v.y[i], xyz[3 * i + 2] = v.z[i];
-    vel[3 * i] = v.vx[i], vel[3 * i + 1] = v.vy[i], vel[3 * i + 2] = v.vz[i];
-    cls[i] = gs_dem_type_class(d, v.type[i]) + 1; /* 1-based, as in the CSV tables */
-    id[i] = v.id[i];
-    const double vt = v.vs[i] + v.vl[i];
-    liq[i] = vt > 0 ? v.vl[i] / vt : 0;
+    xyz[3 * i] = f->x[i], xyz[3 * i + 1] = f->y[i], xyz[3 * i + 2] = f->z[i];
+    vel[3 * i] = f->vx[i], vel[3 * i + 1] = f->vy[i], vel[3 * i + 2] = f->vz[i];
+    liq[i] = f->liquid ? f->liquid[i] : 0;
     conn[i] = (int64_t)i;
     offs[i] = (int64_t)i + 1;
   }
   if (!rc) {
     const vtp_array a[] = {
-        {"Float64", "radius", 1, v.r, n * sizeof(double)},
-        {"Int32", "class", 1, cls, n * sizeof(int32_t)},
-        {"Int64", "id", 1, id, n * sizeof(int64_t)},
+        {"Float64", "radius", 1, f->r, n * sizeof(double)},
+        {"Int32", "class", 1, f->cls, n * sizeof(int32_t)},
+        {"Int64", "id", 1, f->id, n * sizeof(int64_t)},
         {"Float64", "liquid_content", 1, liq, n * sizeof(double)},
         {"Float64", "velocity", 3, vel, 3 * n * sizeof(double)},
         {"Float64", NULL, 3, xyz, 3 * n * sizeof(double)},
         {"Int64", "connectivity", 1, conn, n * sizeof(int64_t)},
         {"Int64", "offsets", 1, offs, n * sizeof(int64_t)},
     };
-    rc = write_vtp(path, gs_dem_time(d), "particles", n, "Verts", n, a, 5, err);
+    rc = write_vtp(path, f->t, "particles", n, "Verts", n, a, 5, err);
   }
-  free(xyz), free(vel), free(liq), free(cls), free(id), free(conn), free(offs);
+  free(xyz), free(vel), free(liq), free(conn), free(offs);
+  return rc;
+}
+
+int gs_dem_write_vtp_particles(const gs_dem *d, const char *path, gs_error *err) {
+  gs_dem_view v;
+  gs_dem_get_view(d, &v);
+  const size_t n = v.n, m = n ? n : 1;
+  double *liq = malloc(m * sizeof(double));
+  int32_t *cls = malloc(m * sizeof(int32_t));
+  int64_t *id = malloc(m * sizeof(int64_t));
+  int rc = GS_OK;
+  if (!liq || !cls || !id) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  for (size_t i = 0; !rc && i < n; i++) {
+    cls[i] = gs_dem_type_class(d, v.type[i]) + 1; /* 1-based, as in the CSV tables */
+    id[i] = v.id[i];
+    const double vt = v.vs[i] + v.vl[i];
+    liq[i] = vt > 0 ? v.vl[i] / vt : 0;
+  }
+  if (!rc) {
+    const gs_dem_vtp_frame f = {.n = n, .t = gs_dem_time(d), .x = v.x, .y = v.y, .z = v.z,
+                                .vx = v.vx, .vy = v.vy, .vz = v.vz, .r = v.r, .liquid = liq,
+                                .cls = cls, .id = id};
+    rc = gs_dem_write_vtp_frame(&f, path, err);
+  }
+  free(liq), free(cls), free(id);
   return rc;
 }
 

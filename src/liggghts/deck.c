@@ -358,9 +358,11 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   fprintf(fp, "compute rke all erotate/sphere\n"
               "thermo_style custom step atoms ke c_rke cpu v_hn v_hm\nthermo %ld\nthermo_modify lost ignore norm no\n", out_k);
 
-  if (c->vtk_every > 0) { /* frames in DIR/vtk, named by step: LIGGGHTS' own writers */
+  if (c->vtk_every > 0) { /* text frames in DIR/vtk, named by step: gransim makes them VTK XML (frames.c) */
     long vk = (long)fmax(1, round(c->vtk_every / dt));
-    fprintf(fp, "dump dvtk all custom/vtk %ld ../vtk/particles_*.vtk id type radius x y z vx vy vz\n", vk);
+    fprintf(fp, "dump dvtk all custom %ld ../vtk/particles_*.dump id type radius x y z vx vy vz\n", vk);
+    /* all digits: a frame's radius is its class's (LIGGGHTS' default %g keeps 6) */
+    fprintf(fp, "dump_modify dvtk format \"%%d %%d%s\"\n", " %.17g %.17g %.17g %.17g %.17g %.17g %.17g");
     if (c->nwall_src) fprintf(fp, "dump dstl all mesh/stl %ld ../vtk/walls_*.stl\n", vk);
   }
   fprintf(fp, "# before the statistics window (%.9g s)\n", c->stats_start);

@@ -34,6 +34,11 @@ int gs_lig_clear_dumps(const char *dir, gs_error *err);
 /* Remove the tables a reduction writes from out (before a run, and after a
  * failed reduction: all of them or none). */
 void gs_lig_remove_tables(const gs_dem_case *c, const char *out);
+/* The text frames out/vtk/particles_<step>.dump as out/vtk/particles_NNNNNN.vtp
+ * at time step x dt and the series out/vtk/particles.pvd, the embedded
+ * engine's files (frames.c); the dumps removed once all are converted.
+ * Nothing to do without frames. */
+int gs_lig_vtk_frames(const gs_dem_case *c, const char *out, gs_error *err);
 /* Reduce out/liggghts/post into out's tables (those of src/dem/stats.c). */
 int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, gs_error *err);
 #endif

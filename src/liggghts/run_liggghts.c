@@ -284,6 +284,7 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
     gs_lig_thermo th = {0};
     rc = read_log(c, dir, &th, err);
     if (!rc) rc = gs_lig_reduce(c, out, &th, err);
+    if (!rc) rc = gs_lig_vtk_frames(c, out, err);
     free(th.row);
     return rc;
   }
@@ -350,6 +351,7 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
   gs_lig_thermo th = {0};
   rc = run_deck(dir, launch, bin, "in.gransim", "log.liggghts", "screen.liggghts", c, progress, &th, err);
   if (!rc) rc = gs_lig_reduce(c, out, &th, err);
+  if (!rc) rc = gs_lig_vtk_frames(c, out, err);
   free(th.row);
   return rc;
 }

@@ -8,6 +8,7 @@
 
 #include "demdata/csv_meta.h"
 #include "gransim/study.h"
+#include "study/study_internal.h"
 
 static int write_estimates(const char *dir, const gs_study_axis *params, size_t np,
                            const gs_fit_result *res, gs_error *err) {
@@ -20,12 +21,19 @@ static int write_estimates(const char *dir, const gs_study_axis *params, size_t 
              "std_error from the Jacobian at the estimates, ci95 the 95 %% interval "
              "estimate -+ t(0.975, n - p) std_error; identifiable 0 where the data cannot fix "
              "the parameter (docs/studies.md).\n");
-  fprintf(f, "parameter,estimate,std_error,ci95_lo,ci95_hi,range_lo,range_hi,log_range,identifiable\n");
+  fprintf(f, "# unit: the parameter's SI unit (docs/case-files.md); \"" GS_STUDY_CASE_UNIT
+             "\" where it depends on the model, as beta0's on the kernel: then the unit the case "
+             "file gives the key.\n");
+  fprintf(f, "parameter,estimate [unit],std_error [unit],ci95_lo [unit],ci95_hi [unit],"
+             "range_lo [unit],range_hi [unit],log_range [1],identifiable [1],unit\n");
   for (size_t k = 0; k < np; k++)
-    fprintf(f, "%s,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d\n", params[k].key, res->x[k],
+    fprintf(f, "%s,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%s\n", params[k].key, res->x[k],
             res->stderr_x[k], res->ci_lo[k], res->ci_hi[k], params[k].lo, params[k].hi,
-            params[k].log, !res->unidentified[k]);
-  static const char *const units[] = {"log_range", "1", "identifiable", "1", NULL};
+            params[k].log, !res->unidentified[k], gs_study_key_unit(params[k].key));
+  static const char *const units[] = {"estimate", "the row's unit", "std_error", "the row's unit",
+                                      "ci95_lo", "the row's unit", "ci95_hi", "the row's unit",
+                                      "range_lo", "the row's unit", "range_hi", "the row's unit",
+                                      "log_range", "1", "identifiable", "1", NULL};
   return gs_csv_close(&t, "gransim fit", units, err);
 }
 
@@ -41,7 +49,7 @@ static void write_values(FILE *f, const char *role, const gs_fit_batches *bs, co
         fprintf(f, "%s,%s,%.17g,%s,", role, bs->batch[b].name, d->times[i], d->names[j]);
         if (sieve) fprintf(f, "%.10g,%.10g,", lo * 1e6, hi * 1e6);
         else fprintf(f, ",,");
-        fprintf(f, "%.17g,%.17g\n", d->values[i * d->ncols + j], ev->model[at]);
+        fprintf(f, "%.17g,%.17g,%s\n", d->values[i * d->ncols + j], ev->model[at], ev->unit[at]);
       }
   }
 }
@@ -60,13 +68,13 @@ int gs_fit_write(const char *dir, const gs_study_axis *params, size_t np, const 
   if (!f) return err->code;
   fprintf(f, "# Every measured value of gransim fit's batches (role fit) and held-out batches "
              "(role predict, --predict) beside the case's value at the estimates; measured and "
-             "model are in the unit of their column (d10/d50/d90 m, sieve classes, porosity and "
-             "moisture 1, moments as in summary.csv); d_lo and d_hi are a sieve class's edges, "
-             "empty for other columns.\n");
-  fprintf(f, "role,batch,time [s],column,d_lo [um],d_hi [um],measured,model\n");
+             "model are in the unit of their column, the row's unit (d10/d50/d90 m, sieve "
+             "classes, porosity and moisture 1, moments as in summary.csv); d_lo and d_hi are a "
+             "sieve class's edges, empty for other columns.\n");
+  fprintf(f, "role,batch,time [s],column,d_lo [um],d_hi [um],measured [unit],model [unit],unit\n");
   write_values(f, "fit", fit, fit_ev);
   if (pred) write_values(f, "predict", pred, pred_ev);
-  static const char *const units[] = {"measured", "unit of the column", "model",
-                                      "unit of the column", NULL};
+  static const char *const units[] = {"measured", "the row's unit", "model", "the row's unit",
+                                      NULL};
   return gs_csv_close(&t, "gransim fit", units, err);
 }

@@ -360,6 +360,7 @@ void gs_fit_eval_free(gs_fit_eval *ev) {
   if (!ev) return;
   free(ev->model);
   free(ev->resid);
+  free(ev->unit);
   memset(ev, 0, sizeof *ev);
 }
 
@@ -377,7 +378,15 @@ int gs_fit_evaluate(const gs_cfg *base, const gs_study_axis *params, size_t np, 
   ev->nresid = fc.nresid;
   ev->model = malloc((fc.nresid ? fc.nresid : 1) * sizeof *ev->model);
   ev->resid = malloc((fc.nresid ? fc.nresid : 1) * sizeof *ev->resid);
-  if (!ev->model || !ev->resid) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  ev->unit = malloc((fc.nresid ? fc.nresid : 1) * sizeof *ev->unit);
+  if (!ev->model || !ev->resid || !ev->unit) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  for (size_t b = 0; !rc && b < bs->n; b++) { /* sieve fractions are fractions of the volume */
+    const gs_fit_data *d = &bs->batch[b].data;
+    const gs_fit_map *map = &fc.map[b];
+    for (size_t q = 0; q < d->ntimes * d->ncols; q++)
+      ev->unit[map->off + q] =
+          map->col[q % d->ncols] == GS_FIT_SIEVE ? "1" : fc.out.units[map->col[q % d->ncols]];
+  }
   if (!rc) rc = gs_fit_problem_residuals(&fc, x, ev->resid, ev->model, err);
   for (size_t i = 0; !rc && i < fc.nresid; i++) ev->chi2 += ev->resid[i] * ev->resid[i];
   if (!rc) ev->r2 = gs_fit_problem_r2(&fc, ev->chi2);

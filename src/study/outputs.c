@@ -2,6 +2,7 @@
  * run (see gransim/study.h). */
 #include "gransim/study.h"
 #include "study/study_internal.h"
+#include "output/units.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -46,8 +47,18 @@ int gs_study_case(const gs_cfg *base, const gs_design *d, size_t r, gs_case *c, 
   return rc;
 }
 
-static int add_col(gs_study_outputs *o, int what, int index, size_t comp, const char *fmt,
-                   const char *a, gs_error *err) {
+/* The unit of a column: summary.csv's for its statistic, the mechanism's
+ * for a mechanism's column, 1 for moisture (a volume ratio). */
+static const char *unit_of(const gs_model *m, int what, int index, const char *stat) {
+  if (what == W_MECH) return gs_model_column(m, index)->unit;
+  if (what == W_MOISTURE) return "1";
+  if (what == W_M1_ALL) return gs_summary_unit("M1");
+  const char *u = gs_summary_unit(stat);
+  return u ? u : "1";
+}
+
+static int add_col(gs_study_outputs *o, const gs_model *m, int what, int index, size_t comp,
+                   const char *fmt, const char *a, gs_error *err) {
   char name[128];
   if (comp == (size_t)-1) snprintf(name, sizeof name, fmt, a);
   else snprintf(name, sizeof name, fmt, a, comp + 1);
@@ -55,6 +66,7 @@ static int add_col(gs_study_outputs *o, int what, int index, size_t comp, const 
   o->names[i] = malloc(strlen(name) + 1);
   if (!o->names[i]) return gs_error_set(err, GS_ENOMEM, "out of memory for output names");
   strcpy(o->names[i], name);
+  o->units[i] = unit_of(m, what, index, a);
   o->what[i] = what;
   o->index[i] = index;
   o->comp[i] = comp;
@@ -68,22 +80,23 @@ int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *co
   const int nvol = m->nvol;
   size_t cap = 1 + (size_t)nvol + 3 * nc + nextra * nc;
   o->names = gs_calloc(cap, sizeof *o->names, err);
+  o->units = gs_calloc(cap, sizeof *o->units, err);
   o->what = gs_calloc(cap, sizeof *o->what, err);
   o->index = gs_calloc(cap, sizeof *o->index, err);
   o->comp = gs_calloc(cap, sizeof *o->comp, err);
   o->ncomp = nc;
   o->nvol = nvol;
   o->nmech_col = gs_model_ncolumns(m);
-  if (!o->names || !o->what || !o->index || !o->comp) {
+  if (!o->names || !o->units || !o->what || !o->index || !o->comp) {
     gs_study_outputs_free(o);
     return GS_ENOMEM;
   }
-  int rc = add_col(o, W_M0_ALL, 0, (size_t)-1, "%s", "M0", err);
+  int rc = add_col(o, m, W_M0_ALL, 0, (size_t)-1, "%s", "M0", err);
   for (int k = 0; k < nvol && !rc; k++)
-    rc = add_col(o, W_M1_ALL, k, (size_t)-1, "M1_%s", gs_model_vol_name(m, k), err);
+    rc = add_col(o, m, W_M1_ALL, k, (size_t)-1, "M1_%s", gs_model_vol_name(m, k), err);
   for (int w = W_D10; w <= W_D90 && !rc; w++)
     for (size_t j = 0; j < nc && !rc; j++)
-      rc = add_col(o, w, 0, j, "%s_c%zu", fixed_names[w - W_M0], err);
+      rc = add_col(o, m, w, 0, j, "%s_c%zu", fixed_names[w - W_M0], err);
   for (size_t e = 0; e < nextra && !rc; e++) {
     int what = -1, index = 0;
     int dup = !strcmp(extra[e], "d10") || !strcmp(extra[e], "d50") || !strcmp(extra[e], "d90");
@@ -118,7 +131,7 @@ int gs_study_outputs_init(gs_study_outputs *o, const gs_model *m, const char *co
       rc = gs_error_set(err, GS_EINPUT, "--outputs: unknown summary column '%s'; known: %s",
                         extra[e], known);
     }
-    for (size_t j = 0; j < nc && !rc; j++) rc = add_col(o, what, index, j, "%s_c%zu", extra[e], err);
+    for (size_t j = 0; j < nc && !rc; j++) rc = add_col(o, m, what, index, j, "%s_c%zu", extra[e], err);
   }
   if (rc) gs_study_outputs_free(o);
   return rc;
@@ -191,6 +204,7 @@ void gs_study_outputs_free(gs_study_outputs *o) {
   if (!o) return;
   for (size_t i = 0; o->names && i < o->ncol; i++) free(o->names[i]);
   free(o->names);
+  free(o->units);
   free(o->what);
   free(o->index);
   free(o->comp);

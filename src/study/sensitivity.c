@@ -15,6 +15,7 @@
 #include <gsl/gsl_sort.h>
 #include <gsl/gsl_statistics_double.h>
 
+#include "demdata/csv_meta.h"
 #include "study/study_internal.h"
 
 void gs_sens_result_free(gs_sens_result *r) {
@@ -22,6 +23,8 @@ void gs_sens_result_free(gs_sens_result *r) {
   double **all[] = {&r->s1, &r->s1_lo, &r->s1_hi, &r->st, &r->st_lo, &r->st_hi,
                     &r->mu, &r->mu_star, &r->sigma};
   for (size_t i = 0; i < sizeof all / sizeof *all; i++) free(*all[i]);
+  for (size_t o = 0; r->unit && o < r->nout; o++) free(r->unit[o]);
+  free(r->unit);
   memset(r, 0, sizeof *r);
 }
 
@@ -335,20 +338,38 @@ int gs_sensitivity_case(const gs_cfg *base, const gs_study_axis *axes, size_t ni
   if (!cc.col) rc = GS_ENOMEM;
   for (size_t j = 0; j < nout && !rc; j++)
     rc = gs_study_outputs_find(&o, outputs[j], "--outputs column", &cc.col[j], err);
+  char **unit = gs_calloc(nout ? nout : 1, sizeof *unit, err);
+  if (!rc && !unit) rc = GS_ENOMEM;
+  for (size_t j = 0; j < nout && !rc; j++)
+    if (!(unit[j] = strdup(o.units[cc.col[j]]))) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   gs_study_outputs_free(&o);
   if (!rc) rc = gs_sensitivity(axes, nin, nout, case_model, &cc, opt, res, err);
+  if (!rc) res->unit = unit, unit = NULL;
+  for (size_t j = 0; unit && j < nout; j++) free(unit[j]);
+  free(unit);
   free(cc.col);
   return rc;
 }
 
 int gs_sens_write_csv(const char *path, const gs_sens_result *r, const gs_study_axis *axes,
                       const char *const *outputs, gs_error *err) {
-  char tmp[4200];
-  snprintf(tmp, sizeof tmp, "%s.partial", path);
-  FILE *f = fopen(tmp, "w");
-  if (!f) return gs_error_set(err, GS_EIO, "cannot write '%s': %s", tmp, strerror(errno));
+  gs_csv_out t;
+  FILE *f = gs_csv_open(&t, path, err);
+  if (!f) return err->code;
   const int sobol = r->method == GS_SENS_SOBOL;
-  fputs(sobol ? "output,key,S1,S1_lo,S1_hi,ST,ST_lo,ST_hi\n" : "output,key,mu,mu_star,sigma\n", f);
+  if (sobol)
+    fputs("# Sobol' indices of each output (a summary column at the final time) and key: "
+          "first-order S1 and total ST with bootstrap intervals [lo, hi], fractions of the "
+          "output's variance (dimensionless).\n"
+          "output,key,S1 [1],S1_lo [1],S1_hi [1],ST [1],ST_lo [1],ST_hi [1]\n",
+          f);
+  else
+    fputs("# Morris elementary effects of each output (a summary column at the final time) and "
+          "key: mean mu, mean of the absolute values mu_star and standard deviation sigma of "
+          "the output's change per whole range of the key, in the output's unit (the row's "
+          "unit).\n"
+          "output,key,mu [unit],mu_star [unit],sigma [unit],unit\n",
+          f);
   for (size_t o = 0; o < r->nout; o++)
     for (size_t k = 0; k < r->nin; k++) {
       const size_t i = o * r->nin + k;
@@ -356,12 +377,12 @@ int gs_sens_write_csv(const char *path, const gs_sens_result *r, const gs_study_
         fprintf(f, "%s,%s,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", outputs[o], axes[k].key, r->s1[i],
                 r->s1_lo[i], r->s1_hi[i], r->st[i], r->st_lo[i], r->st_hi[i]);
       else
-        fprintf(f, "%s,%s,%.10g,%.10g,%.10g\n", outputs[o], axes[k].key, r->mu[i], r->mu_star[i],
-                r->sigma[i]);
+        fprintf(f, "%s,%s,%.10g,%.10g,%.10g,%s\n", outputs[o], axes[k].key, r->mu[i], r->mu_star[i],
+                r->sigma[i], r->unit ? r->unit[o] : "");
     }
-  if (fclose(f) || rename(tmp, path)) {
-    remove(tmp);
-    return gs_error_set(err, GS_EIO, "cannot write '%s': %s", path, strerror(errno));
-  }
-  return GS_OK;
+  static const char *const sobol_units[] = {"S1", "1", "S1_lo", "1", "S1_hi", "1", "ST", "1",
+                                            "ST_lo", "1", "ST_hi", "1", NULL};
+  static const char *const morris_units[] = {"mu", "the row's unit", "mu_star", "the row's unit",
+                                             "sigma", "the row's unit", NULL};
+  return gs_csv_close(&t, "gransim sensitivity", sobol ? sobol_units : morris_units, err);
 }

@@ -23,6 +23,9 @@ void gs_study_extras_all(const gs_model *m, gs_study_extras *x);
 int gs_study_outputs_find(const gs_study_outputs *o, const char *name, const char *what,
                           size_t *col, gs_error *err);
 
+/* A study table's header field: "NAME [UNIT]", as summary.csv's. */
+void gs_study_header(const char *name, const char *unit, char *buf, size_t n);
+
 /* The logistic map from an unbounded z to (LO, HI) (in log for log ranges),
  * so that every trial point of an unconstrained method is a valid case;
  * *dxdz (if not NULL) its derivative.  gs_study_to_z is its inverse. */

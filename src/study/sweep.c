@@ -78,10 +78,19 @@ static int make_dir(const char *dir, gs_error *err) {
   return GS_OK;
 }
 
+/* The tables' header: each key and output with its unit, as summary.csv's
+ * (run, status and error are a number and text). */
 static int header_of(const gs_design *d, const gs_study_outputs *o, buf_t *h) {
+  char field[512];
   int bad = buf_add(h, "run,status");
-  for (size_t k = 0; k < d->nkeys; k++) bad |= buf_add(h, ",%s", d->keys[k]);
-  for (size_t i = 0; i < o->ncol; i++) bad |= buf_add(h, ",%s", o->names[i]);
+  for (size_t k = 0; k < d->nkeys; k++) {
+    gs_study_header(d->keys[k], gs_study_key_unit(d->keys[k]), field, sizeof field);
+    bad |= buf_add(h, ",%s", field);
+  }
+  for (size_t i = 0; i < o->ncol; i++) {
+    gs_study_header(o->names[i], o->units[i], field, sizeof field);
+    bad |= buf_add(h, ",%s", field);
+  }
   return bad | buf_add(h, ",error\n");
 }
 

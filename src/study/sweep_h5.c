@@ -2,7 +2,9 @@
  * finished run in run order:
  *   /run (float64, from 1: exact), /status ("ok" | "error"), /error (message or "")
  *   /params/<key>   float64 when every value is a number, else strings
- *   /outputs/<name> float64 (nan for failed runs) */
+ *   /outputs/<name> float64 (nan for failed runs)
+ * each with the attributes `units` (the column's in sweep.csv; "" for text)
+ * and `dimensions` ("run"). */
 #include "study/sweep_h5.h"
 
 #include <hdf5.h>
@@ -12,6 +14,8 @@
 #include <string.h>
 
 #include "output/h5_setup.h"
+#include "output/units.h"
+#include "study/study_internal.h"
 
 /* Splits a journal line in place: fields[0..nplain) at commas, then the rest
  * (the quoted error) unquoted into *error. */
@@ -91,13 +95,18 @@ int gs_sweep_write_h5(const char *dir, const gs_design *d, const gs_study_output
       num[i] = strtod(text[i], &end);
       numeric &= end != text[i] && !*end;
     }
-    if (c == 0) bad |= write_doubles(f, "run", num, n); /* run numbers are exact in float64 */
-    else if (c == 1) bad |= write_strings(f, "status", text, n);
-    else if (c < 2 + nk)
-      bad |= numeric ? write_doubles(gp, d->keys[c - 2], num, n) : write_strings(gp, d->keys[c - 2], text, n);
-    else bad |= write_doubles(go, o->names[c - 2 - nk], num, n);
+    if (c == 0) bad |= write_doubles(f, "run", num, n) || gs_h5_describe(f, "run", "1", "run") < 0; /* run numbers are exact in float64 */
+    else if (c == 1) bad |= write_strings(f, "status", text, n) || gs_h5_describe(f, "status", "", "run") < 0;
+    else if (c < 2 + nk) {
+      const char *key = d->keys[c - 2];
+      bad |= numeric ? write_doubles(gp, key, num, n) : write_strings(gp, key, text, n);
+      bad |= !bad && gs_h5_describe(gp, key, numeric ? gs_study_key_unit(key) : "", "run") < 0;
+    } else {
+      const size_t i = c - 2 - nk;
+      bad |= write_doubles(go, o->names[i], num, n) || gs_h5_describe(go, o->names[i], o->units[i], "run") < 0;
+    }
   }
-  if (!bad) bad |= write_strings(f, "error", errors, n);
+  if (!bad) bad |= write_strings(f, "error", errors, n) || gs_h5_describe(f, "error", "", "run") < 0;
   if (gp >= 0) H5Gclose(gp);
   if (go >= 0) H5Gclose(go);
   char cause[256] = "";

@@ -9,6 +9,26 @@
 
 #include "study/study_internal.h"
 
+/* Whether header lines a and b name the same columns, units aside: a
+ * journal written before the headers gave units ("d50_c1" for "d50_c1 [m]")
+ * resumes, its rows being the same. */
+static int same_columns(const char *a, const char *b) {
+  for (;;) {
+    size_t na = strcspn(a, ",\n"), nb = strcspn(b, ",\n");
+    const char *ua = na && a[na - 1] == ']' ? memchr(a, '[', na) : NULL;
+    const char *ub = nb && b[nb - 1] == ']' ? memchr(b, '[', nb) : NULL;
+    size_t ka = ua && ua > a + 1 && ua[-1] == ' ' ? (size_t)(ua - a) - 1 : na;
+    size_t kb = ub && ub > b + 1 && ub[-1] == ' ' ? (size_t)(ub - b) - 1 : nb;
+    if (ka != kb || strncmp(a, b, ka)) return 0;
+    a += na;
+    b += nb;
+    if (*a != *b) return 0;
+    if (*a != ',') return 1;
+    a++;
+    b++;
+  }
+}
+
 int gs_sweep_journal_read(const char *path, const char *header, const gs_design *d, char **row,
                           size_t *nfinished, gs_error *err) {
   FILE *f = fopen(path, "r");
@@ -22,7 +42,7 @@ int gs_sweep_journal_read(const char *path, const char *header, const gs_design 
     lineno++;
     if (line[len - 1] != '\n') break; /* torn: dropped below */
     if (lineno == 1) {
-      if (strcmp(line, header))
+      if (strcmp(line, header) && !same_columns(line, header))
         rc = gs_error_set(err, GS_EINPUT,
                           "cannot resume: '%s' was written by a sweep with other keys or outputs "
                           "(header %.*s; this sweep's %.*s)",
