@@ -2,7 +2,9 @@
  * and values the case gives: material properties (per type and pair means),
  * time step, gravity, the mesh and its scale, the impeller's rotation as a
  * period, the feed's insertion, the outlet, the dumps; and keys a deck cannot
- * express are refused naming them.  Runs without LIGGGHTS. */
+ * express are refused naming them.  A plane wall's mesh is the polygon in
+ * which it cuts the box: for x + y + z = 0 through a cube of half-size a the
+ * regular hexagon of area 3 sqrt(3) a^2.  Runs without LIGGGHTS. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,6 +15,7 @@
 #include "gransim/dem.h"
 #include "gransim/dem_data.h"
 #include "gransim/liggghts.h"
+#include "liggghts/lig_internal.h"
 
 static const char *stl =
     "solid t\n facet normal 0 0 1\n  outer loop\n   vertex -10 -10 0\n   vertex 10 -10 0\n   vertex 10 10 0\n"
@@ -125,10 +128,59 @@ int main(void) {
     if (d) HAS(d, want);
     free(d);
   }
+  /* a static plane: read as the mesh of its polygon in the box; an oblique
+   * one through the centre of a cube widened by the largest radius, rmax */
+  {
+    const char *rot = "    rotation: {origin: [0, 0, 0], axis: [0, 0, 1], rpm: 600}\n";
+    const char *mesh = "    mesh: liggghts_deck_plate.stl\n    scale: 1.0e-3\n";
+    char y[4096];
+    const char *at = strstr(base, mesh), *at2 = strstr(base, rot);
+    CHECK(at && at2 && at < at2);
+    snprintf(y, sizeof y, "%.*s    plane: {point: [0, 0, 0], normal: [1, 1, 1]}\n%.*s%s", (int)(at - base), base,
+             (int)(at2 - at - strlen(mesh)), at + strlen(mesh), at2 + strlen(rot));
+    d = deck_of(y, &err, &rc);
+    if (rc) fprintf(stderr, "%s\n", err.msg);
+    CHECK(rc == 0 && d);
+    if (d) HAS(d, "fix wall0 all mesh/surface file wall0_plane.stl type 3 ");
+    free(d);
+    fp = fopen("liggghts_deck_case.yaml", "w");
+    fputs(y, fp);
+    fclose(fp);
+    gs_dem_case *c = gs_dem_case_load("liggghts_deck_case.yaml", &err);
+    CHECK(c != NULL);
+    if (c) CHECK(gs_lig_write_plane_mesh(c, 0, "plane.stl", &err) == 0);
+    gs_dem_case_free(c);
+    const double a = 0.02 + 1.5e-3; /* the box's half-size and class b's radius */
+    double area = 0, x[3][3];
+    int ntri = 0, nv = 0, bad_v = 0;
+    char line[256];
+    FILE *in = fopen("plane.stl", "r");
+    while (in && fgets(line, sizeof line, in)) {
+      if (sscanf(line, " vertex %lf %lf %lf", &x[nv][0], &x[nv][1], &x[nv][2]) != 3) continue;
+      /* on the plane, and on the widened box's surface */
+      double on = fabs(x[nv][0] + x[nv][1] + x[nv][2]), m = 0;
+      for (int k = 0; k < 3; k++) m = fmax(m, fabs(x[nv][k]));
+      bad_v += on > 1e-15 || fabs(m - a) > 1e-15;
+      if (++nv < 3) continue;
+      double u[3], v[3];
+      for (int k = 0; k < 3; k++) u[k] = x[1][k] - x[0][k], v[k] = x[2][k] - x[0][k];
+      double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2], cz = u[0] * v[1] - u[1] * v[0];
+      area += 0.5 * sqrt(cx * cx + cy * cy + cz * cz);
+      ntri++, nv = 0;
+    }
+    if (in) fclose(in);
+    remove("plane.stl");
+    printf("test_liggghts_deck: oblique plane: %d triangles, area %.12g m^2 (hexagon %.12g)\n", ntri, area,
+           3 * sqrt(3.0) * a * a);
+    CHECK(ntri == 4 && bad_v == 0);
+    CHECK(fabs(area / (3 * sqrt(3.0) * a * a) - 1) < 1e-12);
+  }
   /* refused keys name themselves */
   struct { const char *from, *to, *msg; } bad[] = {
       {"    mesh: liggghts_deck_plate.stl\n    scale: 1.0e-3\n", "    plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n",
-       "walls[0] (imp): plane walls"},
+       "walls[0] (imp).rotation: a moving plane"},
+      {"    mesh: liggghts_deck_plate.stl\n    scale: 1.0e-3\n",
+       "    cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.015}\n", "walls[0] (imp): cylinder walls"},
       {"statistics: {start: 0.005", "statistics: {start: steady", "statistics.start"},
       {"axis: [0, 1, 0], radius: 0.005,", "axis: [0, 1, 0], radius: 0.005, inner_radius: 0.001,", "feed[0].region.cylinder"},
       {"{name: b, radius: 1.5e-3,", "{name: b, radius: [1.0e-3, 2.0e-3],", "classes[1].radius"},

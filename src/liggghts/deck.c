@@ -162,6 +162,10 @@ static void preamble(const gs_dem_case *c, FILE *fp, const char *data_file) {
 }
 
 void gs_lig_mesh_name(const gs_dem_case *c, size_t w, char *buf, size_t n) {
+  if (c->wall_src[w].kind == GS_DEM_SRC_PLANE) {
+    snprintf(buf, n, "wall%zu_plane.stl", w);
+    return;
+  }
   const char *base = strrchr(c->wall_src[w].mesh, '/');
   snprintf(buf, n, "wall%zu_%s", w, base ? base + 1 : c->wall_src[w].mesh);
 }
@@ -185,11 +189,20 @@ int gs_lig_check(const gs_dem_case *c, gs_error *err) {
     return gs_error_set(err, GS_EINPUT, "%s: not expressible in a LIGGGHTS deck (droplets, the liquid on the "
                         "particles and their aggregation live in the embedded engine); use engine: embedded",
                         c->wet->has_spray ? "spray" : "granulation");
-  for (size_t w = 0; w < c->nwall_src; w++)
-    if (c->wall_src[w].kind != GS_DEM_SRC_MESH)
-      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): %s walls are not expressible in the LIGGGHTS engine "
-                          "(compute wall/gran/local reports mesh walls only); give the wall as an STL mesh", w,
-                          c->wall_src[w].name, c->wall_src[w].kind == GS_DEM_SRC_PLANE ? "plane" : "cylinder");
+  /* a plane becomes a mesh (plane_mesh.c) of the box's size: it may not move out of it */
+  for (size_t w = 0; w < c->nwall_src; w++) {
+    const gs_dem_wall_src *s = &c->wall_src[w];
+    if (s->kind == GS_DEM_SRC_CYLINDER)
+      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): cylinder walls are not expressible in the LIGGGHTS "
+                          "engine (a primitive cylinder's contacts are not reported by compute wall/gran/local, "
+                          "and a faceted one gets two contacts at each fold by LIGGGHTS' mesh rule); give the "
+                          "wall as an STL mesh", w, s->name);
+    if (s->kind == GS_DEM_SRC_PLANE && (s->rotating || s->velocity[0] != 0 || s->velocity[1] != 0 ||
+                                        s->velocity[2] != 0))
+      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s).%s: a moving plane is not expressible in the LIGGGHTS "
+                          "engine (the deck meshes the plane where it cuts the box at t = 0); give the wall as "
+                          "an STL mesh", w, s->name, s->rotating ? "rotation" : "velocity");
+  }
   for (size_t w = 0; w < c->nwall_src; w++)
     if (c->wall_src[w].rotating && c->wall_src[w].spin_start > 0)
       return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): rotation.start is not expressible in a LIGGGHTS deck "
@@ -233,7 +246,7 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   int rc = gs_lig_check(c, err);
   if (rc) return rc;
   for (size_t w = 0; w < c->nwall_src; w++)
-    if (!c->wall_src[w].mesh[0])
+    if (!c->wall_src[w].mesh[0] && c->wall_src[w].kind == GS_DEM_SRC_MESH)
       return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): the generated mesh has no file yet; write it first "
                           "(gs_dem_case_write_geometry)", w, c->wall_src[w].name);
   const gs_dem_params *p = &c->prm;
