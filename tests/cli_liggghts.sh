@@ -26,16 +26,16 @@ with open(sys.argv[1], "w") as f:
             f.write("  endloop\n endfacet\n")
     f.write("endsolid box\n")
 PY
-case_yaml() { # case_yaml ENGINE
+box_yaml() { # box_yaml ENGINE DURATION SEED WALLS FILL STATISTICS: two classes in the 22 x 22 x 32 mm box
   cat <<YAML
 dem:
   time_step: 5.0e-6
-  duration: 0.1
+  duration: $2
   gravity: [0, 0, -9.81]
   box: {lo: [-0.011, -0.011, -0.001], hi: [0.011, 0.011, 0.031]}
   damping: liggghts
   mesh_contacts: liggghts
-  seed: 3
+  seed: $3
   engine: $1
 materials:
   - {name: granule, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}
@@ -43,12 +43,16 @@ classes:
   - {name: small, radius: 1.0e-3, material: granule}
   - {name: large, radius: 1.5e-3, material: granule}
 walls:
-  - {name: box, mesh: box.stl, scale: 1.0e-3, material: granule}
+$4
 fill:
-  - region: {box: {lo: [-0.008, -0.008, 0.002], hi: [0.008, 0.008, 0.025]}}
-    count: 200
-statistics: {start: 0.08, sample_every: 0.0025}
+$5
+statistics: $6
 YAML
+}
+case_yaml() { # case_yaml ENGINE
+  box_yaml "$1" 0.1 3 "  - {name: box, mesh: box.stl, scale: 1.0e-3, material: granule}" \
+    "  - region: {box: {lo: [-0.008, -0.008, 0.002], hi: [0.008, 0.008, 0.025]}}
+    count: 200" "{start: 0.08, sample_every: 0.0025}"
 }
 case_yaml embedded > "$W/e.yaml"
 case_yaml liggghts > "$W/l.yaml"
@@ -187,32 +191,13 @@ PY
 # class, none on the sides (a plane's contact is one contact, as the embedded engine's); the mean
 # normal impact speed within 15 % (LIGGGHTS' is read up to K steps into the contact).
 plane_yaml() { # plane_yaml ENGINE [VELOCITY]
-  cat <<YAML
-dem:
-  time_step: 5.0e-6
-  duration: 0.06
-  gravity: [0, 0, -9.81]
-  box: {lo: [-0.011, -0.011, -0.001], hi: [0.011, 0.011, 0.031]}
-  damping: liggghts
-  mesh_contacts: liggghts
-  seed: 5
-  engine: $1
-materials:
-  - {name: granule, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}
-classes:
-  - {name: small, radius: 1.0e-3, material: granule}
-  - {name: large, radius: 1.5e-3, material: granule}
-walls:
-  - {name: floor, plane: {point: [0, 0, 0], normal: [0, 0, 1]}, material: granule${2:+, velocity: $2}}
+  box_yaml "$1" 0.06 5 "  - {name: floor, plane: {point: [0, 0, 0], normal: [0, 0, 1]}, material: granule${2:+, velocity: $2}}
   - {name: xlo, plane: {point: [-0.01, 0, 0], normal: [1, 0, 0]}, material: granule}
   - {name: xhi, plane: {point: [0.01, 0, 0], normal: [-1, 0, 0]}, material: granule}
   - {name: ylo, plane: {point: [0, -0.01, 0], normal: [0, 1, 0]}, material: granule}
-  - {name: yhi, plane: {point: [0, 0.01, 0], normal: [0, -1, 0]}, material: granule}
-fill:
-  - region: {box: {lo: [-0.007, -0.007, 0.006], hi: [0.007, 0.007, 0.012]}}
-    count: 20
-statistics: {start: 0, sample_every: 0.0025}
-YAML
+  - {name: yhi, plane: {point: [0, 0.01, 0], normal: [0, -1, 0]}, material: granule}" \
+    "  - region: {box: {lo: [-0.007, -0.007, 0.006], hi: [0.007, 0.007, 0.012]}}
+    count: 20" "{start: 0, sample_every: 0.0025}"
 }
 plane_yaml embedded > "$W/pe.yaml"
 plane_yaml liggghts > "$W/pl.yaml"
