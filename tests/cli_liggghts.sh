@@ -1,6 +1,9 @@
 # `engine: liggghts`: a tiny settling case (200 spheres of two classes in an STL box) through
 # both engines; both must write the same tables with the same classes and columns, keep every
-# particle, and agree on the mean velocity to within its order of magnitude.  Skips (exit 0)
+# particle, and agree on the mean velocity to within its order of magnitude.  Further below, each
+# with its own comment: outlets and the hold-up, plane walls (the same events on both engines),
+# feeds of radius-range and lognormal classes, refusals, the bundled examples, the cluster
+# recipe; and with GRANSIM_TEST_LONG=1 the same physics on the CoriMix meshes.  Skips (exit 0)
 # only when the liggghts binary is absent (scripts/setup installs it).
 # Usage: bash cli_liggghts.sh GRANSIM_BINARY SOURCE_DIR
 set -euo pipefail
