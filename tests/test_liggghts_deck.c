@@ -2,7 +2,9 @@
  * and values the case gives: material properties (per type and pair means),
  * time step, gravity, the mesh and its scale, the impeller's rotation as a
  * period, the feed's insertion, the outlet, the dumps; and keys a deck cannot
- * express are refused naming them.  Runs without LIGGGHTS. */
+ * express are refused naming them.  A plane wall's mesh is the polygon in
+ * which it cuts the box: for x + y + z = 0 through a cube of half-size a the
+ * regular hexagon of area 3 sqrt(3) a^2.  Runs without LIGGGHTS. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,6 +15,7 @@
 #include "gransim/dem.h"
 #include "gransim/dem_data.h"
 #include "gransim/liggghts.h"
+#include "liggghts/lig_internal.h"
 
 static const char *stl =
     "solid t\n facet normal 0 0 1\n  outer loop\n   vertex -10 -10 0\n   vertex 10 -10 0\n   vertex 10 10 0\n"
@@ -126,13 +129,129 @@ int main(void) {
     if (d) HAS(d, want);
     free(d);
   }
+  /* a fed class with a range of radii: 16 templates for 16 equal-number
+   * bins [a, b] = 1 + [j - 1, j]/16 mm, r_j^3 the bin's mean r^3
+   * (b^4 - a^4) / (4 (b - a)), their mass weights in proportion to r_j^3
+   * and adding up to the class's mass fraction 3/4 */
+  {
+    char y[4096];
+    const char *from = "{name: b, radius: 1.5e-3,", *at = strstr(base, from);
+    CHECK(at != NULL);
+    snprintf(y, sizeof y, "%.*s{name: b, radius: [1.0e-3, 2.0e-3],%s", (int)(at - base), base, at + strlen(from));
+    d = deck_of(y, &err, &rc);
+    if (rc) fprintf(stderr, "%s\n", err.msg);
+    CHECK(rc == 0 && d);
+    if (d) {
+      double r3[17], s3 = 0, wb = 0, w1 = 0, w16 = 0;
+      for (int j = 1; j <= 16; j++) {
+        double a = 1 + (j - 1) / 16.0, b = 1 + j / 16.0;
+        r3[j] = (pow(b, 4) - pow(a, 4)) / (4 * (b - a));
+        s3 += r3[j];
+      }
+      char want[160];
+      for (int j = 1; j <= 16; j += 15) {
+        snprintf(want, sizeof want, "atom_type 2 density constant 500 radius constant %.9g\n", 1e-3 * cbrt(r3[j]));
+        HAS(d, want);
+      }
+      HAS(d, "fix pdd0 all particledistribution/discrete ");
+      const char *p = strstr(d, "fix pdd0 all particledistribution/discrete ");
+      char key[32];
+      for (int j = 1; p && j <= 16; j++) {
+        snprintf(key, sizeof key, " pts2_%d ", j);
+        const char *q = strstr(p, key);
+        CHECK(q != NULL);
+        double w = q ? atof(q + strlen(key)) : 0;
+        wb += w;
+        if (j == 1) w1 = w;
+        if (j == 16) w16 = w;
+      }
+      CHECK(fabs(wb - 0.75) < 1e-8);
+      CHECK(fabs(w1 - 0.75 * r3[1] / s3) < 1e-8 && fabs(w16 - 0.75 * r3[16] / s3) < 1e-8);
+    }
+    free(d);
+  }
+  /* a lognormal class (median 1 mm, gsd 1.3, truncated at gsd^-+3): the
+   * templates' mean r^3 is the truncated distribution's E[r^3] =
+   * exp(3 mu + 9 s^2/2) (P(3 - 3 s) - P(-3 - 3 s)) / (P(3) - P(-3)) */
+  {
+    char y[4096];
+    const char *from = "{name: b, radius: 1.5e-3,", *at = strstr(base, from);
+    snprintf(y, sizeof y, "%.*s{name: b, radius: {type: lognormal, median: 1.0e-3, gsd: 1.3},%s", (int)(at - base),
+             base, at + strlen(from));
+    fp = fopen("liggghts_deck_case.yaml", "w");
+    fputs(y, fp);
+    fclose(fp);
+    gs_dem_case *c = gs_dem_case_load("liggghts_deck_case.yaml", &err);
+    CHECK(c != NULL);
+    double r[GS_LIG_RADII], m3 = 0;
+    int n = c ? gs_lig_class_radii(c, 1, r) : 0;
+    CHECK(n == GS_LIG_RADII);
+    for (int j = 0; j < n; j++) m3 += r[j] * r[j] * r[j] / n;
+    const double sg = log(1.3);
+#define PHI(x) (0.5 * erfc(-(x) / sqrt(2.0)))
+    const double want = 1e-9 * exp(4.5 * sg * sg) * (PHI(3 - 3 * sg) - PHI(-3 - 3 * sg)) / (PHI(3.0) - PHI(-3.0));
+#undef PHI
+    printf("test_liggghts_deck: lognormal class: mean r^3 of the templates %.12g, of the distribution %.12g\n", m3,
+           want);
+    CHECK(fabs(m3 / want - 1) < 1e-9);
+    for (int j = 1; j < n; j++) CHECK(r[j] > r[j - 1] && r[0] >= 1e-3 / pow(1.3, 3) && r[n - 1] <= 1e-3 * pow(1.3, 3));
+    gs_dem_case_free(c);
+  }
+  /* a static plane: read as the mesh of its polygon in the box; an oblique
+   * one through the centre of a cube widened by the largest radius, rmax */
+  {
+    const char *rot = "    rotation: {origin: [0, 0, 0], axis: [0, 0, 1], rpm: 600}\n";
+    const char *mesh = "    mesh: liggghts_deck_plate.stl\n    scale: 1.0e-3\n";
+    char y[4096];
+    const char *at = strstr(base, mesh), *at2 = strstr(base, rot);
+    CHECK(at && at2 && at < at2);
+    snprintf(y, sizeof y, "%.*s    plane: {point: [0, 0, 0], normal: [1, 1, 1]}\n%.*s%s", (int)(at - base), base,
+             (int)(at2 - at - strlen(mesh)), at + strlen(mesh), at2 + strlen(rot));
+    d = deck_of(y, &err, &rc);
+    if (rc) fprintf(stderr, "%s\n", err.msg);
+    CHECK(rc == 0 && d);
+    if (d) HAS(d, "fix wall0 all mesh/surface file wall0_plane.stl type 3 ");
+    free(d);
+    fp = fopen("liggghts_deck_case.yaml", "w");
+    fputs(y, fp);
+    fclose(fp);
+    gs_dem_case *c = gs_dem_case_load("liggghts_deck_case.yaml", &err);
+    CHECK(c != NULL);
+    if (c) CHECK(gs_lig_write_plane_mesh(c, 0, "plane.stl", &err) == 0);
+    gs_dem_case_free(c);
+    const double a = 0.02 + 1.5e-3; /* the box's half-size and class b's radius */
+    double area = 0, x[3][3];
+    int ntri = 0, nv = 0, bad_v = 0;
+    char line[256];
+    FILE *in = fopen("plane.stl", "r");
+    while (in && fgets(line, sizeof line, in)) {
+      if (sscanf(line, " vertex %lf %lf %lf", &x[nv][0], &x[nv][1], &x[nv][2]) != 3) continue;
+      /* on the plane, and on the widened box's surface */
+      double on = fabs(x[nv][0] + x[nv][1] + x[nv][2]), m = 0;
+      for (int k = 0; k < 3; k++) m = fmax(m, fabs(x[nv][k]));
+      bad_v += on > 1e-15 || fabs(m - a) > 1e-15;
+      if (++nv < 3) continue;
+      double u[3], v[3];
+      for (int k = 0; k < 3; k++) u[k] = x[1][k] - x[0][k], v[k] = x[2][k] - x[0][k];
+      double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2], cz = u[0] * v[1] - u[1] * v[0];
+      area += 0.5 * sqrt(cx * cx + cy * cy + cz * cz);
+      ntri++, nv = 0;
+    }
+    if (in) fclose(in);
+    remove("plane.stl");
+    printf("test_liggghts_deck: oblique plane: %d triangles, area %.12g m^2 (hexagon %.12g)\n", ntri, area,
+           3 * sqrt(3.0) * a * a);
+    CHECK(ntri == 4 && bad_v == 0);
+    CHECK(fabs(area / (3 * sqrt(3.0) * a * a) - 1) < 1e-12);
+  }
   /* refused keys name themselves */
   struct { const char *from, *to, *msg; } bad[] = {
       {"    mesh: liggghts_deck_plate.stl\n    scale: 1.0e-3\n", "    plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n",
-       "walls[0] (imp): plane walls"},
+       "walls[0] (imp).rotation: a moving plane"},
+      {"    mesh: liggghts_deck_plate.stl\n    scale: 1.0e-3\n",
+       "    cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.015}\n", "walls[0] (imp): cylinder walls"},
       {"statistics: {start: 0.005", "statistics: {start: steady", "statistics.start"},
       {"axis: [0, 1, 0], radius: 0.005,", "axis: [0, 1, 0], radius: 0.005, inner_radius: 0.001,", "feed[0].region.cylinder"},
-      {"{name: b, radius: 1.5e-3,", "{name: b, radius: [1.0e-3, 2.0e-3],", "classes[1].radius"},
       {"seed: 5,", "seed: 5, damping: exact,", "dem.damping"},
       {"seed: 5,", "seed: 5, mesh_contacts: closest,", "dem.mesh_contacts"},
       {"statistics: {start: 0.005", "spray: {point: [0, 0, 0.01], axis: [0, 0, -1], half_angle: 25, droplet_diameter: "

@@ -205,6 +205,8 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
     if ((rc = gs_cfg_require_kind(pl, GS_CFG_MAP, err)) || (rc = vec3(pl, "point", 1, NULL, p, err)) ||
         (rc = unit_vec(pl, "normal", nv, err)) || (rc = gs_cfg_check_unused(pl, err)))
       return rc;
+    memcpy(src->point, p, sizeof p);
+    memcpy(src->normal, nv, sizeof nv);
     w = gs_dem_add_plane(c->dem, name, p, nv, m, err);
   } else {
     double p[3], a[3], R;

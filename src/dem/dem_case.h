@@ -28,6 +28,7 @@ typedef struct {
   double origin[3], axis[3], omega; /* rotation (omega rad/s about the unit axis) */
   double spin_start;                /* rotation.start: the rotation begins then [s] */
   double velocity[3];
+  double point[3], normal[3]; /* plane: a point and the unit normal (the LIGGGHTS deck meshes it) */
   int generated;         /* generate: mesh is empty until gs_dem_case_write_geometry */
   int wall;              /* the engine's wall index */
 } gs_dem_wall_src;

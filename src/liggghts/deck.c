@@ -11,6 +11,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include <gsl/gsl_cdf.h>
+
 #include "dem/dem_case.h"
 #include "dem/dem_wet.h"
 #include "gransim/dem_data.h"
@@ -162,6 +164,10 @@ static void preamble(const gs_dem_case *c, FILE *fp, const char *data_file) {
 }
 
 void gs_lig_mesh_name(const gs_dem_case *c, size_t w, char *buf, size_t n) {
+  if (c->wall_src[w].kind == GS_DEM_SRC_PLANE) {
+    snprintf(buf, n, "wall%zu_plane.stl", w);
+    return;
+  }
   const char *base = strrchr(c->wall_src[w].mesh, '/');
   snprintf(buf, n, "wall%zu_%s", w, base ? base + 1 : c->wall_src[w].mesh);
 }
@@ -179,17 +185,58 @@ long gs_lig_event_every(const gs_dem_case *c) {
   return (long)fmax(1, floor(tc / 3 / c->prm.dt));
 }
 
+/* The radii by which a feed inserts class i: its radius, or for a range or a
+ * truncated lognormal one per each of GS_LIG_RADII bins of equal number,
+ * since particletemplate/sphere takes a constant radius only in LIGGGHTS 3.8
+ * and a distribution of templates stands for the class.  A bin's radius is
+ * the cube root of its mean r^3, so that the class's mean particle mass is
+ * the distribution's (the bins' midpoints would make it 2.4 % light for a
+ * lognormal of gsd 1.3).  Returns how many. */
+int gs_lig_class_radii(const gs_dem_case *c, size_t i, double *r) {
+  const gs_dem_class *k = &c->cls[i];
+  if (k->rmin == k->rmax) {
+    r[0] = k->rmin;
+    return 1;
+  }
+  const int lognormal = k->gsd > 1;
+  const double mu = lognormal ? log(k->median) : 0, sg = lognormal ? log(k->gsd) : 0;
+  const double za = lognormal ? (log(k->rmin) - mu) / sg : 0, zb = lognormal ? (log(k->rmax) - mu) / sg : 0;
+  const double pa = lognormal ? gsl_cdf_ugaussian_P(za) : 0, pb = lognormal ? gsl_cdf_ugaussian_P(zb) : 1;
+  for (int j = 0; j < GS_LIG_RADII; j++) {
+    const double q0 = pa + (double)j / GS_LIG_RADII * (pb - pa), q1 = pa + (j + 1.0) / GS_LIG_RADII * (pb - pa);
+    double m3;
+    if (lognormal) { /* E[r^3] over z in [z0, z1]: exp(3 mu + 9 s^2/2) (P(z1 - 3 s) - P(z0 - 3 s)) / (q1 - q0) */
+      const double z0 = j ? gsl_cdf_ugaussian_Pinv(q0) : za, z1 = j + 1 < GS_LIG_RADII ? gsl_cdf_ugaussian_Pinv(q1) : zb;
+      m3 = exp(3 * mu + 4.5 * sg * sg) * (gsl_cdf_ugaussian_P(z1 - 3 * sg) - gsl_cdf_ugaussian_P(z0 - 3 * sg)) / (q1 - q0);
+    } else {
+      const double a = k->rmin + q0 * (k->rmax - k->rmin), b = k->rmin + q1 * (k->rmax - k->rmin);
+      m3 = (b * b * b * b - a * a * a * a) / (4 * (b - a));
+    }
+    r[j] = cbrt(m3);
+  }
+  return GS_LIG_RADII;
+}
+
 /* What a deck cannot express, named by key. */
 int gs_lig_check(const gs_dem_case *c, gs_error *err) {
   if (c->wet)
     return gs_error_set(err, GS_EINPUT, "%s: not expressible in a LIGGGHTS deck (droplets, the liquid on the "
                         "particles and their aggregation live in the embedded engine); use engine: embedded",
                         c->wet->has_spray ? "spray" : "granulation");
-  for (size_t w = 0; w < c->nwall_src; w++)
-    if (c->wall_src[w].kind != GS_DEM_SRC_MESH)
-      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): %s walls are not expressible in the LIGGGHTS engine "
-                          "(compute wall/gran/local reports mesh walls only); give the wall as an STL mesh", w,
-                          c->wall_src[w].name, c->wall_src[w].kind == GS_DEM_SRC_PLANE ? "plane" : "cylinder");
+  /* a plane becomes a mesh (plane_mesh.c) of the box's size: it may not move out of it */
+  for (size_t w = 0; w < c->nwall_src; w++) {
+    const gs_dem_wall_src *s = &c->wall_src[w];
+    if (s->kind == GS_DEM_SRC_CYLINDER)
+      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): cylinder walls are not expressible in the LIGGGHTS "
+                          "engine (a primitive cylinder's contacts are not reported by compute wall/gran/local, "
+                          "and a faceted one gets two contacts at each fold by LIGGGHTS' mesh rule); give the "
+                          "wall as an STL mesh", w, s->name);
+    if (s->kind == GS_DEM_SRC_PLANE && (s->rotating || s->velocity[0] != 0 || s->velocity[1] != 0 ||
+                                        s->velocity[2] != 0))
+      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s).%s: a moving plane is not expressible in the LIGGGHTS "
+                          "engine (the deck meshes the plane where it cuts the box at t = 0); give the wall as "
+                          "an STL mesh", w, s->name, s->rotating ? "rotation" : "velocity");
+  }
   for (size_t w = 0; w < c->nwall_src; w++)
     if (c->wall_src[w].rotating && c->wall_src[w].spin_start > 0)
       return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): rotation.start is not expressible in a LIGGGHTS deck "
@@ -203,12 +250,6 @@ int gs_lig_check(const gs_dem_case *c, gs_error *err) {
   if (c->start_steady)
     return gs_error_set(err, GS_EINPUT, "statistics.start: 'steady' is not expressible in a LIGGGHTS deck (the "
                         "detector needs the collision rate during the run); give a time");
-  for (size_t k = 0; k < c->nfeed; k++)
-    for (size_t i = 0; i < c->nclass; i++)
-      if (c->feed[k].frac[i] > 0 && c->cls[i].rmin != c->cls[i].rmax)
-        return gs_error_set(err, GS_EINPUT, "classes[%zu].radius: a feed of the LIGGGHTS engine inserts classes of "
-                            "one radius only (particletemplate/sphere radius constant); class '%s' has a range or "
-                            "a distribution", i, c->cls[i].name);
   char key[64];
   int rc = GS_OK;
   for (size_t k = 0; k < c->nfeed && !rc; k++) {
@@ -233,7 +274,7 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   int rc = gs_lig_check(c, err);
   if (rc) return rc;
   for (size_t w = 0; w < c->nwall_src; w++)
-    if (!c->wall_src[w].mesh[0])
+    if (!c->wall_src[w].mesh[0] && c->wall_src[w].kind == GS_DEM_SRC_MESH)
       return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): the generated mesh has no file yet; write it first "
                           "(gs_dem_case_write_geometry)", w, c->wall_src[w].name);
   const gs_dem_params *p = &c->prm;
@@ -280,23 +321,42 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   fprintf(fp, "fix pdd_types all particledistribution/discrete %ld %zu", lig_seed(c, 63), ncl);
   for (size_t i = 0; i < ncl; i++) fprintf(fp, " pts%zu %.9g", i + 1, 1.0 / (double)ncl);
   fprintf(fp, "\n");
+  /* a fed class with a range of radii: one template per radius of gs_lig_class_radii */
+  double rad[GS_DEM_MAX_CLASSES][GS_LIG_RADII], mr3[GS_DEM_MAX_CLASSES];
+  int nrad[GS_DEM_MAX_CLASSES];
+  for (size_t i = 0; i < ncl; i++) {
+    nrad[i] = gs_lig_class_radii(c, i, rad[i]);
+    mr3[i] = 0;
+    for (int j = 0; j < nrad[i]; j++) mr3[i] += rad[i][j] * rad[i][j] * rad[i][j] / nrad[i];
+    int fed = 0;
+    for (size_t k = 0; k < c->nfeed; k++) fed |= c->feed[k].frac[i] > 0;
+    for (int j = 0; fed && nrad[i] > 1 && j < nrad[i]; j++)
+      fprintf(fp, "fix pts%zu_%d all particletemplate/sphere %ld atom_type %zu density constant %.9g radius constant "
+              "%.9g\n", i + 1, j + 1, lig_seed(c, 200 + GS_LIG_RADII * (int)i + j), i + 1, c->cls[i].mat.density,
+              rad[i][j]);
+  }
   /* feeds: one distribution and inserter per feed */
   for (size_t k = 0; k < c->nfeed; k++) {
     const gs_dem_inserter *f = &c->feed[k];
     size_t nz = 0;
-    for (size_t i = 0; i < ncl; i++) nz += f->frac[i] > 0;
+    for (size_t i = 0; i < ncl; i++) nz += f->frac[i] > 0 ? (size_t)nrad[i] : 0;
     /* mass-based weights (particledistribution/discrete): number fractions become mass
-     * fractions f_i m_i, feeds having one radius per class; one convention, checked
-     * against the embedded engine (a 1:1 number feed gave 29:29 and 30:28 particles) */
+     * fractions f_i m_i, m_i the mean mass of the class's templates, which have equal
+     * numbers within the class; one convention, checked against the embedded engine
+     * (a 1:1 number feed gave 29:29 and 30:28 particles) */
     double w[GS_DEM_MAX_CLASSES], fs = 0;
     for (size_t i = 0; i < ncl; i++) {
-      double r = c->cls[i].rmin;
-      w[i] = f->frac[i] * (f->by_mass ? 1 : c->cls[i].mat.density * r * r * r);
+      w[i] = f->frac[i] * (f->by_mass ? 1 : c->cls[i].mat.density * mr3[i]);
       fs += w[i];
     }
     fprintf(fp, "fix pdd%zu all particledistribution/discrete %ld %zu", k, lig_seed(c, 64 + 2 * (int)k), nz);
-    for (size_t i = 0; i < ncl; i++)
-      if (f->frac[i] > 0) fprintf(fp, " pts%zu %.9g", i + 1, w[i] / fs);
+    for (size_t i = 0; i < ncl; i++) {
+      if (!(f->frac[i] > 0)) continue;
+      if (nrad[i] == 1) fprintf(fp, " pts%zu %.9g", i + 1, w[i] / fs);
+      for (int j = 0; nrad[i] > 1 && j < nrad[i]; j++) /* the class's mass split by r^3 */
+        fprintf(fp, " pts%zu_%d %.9g", i + 1, j + 1,
+                w[i] / fs * rad[i][j] * rad[i][j] * rad[i][j] / (nrad[i] * mr3[i]));
+    }
     fprintf(fp, "\n");
     char key[64];
     snprintf(key, sizeof key, "feed[%zu].region", k);

@@ -29,6 +29,14 @@ long gs_lig_event_every(const gs_dem_case *c);
 /* The name under which the deck reads wall w's mesh: a copy beside the deck,
  * wall<w>_<file name>, so that the folder runs anywhere (a cluster). */
 void gs_lig_mesh_name(const gs_dem_case *c, size_t w, char *buf, size_t n);
+/* Write plane wall w (walls[w].plane) as an STL mesh to path: the polygon
+ * in which it cuts the box (plane_mesh.c). */
+int gs_lig_write_plane_mesh(const gs_dem_case *c, size_t w, const char *path, gs_error *err);
+/* The radii standing for class i in a feed (deck.c): its radius (1), or
+ * GS_LIG_RADII radii of equal-number bins of its range or truncated
+ * lognormal, each bin's (mean r^3)^(1/3). */
+#define GS_LIG_RADII 16
+int gs_lig_class_radii(const gs_dem_case *c, size_t i, double *r);
 /* Remove the collision/impact/ppcoll dumps of an earlier run from dir. */
 int gs_lig_clear_dumps(const char *dir, gs_error *err);
 /* Remove the tables a reduction writes from out (before a run, and after a

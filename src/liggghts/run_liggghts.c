@@ -323,7 +323,9 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
     char deck[64], ex[4400], name[4200], copy[8500];
     gs_lig_mesh_name(c, w, name, sizeof name);
     snprintf(copy, sizeof copy, "%s/%s", dir, name);
-    if ((rc = copy_file(c->wall_src[w].mesh, copy, err))) return rc;
+    if ((rc = c->wall_src[w].kind == GS_DEM_SRC_PLANE ? gs_lig_write_plane_mesh(c, w, copy, err)
+                                                      : copy_file(c->wall_src[w].mesh, copy, err)))
+      return rc;
     snprintf(deck, sizeof deck, "in.exclude%zu", w);
     snprintf(ex, sizeof ex, "%s/ex_wall%zu.txt", dir, w);
     remove(ex);
