@@ -501,7 +501,7 @@ gs_cfg *gs_cfg_copy(const gs_cfg *cfg, gs_error *err) {
   c->name = gs_strdup(cfg->name, err);
   c->dir = gs_strdup(cfg->dir, err);
   if (!c->source || !c->name || !c->dir || gs_cfg_parse(c, c->source, strlen(c->source), err) ||
-      gs_node_sync(c->root, cfg->root, err)) {
+      (cfg->root && c->root && gs_node_sync(c->root, cfg->root, err))) { /* an empty file has no root */
     gs_cfg_free(c);
     return NULL;
   }
