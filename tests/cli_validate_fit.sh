@@ -1,9 +1,15 @@
 # gransim validate-fit: the recipe-recovery study.  The default suite checks
-# its arguments only: a run of the semi-mechanistic case takes about a second,
-# so even --quick (12 runs per method) takes half a minute on an idle machine.
-# With ctest -L long (GRANSIM_TEST_LONG=1) the full study runs (some 1700 runs,
-# half an hour on two cores), its report must hold every row, and the spray
-# rates, binder and impeller speed must be recovered within 10 % by both methods.
+# its arguments only (a run of the case is 0.35-0.6 CPU s).  With ctest -L long
+# (GRANSIM_TEST_LONG=1) the full study runs (at most 150 + 120 runs, the two
+# methods side by side: under two CPU minutes, a quarter of an hour on the
+# shared reference machine) and its report must hold every row, and both
+# methods are budget-limited, so the tolerances are those of a budget-limited
+# recovery, from the run of docs/validation-fit.md with some margin (what a
+# bug breaks): the start is really off the recipe (start objective > 0.05; it
+# was the recipe itself while gs_cfg_copy lost set values), each method lowers
+# the objective at least 100-fold (225- and 1300-fold there), BOBYQA recovers
+# every control within 20 % (at most 15.5 % there) and both the end of wet
+# massing within 1 % (0.26 and 0.014 % there).
 # ctest-long
 source "$(dirname "$0")/cli-lib.sh" "$@"
 CASE=$SRC/examples/recipe-recovery.yaml
@@ -21,8 +27,16 @@ for s in "# Recipe recovery (Chaudhury 2015, tables 5.6 and 5.7)" "| liquid rate
   "bounded (NLopt BOBYQA): objective"; do
   grep -qF "$s" "$WORK/v.md" || { cat "$WORK/v.md"; fail "report lacks '$s'"; }
 done
-# the rates, binder and impeller speed (rows 1-6 of the table) within 10 % by both methods
-awk -F'|' '/^\| (liquid rate|binder|impeller)/ {
-    for (c = 6; c <= 8; c += 2) { e = $c; sub(/ %.*/, "", e); if (e + 0 > 10) bad = bad $2 ": " e " %; " } }
+# the objectives: "- NAME: objective X (start Y), ..."
+awk '/^- (Nelder-Mead|bounded).*objective/ {
+    x = $0; sub(/.*objective /, "", x); y = x; sub(/ .*/, "", x); sub(/.*\(start /, "", y); sub(/\).*/, "", y)
+    if (!(y + 0 > 0.05)) bad = bad "start objective " y " (the start is the recipe?); "
+    if (!(x * 100 < y + 0)) bad = bad "objective " x " not 100 times below the start " y "; "; n++ }
+  END { if (n != 2 || bad) { print n " objectives; " bad; exit 1 } }' "$WORK/v.md" ||
+  { cat "$WORK/v.md"; fail "objectives"; }
+# BOBYQA (column 8) every control within 20 %; both methods the end of wet massing within 1 %
+awk -F'|' '/^\| (liquid rate|binder|impeller|end of wet)/ {
+    e = $8; sub(/ %.*/, "", e); if (!(e + 0 <= 20)) bad = bad $2 ": bounded " e " %; "
+    if ($2 ~ /end of wet/) for (c = 6; c <= 8; c += 2) { e = $c; sub(/ %.*/, "", e); if (!(e + 0 <= 1)) bad = bad $2 ": " e " %; " } }
   END { if (bad) { print bad; exit 1 } }' "$WORK/v.md" || { cat "$WORK/v.md"; fail "recipe not recovered"; }
 echo "cli_validate_fit: ok"

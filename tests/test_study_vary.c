@@ -54,6 +54,12 @@ static void test_setter(void) {
   /* the original is untouched */
   CHECK(!strcmp(gs_cfg_scalar(gs_cfg_find(cfg, "mechanisms.0.kernel.beta0", &e)), "1"));
   CHECK(!strcmp(gs_cfg_scalar(gs_cfg_find(copy, "grid.axes.0.cells", &e)), "4"));
+  /* a copy of a varied case keeps its values (optimise starts from them) */
+  CHECK(gs_cfg_set_scalar(gs_cfg_find(copy, "solver", &e), "atol", "1e-3", &e) == GS_OK);
+  gs_cfg *again = gs_cfg_copy(copy, &e);
+  CHECK(again && !strcmp(gs_cfg_scalar(gs_cfg_find(again, "mechanisms.0.kernel.beta0", &e)), "2.5"));
+  CHECK(again && !strcmp(gs_cfg_scalar(gs_cfg_find(again, "solver.atol", &e)), "1e-3"));
+  gs_cfg_free(again);
 
   static const struct {
     const char *key, *msg;

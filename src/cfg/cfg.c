@@ -456,6 +456,40 @@ void gs_cfg_free(gs_cfg *cfg) {
   free(cfg);
 }
 
+/* Carries the values set since parsing (gs_cfg_set, gs_cfg_set_scalar) from
+ * src onto dst, the same source parsed afresh: a copy of a varied case must
+ * be that case, not its file (optimise starts from a copy's values). */
+static int gs_node_sync(gs_cfg_node *dst, const gs_cfg_node *src, gs_error *err) {
+  if (dst->kind != src->kind)
+    return gs_error_set(err, GS_EINPUT, "copying the case: %s changed its kind", gs_path_shown(src));
+  if (src->kind == GS_CFG_SCALAR) {
+    if (!strcmp(dst->text ? dst->text : "", src->text ? src->text : "")) return GS_OK;
+    char *t = gs_strdup(src->text ? src->text : "", err);
+    if (!t) return GS_ENOMEM;
+    free(dst->text);
+    dst->text = t;
+    return GS_OK;
+  }
+  for (size_t i = 0; i < src->n; i++) {
+    if (src->kind == GS_CFG_SEQ) {
+      if (i >= dst->n)
+        return gs_error_set(err, GS_EINPUT, "copying the case: %s grew", gs_path_shown(src));
+      if (gs_node_sync(dst->items[i], src->items[i], err)) return err->code;
+      continue;
+    }
+    const gs_cfg_entry *e = &src->entries[i];
+    size_t j = 0;
+    while (j < dst->n && strcmp(dst->entries[j].key, e->key)) j++;
+    int rc = j < dst->n ? gs_node_sync(dst->entries[j].value, e->value, err)
+             : e->value->kind == GS_CFG_SCALAR
+                 ? gs_cfg_set_scalar(dst, e->key, e->value->text ? e->value->text : "", err)
+                 : gs_error_set(err, GS_EINPUT, "copying the case: %s gained a map or list",
+                                gs_path_shown(src));
+    if (rc) return rc;
+  }
+  return GS_OK;
+}
+
 gs_cfg *gs_cfg_copy(const gs_cfg *cfg, gs_error *err) {
   if (!cfg) {
     gs_error_set(err, GS_EINPUT, "no configuration to copy");
@@ -466,7 +500,8 @@ gs_cfg *gs_cfg_copy(const gs_cfg *cfg, gs_error *err) {
   c->source = gs_strdup(cfg->source, err);
   c->name = gs_strdup(cfg->name, err);
   c->dir = gs_strdup(cfg->dir, err);
-  if (!c->source || !c->name || !c->dir || gs_cfg_parse(c, c->source, strlen(c->source), err)) {
+  if (!c->source || !c->name || !c->dir || gs_cfg_parse(c, c->source, strlen(c->source), err) ||
+      (cfg->root && c->root && gs_node_sync(c->root, cfg->root, err))) { /* an empty file has no root */
     gs_cfg_free(c);
     return NULL;
   }
