@@ -25,7 +25,7 @@ _gransim() {
     validate-cfd) opts="--out --long --help" ;;
     validate-fit) opts="--out --quick --help" ;;
     plot) opts="--times --format --out --help" ;;
-    sweep) opts="--set --design --range --seed --out --outputs --resume --threads --quiet --progress --help" ;;
+    sweep) opts="--set --design --range --seed --out --outputs --at --resume --threads --quiet --progress --help" ;;
     fit) opts="--data --batches --params --global --seed --porosity-tol --max-runs --predict --out --help" ;;
     sensitivity) opts="--range --outputs --method --levels --bootstrap --conf --seed --out --resume --threads --quiet --progress --help" ;;
     optimise) opts="--target --controls --weights --method --max-runs --tol --help" ;;
@@ -62,7 +62,7 @@ _gransim() {
     --contacts) COMPREPLY=($(compgen -W "auto ppcoll cc cc-partner" -- "$cur")); return ;;
     --design) COMPREPLY=($(compgen -W "lhs:" -- "$cur")); return ;;
     --threads | --ranks | --seed | --levels | --bootstrap | --conf | --max-runs | --tol | --max-loss | \
-      --set | --range | --params | --controls | --weights | --outputs | --only | --launcher | --edges | \
+      --set | --range | --params | --controls | --weights | --outputs | --at | --only | --launcher | --edges | \
       --prefix | --E | --nu | --rho | --e | --wall-E | --wall-nu | --contact-time | --min-speed | \
       --clusters | --max-clusters | --time-step | --start | --velocity-weight)
       return ;;

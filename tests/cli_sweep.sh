@@ -92,6 +92,24 @@ awk -F, 'END { print $3 "," $4 "," $6 "," $7 "," $8 "," $5 }' "$WORK/run6/summar
 awk -F, '$1 == 6 { print $5 "," $6 "," $7 "," $8 "," $9 "," $10 }' "$out/sweep.csv" >"$WORK/got"
 csv_rows_close "$WORK/want" "$WORK/got" 1e-9
 
+# --at: the same outputs also at an earlier output time, equal to gransim run's summary.csv there
+run_rc 2 "$BIN" sweep "$c" --set "$B=2e-3" --at 1,x --out "$WORK/x"
+stderr_has "--at: expected output times T1,T2,... [s] >= 0, got '1,x'"
+run_rc 1 "$BIN" sweep "$c" --set "$B=2e-3" --at 0.7 --out "$WORK/x"
+stderr_has "--at 0.7: not an output time of the case"
+run_rc 1 "$BIN" sweep "$c" --set "$B=2e-3" --at 1,1 --out "$WORK/x"
+stderr_has "--at 1 is given twice"
+[ ! -e "$WORK/x" ] || fail "a refused sweep wrote $WORK/x"
+run_rc 0 "$BIN" sweep "$c" --set "$B=1e-3,2e-3" --at 1 --outputs M2 --out "$WORK/at" --threads 2
+head -n 1 "$WORK/at/sweep.csv" | grep -q ',M2_c1 \[m^6\],M0@1 \[1\],M1_solid@1 \[m^3\],d10_c1@1 \[m\],d50_c1@1 \[m\],d90_c1@1 \[m\],M2_c1@1 \[m^6\],error$' ||
+  fail "--at columns: $(head -n 1 "$WORK/at/sweep.csv")"
+awk -F, '$1 + 0 == 1 { print $3 "," $4 "," $6 "," $7 "," $8 "," $5 }' "$WORK/run6/summary.csv" >"$WORK/want"
+awk -F, '$1 == 2 { print $10 "," $11 "," $12 "," $13 "," $14 "," $15 }' "$WORK/at/sweep.csv" >"$WORK/got"
+[ -s "$WORK/want" ] || fail "run6 has no output time 1"
+csv_rows_close "$WORK/want" "$WORK/got" 1e-9
+awk -F, '$1 == 2 { print $4 "," $5 "," $6 "," $7 "," $8 "," $9 }' "$WORK/at/sweep.csv" >"$WORK/final"
+cmp -s "$WORK/final" "$WORK/got" && fail "--at 1 gave the final time's values"
+
 # resume: a sweep killed after two runs (and in the middle of a third row's write)
 cp "$out/sweep.csv" "$WORK/complete.csv"
 head -n 3 "$out/runs.csv" >"$WORK/part"

@@ -85,6 +85,11 @@ typedef struct gs_study_outputs {
   size_t ncomp; /* the shape the columns were made for */
   int nvol;
   int nmech_col; /* the mechanisms' summary columns (gs_model_ncolumns) */
+  /* With earlier output times (gs_study_outputs_add_times): the first nbase
+   * columns are at the final time, then the same nbase columns at each of
+   * times[0..ntimes), named NAME@T. */
+  size_t nbase, ntimes;
+  double *times;
 } gs_study_outputs;
 
 /* The SI unit of a case key a study varies, from the last name of the
@@ -103,6 +108,15 @@ int gs_study_outputs_fit(const gs_study_outputs *o, const gs_model *m, gs_error 
 /* values[0..ncol) from the state y (full layout) of model m at time t. */
 void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, double t, const double *y,
                            double *values);
+/* Repeat the columns at each of times[0..n) (seconds, each an output time of
+ * every run's case; checked by gs_study_outputs_times_fit), named NAME@T. */
+int gs_study_outputs_add_times(gs_study_outputs *o, const double *times, size_t n, gs_error *err);
+/* GS_EINPUT when one of o's times is not an output time of case times[0..n). */
+int gs_study_outputs_times_fit(const gs_study_outputs *o, const double *times, size_t n, gs_error *err);
+/* The columns of slot k (0: the final time, k: o->times[k - 1]) from the
+ * state y at time t into values[0..nbase). */
+void gs_study_outputs_eval_slot(const gs_study_outputs *o, const gs_model *m, size_t k, double t,
+                                const double *y, double *values);
 void gs_study_outputs_free(gs_study_outputs *o);
 
 typedef struct gs_sweep_options {
@@ -110,6 +124,8 @@ typedef struct gs_sweep_options {
   int resume;          /* skip the runs DIR/runs.csv records as finished */
   const char *const *outputs; /* extra summary columns (see gs_study_outputs) */
   size_t noutputs;
+  const double *at; /* the outputs also at these output times [s] (NAME@T columns) */
+  size_t nat;
   int threads; /* runs at once (0: omp_get_max_threads()); each run single-threaded */
   int progress; /* a line on stderr as runs finish: -1 when stderr is a terminal, 0 off, 1 on */
 } gs_sweep_options;

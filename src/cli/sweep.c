@@ -1,6 +1,7 @@
 /* gransim sweep: many runs of one case over a grid or a Latin hypercube of
  * variations (src/study, gransim/study.h). */
 #include <stdio.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,6 +32,8 @@ static const char *const SWEEP_HELP =
     "  --outputs A,B,...     more summary columns per compartment at the final time\n"
     "                        (M0 M1 M2 d10 d50 d90 mean_<axis> total_<axis>, porosity,\n"
     "                        liquid_content, a mechanism's column such as bed_temperature)\n"
+    "  --at T1,T2,...        the outputs also at these output times of the case [s]:\n"
+    "                        columns NAME@T (e.g. d50_c1@60 [m]) after the final ones\n"
     "  --resume              continue a killed sweep: skip the runs DIR/runs.csv has\n"
     "  --threads N           runs at once (default: OMP_NUM_THREADS or all cores);\n"
     "                        each run is single-threaded\n"
@@ -60,6 +63,7 @@ int gs_cmd_sweep(int argc, char **argv) {
   gs_study_axis *axes = calloc((size_t)argc + 1, sizeof *axes);
   const char **outputs = calloc((size_t)argc + 1, sizeof *outputs);
   char *outputs_text = NULL;
+  double *at = NULL;
   size_t naxes = 0, nsets = 0, nranges = 0;
   unsigned long seed = 1;
   gs_error err = {0};
@@ -75,7 +79,8 @@ int gs_cmd_sweep(int argc, char **argv) {
       {"help", no_argument, NULL, GS_CLI_HELP}, {"set", required_argument, NULL, 'S'},
       {"range", required_argument, NULL, 'R'}, {"design", required_argument, NULL, 'd'},
       {"seed", required_argument, NULL, 's'},  {"out", required_argument, NULL, 'o'},
-      {"outputs", required_argument, NULL, 'O'}, {"resume", no_argument, NULL, 'r'},
+      {"outputs", required_argument, NULL, 'O'}, {"at", required_argument, NULL, 'a'},
+      {"resume", no_argument, NULL, 'r'},
       {"quiet", no_argument, NULL, 'q'},       {"progress", no_argument, NULL, 'p'},
       {"threads", required_argument, NULL, 't'}, {0}};
   gs_cli_begin();
@@ -103,6 +108,25 @@ int gs_cmd_sweep(int argc, char **argv) {
       opt.noutputs = 0;
       for (char *s = outputs_text ? strtok(outputs_text, ",") : NULL; s; s = strtok(NULL, ",")) outputs[opt.noutputs++] = s;
       break;
+    case 'a': {
+      free(at);
+      at = calloc(strlen(optarg) / 2 + 2, sizeof *at);
+      opt.nat = 0;
+      if (!at) {
+        rc = usage_error("%s", "out of memory");
+        break;
+      }
+      for (const char *p = optarg; !rc;) {
+        char *end;
+        at[opt.nat] = strtod(p, &end);
+        if (end == p || (*end && *end != ',') || !isfinite(at[opt.nat]) || at[opt.nat] < 0)
+          rc = usage_error("--at: expected output times T1,T2,... [s] >= 0, got '%s'", optarg);
+        opt.nat++;
+        if (!*end) break;
+        p = end + 1;
+      }
+      break;
+    }
     case 'r': opt.resume = 1; break;
     case 'q': opt.progress = 0; break;
     case 'p': opt.progress = 1; break;
@@ -123,6 +147,7 @@ int gs_cmd_sweep(int argc, char **argv) {
     goto done;
   }
   opt.outputs = outputs;
+  opt.at = at;
   if (design) {
     char *end;
     long n = strncmp(design, "lhs:", 4) ? 0 : strtol(design + 4, &end, 10);
@@ -168,6 +193,7 @@ done:
   free(axes);
   free(outputs);
   free(outputs_text);
+  free(at);
   gs_design_free(&d);
   gs_cfg_free(cfg);
   return rc;

@@ -156,20 +156,21 @@ int gs_study_outputs_fit(const gs_study_outputs *o, const gs_model *m, gs_error 
   return GS_OK;
 }
 
-void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, double t, const double *y,
-                           double *values) {
+/* Columns [lo, hi) of o into values[0..hi - lo). */
+static void eval_range(const gs_study_outputs *o, const gs_model *m, size_t lo, size_t hi, double t,
+                       const double *y, double *values) {
   const size_t nc = m->grid.ncomp, nm = (size_t)o->nmech_col;
   gs_summary *s = calloc(nc, sizeof *s);
   double *mech = calloc(nc * nm + 1, sizeof *mech);
   if (!s || !mech) { /* no memory for the statistics: the row says so, the run still counts */
-    for (size_t i = 0; i < o->ncol; i++) values[i] = NAN;
+    for (size_t i = lo; i < hi; i++) values[i - lo] = NAN;
     free(s);
     free(mech);
     return;
   }
   for (size_t j = 0; j < nc; j++) gs_summarize(m, y, j, &s[j]);
   for (size_t j = 0; nm && j < nc; j++) gs_model_report(m, j, t, y, mech + j * nm);
-  for (size_t i = 0; i < o->ncol; i++) {
+  for (size_t i = lo; i < hi; i++) {
     const gs_summary *c = &s[o->comp[i] < nc ? o->comp[i] : 0];
     double v = 0;
     switch (o->what[i]) {
@@ -194,10 +195,77 @@ void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, double 
       break;
     default: v = c->total[o->index[i]]; break;
     }
-    values[i] = v;
+    values[i - lo] = v;
   }
   free(s);
   free(mech);
+}
+
+void gs_study_outputs_eval(const gs_study_outputs *o, const gs_model *m, double t, const double *y,
+                           double *values) {
+  eval_range(o, m, 0, o->ntimes ? o->nbase : o->ncol, t, y, values);
+}
+
+void gs_study_outputs_eval_slot(const gs_study_outputs *o, const gs_model *m, size_t k, double t,
+                                const double *y, double *values) {
+  const size_t nb = o->ntimes ? o->nbase : o->ncol;
+  eval_range(o, m, k * nb, (k + 1) * nb, t, y, values);
+}
+
+/* Output times equal to the --at time within this relative tolerance (the
+ * case's times are computed, e.g. end * i / count). */
+static int same_time(double a, double b) { return fabs(a - b) <= 1e-12 * fmax(1, fmax(fabs(a), fabs(b))); }
+
+int gs_study_outputs_add_times(gs_study_outputs *o, const double *times, size_t n, gs_error *err) {
+  if (!n) return GS_OK;
+  const size_t nb = o->ncol, total = nb * (n + 1);
+  char **names = realloc(o->names, total * sizeof *names);
+  if (names) o->names = names;
+  const char **units = realloc(o->units, total * sizeof *units);
+  if (units) o->units = units;
+  int *what = realloc(o->what, total * sizeof *what);
+  if (what) o->what = what;
+  int *index = realloc(o->index, total * sizeof *index);
+  if (index) o->index = index;
+  size_t *comp = realloc(o->comp, total * sizeof *comp);
+  if (comp) o->comp = comp;
+  o->times = malloc(n * sizeof *o->times);
+  if (!names || !units || !what || !index || !comp || !o->times)
+    return gs_error_set(err, GS_ENOMEM, "out of memory for the outputs' times");
+  for (size_t k = 0; k < n; k++) {
+    if (!isfinite(times[k]) || times[k] < 0)
+      return gs_error_set(err, GS_EINPUT, "--at %g: expected an output time [s] >= 0", times[k]);
+    for (size_t q = 0; q < k; q++)
+      if (same_time(times[q], times[k])) return gs_error_set(err, GS_EINPUT, "--at %g is given twice", times[k]);
+    o->times[k] = times[k];
+  }
+  for (size_t k = 0; k < n; k++)
+    for (size_t i = 0; i < nb; i++) {
+      const size_t j = nb * (k + 1) + i;
+      char name[160];
+      snprintf(name, sizeof name, "%s@%.10g", o->names[i], times[k]);
+      o->names[j] = malloc(strlen(name) + 1);
+      if (!o->names[j]) return gs_error_set(err, GS_ENOMEM, "out of memory for output names");
+      strcpy(o->names[j], name);
+      o->units[j] = o->units[i], o->what[j] = o->what[i], o->index[j] = o->index[i], o->comp[j] = o->comp[i];
+      o->ncol = j + 1;
+    }
+  o->nbase = nb;
+  o->ntimes = n;
+  return GS_OK;
+}
+
+int gs_study_outputs_times_fit(const gs_study_outputs *o, const double *times, size_t n, gs_error *err) {
+  for (size_t k = 0; k < o->ntimes; k++) {
+    int found = 0;
+    for (size_t i = 0; i < n && !found; i++) found = same_time(times[i], o->times[k]);
+    if (!found)
+      return gs_error_set(err, GS_EINPUT,
+                          "--at %g: not an output time of the case (its output times run from %g to %g "
+                          "s, %zu in all); add it to output.times or choose one of them",
+                          o->times[k], n ? times[0] : 0.0, n ? times[n - 1] : 0.0, n);
+  }
+  return GS_OK;
 }
 
 void gs_study_outputs_free(gs_study_outputs *o) {
@@ -208,6 +276,7 @@ void gs_study_outputs_free(gs_study_outputs *o) {
   free(o->what);
   free(o->index);
   free(o->comp);
+  free(o->times);
   memset(o, 0, sizeof *o);
 }
 

@@ -138,6 +138,24 @@ static int keep_case(const char *dir, const gs_cfg *base, int resume, gs_error *
   return GS_OK;
 }
 
+/* Gathers a run's outputs at the study's earlier output times (--at). */
+typedef struct {
+  const gs_study_outputs *o;
+  double *v; /* the row's values: slot k at v + k * nbase */
+} at_obs;
+
+static int at_obs_output(void *self, const gs_run_view *run, double t, const double *Y, int *stop,
+                         gs_error *err) {
+  (void)stop, (void)err;
+  const at_obs *a = self;
+  for (size_t k = 0; k < a->o->ntimes; k++)
+    if (fabs(t - a->o->times[k]) <= 1e-12 * fmax(1, fabs(t)))
+      gs_study_outputs_eval_slot(a->o, &run->c->model, k + 1, t, Y, a->v + (k + 1) * a->o->nbase);
+  return GS_OK;
+}
+
+static const gs_observer_type at_obs_type = {.name = "sweep-at", .output = at_obs_output};
+
 /* One run: build, run, gather; the row it leaves in *row (error rows too). */
 static void run_one(const gs_cfg *base, const gs_design *d, size_t r, const gs_study_outputs *o,
                     buf_t *row) {
@@ -146,12 +164,17 @@ static void run_one(const gs_cfg *base, const gs_design *d, size_t r, const gs_s
   double *y = NULL, *v = NULL;
   int rc = gs_study_case(base, d, r, &c, &err);
   if (!rc) rc = gs_study_outputs_fit(o, &c.model, &err);
+  if (!rc) rc = gs_study_outputs_times_fit(o, c.times, c.ntimes, &err);
   if (!rc) {
     y = gs_malloc((c.model.nstate + c.model.nledger) * sizeof *y, &err);
     v = gs_malloc(o->ncol * sizeof *v, &err);
     rc = y && v ? GS_OK : GS_ENOMEM;
   }
-  gs_run_options ropt = {.out_dir = NULL, .progress = 0, .one_process = 1};
+  for (size_t i = 0; v && i < o->ncol; i++) v[i] = NAN;
+  at_obs at = {.o = o, .v = v};
+  const gs_observer obs = {.type = &at_obs_type, .self = &at};
+  gs_run_options ropt = {.out_dir = NULL, .progress = 0, .one_process = 1, .observers = &obs,
+                         .nobservers = o->ntimes ? 1 : 0};
   gs_run_report rep;
   if (!rc) rc = gs_case_run(&c, &ropt, y, &rep, &err);
   if (!rc) gs_study_outputs_eval(o, &c.model, c.times[c.ntimes - 1], y, v);
@@ -181,6 +204,7 @@ static int check_runs(const gs_cfg *base, const gs_design *d, const gs_study_out
     gs_case c;
     int rc = gs_study_case(base, d, r, &c, &e);
     if (!rc) rc = gs_study_outputs_fit(o, &c.model, &e);
+    if (!rc) rc = gs_study_outputs_times_fit(o, c.times, c.ntimes, &e);
     gs_case_free(&c);
     if (rc) {
 #pragma omp critical(gs_sweep_check)
@@ -254,6 +278,9 @@ int gs_sweep_run(const gs_cfg *base, const gs_design *d, const gs_sweep_options 
     return rc;
   }
   rc = gs_study_outputs_init(&o, &c0.model, opt->outputs, opt->noutputs, err);
+  if (!rc) rc = gs_study_outputs_add_times(&o, opt->at, opt->nat, err);
+  if (!rc) rc = gs_study_outputs_times_fit(&o, c0.times, c0.ntimes, err);
+  if (rc && o.names) gs_study_outputs_free(&o);
   gs_case_free(&c0);
   if (rc) return rc;
   size_t r = 0;
