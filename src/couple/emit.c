@@ -62,7 +62,7 @@ static int put_map_except(FILE *fp, gs_cfg_node *m, const char *dir, const char 
 }
 
 int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const gs_couple_settings *s,
-                             const gs_couple_classes *cl, gs_error *err) {
+                             const gs_couple_classes *cl, const double *fractions, gs_error *err) {
   if (gs_cfg_require_kind(root, GS_CFG_MAP, err)) return GS_EINPUT;
   int rc = GS_OK, have_dem = 0, have_stats = 0, have_out = 0;
   fprintf(fp, "# written by gransim couple: the dem section with the classes derived from the PBM grid\n");
@@ -92,6 +92,19 @@ int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const
       rc = put_map_except(fp, v, dir, taken, "coupling.steady.sample_every", &first, err);
       fprintf(fp, "%severy: %.17g}\n", first ? "" : ", ", s->sample_every);
       have_out = 1;
+    } else if (!strcmp(key, "fill") && fractions) {
+      static const char *const taken[] = {"fractions", "fractions_by", NULL};
+      if (gs_cfg_require_kind(v, GS_CFG_SEQ, err)) return GS_EINPUT;
+      fputs("fill: [", fp);
+      for (size_t f = 0; f < gs_cfg_size(v) && !rc; f++) {
+        first = 1;
+        fputs(f ? ", {" : "{", fp);
+        rc = put_map_except(fp, gs_cfg_item(v, f), dir, taken, "the PBM population, coupling.mode two_way", &first, err);
+        fprintf(fp, "%sfractions_by: number, fractions: [", first ? "" : ", ");
+        for (size_t c = 0; c < cl->n; c++) fprintf(fp, "%s%.17g", c ? ", " : "", fractions[c]);
+        fputs("]}", fp);
+      }
+      fputs("]\n", fp);
     } else {
       fprintf(fp, "%s: ", key);
       put_node(fp, v, dir);

@@ -1,0 +1,170 @@
+# `gransim couple` with mode two_way on a tiny case: a 15-cell PBM with the
+# DEM's aggregation kernel, 250 particles in a small rotating drum, three
+# cycles of 4 s (trigger.interval) over 10 s.  Checked: the cycles (DEM
+# stages from the population: class fractions of its numbers; cycles.csv; one
+# result.h5 over the whole process time); a run is repeatable bit for bit;
+# the mean-volume trigger fires where the summary says the mean volume has
+# changed by the threshold; a run SIGKILLed in a DEM stage and one killed in a
+# PBM stretch resume to the uninterrupted run's results, bit for bit.
+source "$(dirname "$0")/cli-lib.sh" "$@"
+command -v h5diff >/dev/null || fail "h5diff (hdf5-tools) is needed"
+
+cat > "$WORK/tw.yaml" <<'YAML'
+title: tiny two-way case
+grid:
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-10, ratio: 2, cells: 15, zero_first: true}
+initial: {type: exponential, number: 1000, mean: 8.0e-9}
+output: {end: 10, count: 1001, checkpoint: 0}
+mechanisms:
+  - type: aggregation
+    kernel: {type: table, beta0: 1.0e-4}
+dem:
+  dem:
+    time_step: 5.0e-6
+    box: {lo: [-0.03, -0.03, -0.001], hi: [0.03, 0.03, 0.021]}
+    gravity: [0, -9.81, 0]
+    seed: 3
+  materials:
+    - {name: granule, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}
+  walls:
+    - name: drum
+      cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.015}
+      material: granule
+      rotation: {origin: [0, 0, 0], axis: [0, 0, 1], rpm: 120}
+    - {name: front, plane: {point: [0, 0, 0], normal: [0, 0, 1]}, material: granule}
+    - {name: back, plane: {point: [0, 0, 0.02], normal: [0, 0, -1]}, material: granule}
+  fill:
+    - region: {cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.013, from: 0.002, to: 0.018}}
+      count: 250
+coupling:
+  mode: two_way
+  trigger: {interval: 4}
+  classes: {min_diameter: 2.0e-3, max_diameter: 4.0e-3, count: 3, material: granule}
+  steady: {window: 3, tolerance: 0.5, sample_every: 0.005, max_time: 0.07}
+YAML
+
+run_rc 0 "$BIN" check "$WORK/tw.yaml"
+stdout_has "valid. two_way: 3 DEM classes from the grid"
+
+run_rc 0 "$BIN" couple "$WORK/tw.yaml" --out "$WORK/ref" --threads 2
+stderr_has "cycle 1 ends at t = 4 s (interval"
+stderr_has "3 cycles to t = 10 s"
+for f in cycle-1/collision_kernel.csv cycle-2/collision_kernel.csv cycle-3/steady.csv cycles.csv cycles.json \
+         result.h5 summary.csv; do
+  [ -s "$WORK/ref/$f" ] || fail "missing $f"
+done
+[ ! -e "$WORK/ref/cycle-4" ] && [ ! -e "$WORK/ref/cycle-4.partial" ] || fail "a fourth cycle after the end"
+[ ! -e "$WORK/ref/.result.journal" ] || fail "the journal left after the last stretch"
+head -n 1 "$WORK/ref/cycles.csv" | grep -q '^cycle,t_start \[s\],t_end \[s\],trigger,' || fail "cycles.csv header"
+awk -F, 'NR > 1 { printf "%s %s %s %s %s;", $1, $2, $3, $4, $6 }' "$WORK/ref/cycles.csv" > "$WORK/rows"
+[ "$(cat "$WORK/rows")" = "1 0 4 start interval;2 4 8 interval interval;3 8 10 interval end;" ] ||
+  fail "cycles.csv rows: $(cat "$WORK/rows")"
+# one result over the whole process time: every output time once
+[ "$(awk -F, 'NR > 1' "$WORK/ref/summary.csv" | wc -l)" = 1001 ] || fail "summary.csv: not 1001 output times"
+
+# Cycle 2's DEM sampled the population at t = 4: its fractions are the
+# numbers per class of the summary's state (each class at least 2 %), and
+# the DEM filled its classes so.
+/usr/bin/python3 - "$WORK/ref" <<'PY' || fail "cycle 2's class fractions do not follow the population at t = 4"
+import sys, re, h5py, numpy as np
+d = sys.argv[1]
+f = h5py.File(d + "/result.h5", "r")
+t = f["time"][:]
+i = int(np.argmin(abs(t - 4.0)))
+N = f["number"][i].reshape(-1)
+case = open(d + "/cycle-2/case.yaml").read()
+radii = [tuple(map(float, m)) for m in re.findall(r"radius: \[([^,]+), ([^\]]+)\]", case)]
+edges = [2 * radii[0][0]] + [2 * r[1] for r in radii]
+fr = [float(x) for x in re.search(r"fractions: \[([^\]]+)\]", case).group(1).split(",")]
+pivots = f["grid"]["solid"]["pivots"][:]
+d_c = (6 * pivots / np.pi) ** (1 / 3)
+cnt = np.zeros(3)
+for k in range(15):
+    if pivots[k] <= 0:
+        continue
+    j = 0
+    while j + 1 < 3 and d_c[k] >= edges[j + 1]:
+        j += 1
+    cnt[j] += N[k]
+want = np.maximum(cnt / cnt.sum(), 0.02)
+want /= want.sum()
+assert np.allclose(fr, want, rtol=1e-9, atol=0), (fr, want)
+PY
+
+# Repeatable: the same case again gives the same files bit for bit.
+run_rc 0 "$BIN" couple "$WORK/tw.yaml" --out "$WORK/again" --threads 2
+same() { # same DIR WHAT
+  h5diff "$WORK/ref/result.h5" "$1/result.h5" >"$WORK/h5diff" 2>&1 ||
+    { head -n 20 "$WORK/h5diff" >&2; fail "$1/result.h5 differs from the uninterrupted run's ($2)"; }
+  cmp -s "$WORK/ref/summary.csv" "$1/summary.csv" || fail "$1/summary.csv differs ($2)"
+  cut -d, -f1-10,12 "$WORK/ref/cycles.csv" > "$WORK/c1"
+  cut -d, -f1-10,12 "$1/cycles.csv" > "$WORK/c2"
+  cmp -s "$WORK/c1" "$WORK/c2" || fail "$1/cycles.csv differs ($2): $(diff "$WORK/c1" "$WORK/c2")"
+}
+same "$WORK/again" "a second run"
+
+# SIGKILL in cycle 2's DEM stage, then --resume.
+"$BIN" couple "$WORK/tw.yaml" --out "$WORK/k1" --threads 2 2> "$WORK/k1.err" &
+pid=$!
+BG_PIDS+=("$pid")
+deadline=$((SECONDS + 120))
+until [ -s "$WORK/k1/cycle-2.partial/timeseries.csv" ]; do
+  kill -0 "$pid" 2>/dev/null || fail "the run ended before it could be killed: $(cat "$WORK/k1.err")"
+  [ "$SECONDS" -lt "$deadline" ] || fail "no DEM stage of cycle 2 within 120 s"
+  sleep 0.005
+done
+kill -9 "$pid"
+wait "$pid" 2>/dev/null || true
+[ -d "$WORK/k1/cycle-2.partial" ] || fail "the kill did not land in cycle 2's DEM stage"
+run_rc 0 "$BIN" couple "$WORK/tw.yaml" --out "$WORK/k1" --threads 2 --resume
+stderr_has "resume: from cycle 2 (t = 4 s), its DEM stage run again"
+same "$WORK/k1" "killed in cycle 2's DEM stage"
+
+# SIGKILL in cycle 2's PBM stretch (the time series past t = 4.5 s, cycle 3 not begun), then --resume.
+for try in 1 2 3 4 5; do
+  rm -rf "$WORK/k2"
+  "$BIN" couple "$WORK/tw.yaml" --out "$WORK/k2" --threads 2 2> "$WORK/k2.err" &
+  pid=$!
+  BG_PIDS+=("$pid")
+  until [ -d "$WORK/k2/cycle-2" ] && [ -f "$WORK/k2/.summary.csv.partial" ] &&
+    [ "$(wc -l < "$WORK/k2/.summary.csv.partial")" -gt $((452 + RANDOM % 200)) ]; do
+    kill -0 "$pid" 2>/dev/null || break
+    sleep 0.002
+  done
+  kill -9 "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  [ -d "$WORK/k2/cycle-2" ] && [ ! -e "$WORK/k2/cycle-3.partial" ] && [ ! -e "$WORK/k2/result.h5" ] && break
+  [ "$try" = 5 ] && fail "five kills missed cycle 2's PBM stretch"
+done
+run_rc 0 "$BIN" couple "$WORK/tw.yaml" --out "$WORK/k2" --threads 2 --resume
+stderr_has "resume: from cycle 2 (t = 4 s), its DEM stage complete, the PBM stretch resumed"
+same "$WORK/k2" "killed in cycle 2's PBM stretch"
+
+# A complete run resumed: nothing to do.
+run_rc 0 "$BIN" couple "$WORK/tw.yaml" --out "$WORK/k2" --threads 2 --resume
+stderr_has "the coupled run is complete"
+
+# The mean-volume trigger: each stretch ends at the first output time where
+# the mean granule volume has changed by 30 % since the cycle's start.
+sed -e 's/trigger: {interval: 4}/trigger: {mean_volume_change: 0.3}/' -e 's/count: 1001, checkpoint: 0/count: 41/' \
+  "$WORK/tw.yaml" > "$WORK/dv.yaml"
+run_rc 0 "$BIN" couple "$WORK/dv.yaml" --out "$WORK/dv" --threads 2
+/usr/bin/python3 - "$WORK/dv" <<'PY' || fail "the mean-volume trigger fired at the wrong output times"
+import sys, csv
+d = sys.argv[1]
+rows = list(csv.DictReader(open(d + "/summary.csv")))
+t = [float(r["time [s]"]) for r in rows]
+m = [float(r["mean_solid [m^3]"]) for r in rows]
+cyc = list(csv.DictReader(open(d + "/cycles.csv")))
+assert len(cyc) >= 2, len(cyc)
+for c in cyc:
+    t0, t1 = float(c["t_start [s]"]), float(c["t_end [s]"])
+    i0 = t.index(t0)
+    ch = [abs(m[i] / m[i0] - 1) for i in range(i0 + 1, len(t))]
+    first = next((i0 + 1 + k for k, x in enumerate(ch) if x >= 0.3), None)
+    if c["ended_by"] == "mean_volume_change":
+        assert first is not None and t[first] == t1, (c, first and t[first])
+    else:
+        assert c["ended_by"] == "end" and (first is None or t[first] >= t1), c
+PY
