@@ -38,7 +38,9 @@ int gs_couple_read_trigger(gs_cfg_node *cp, gs_couple_settings *s, gs_error *err
   if (!tr) return GS_OK;
   if (!s->two_way) return gs_cfg_fail(tr, err, "a trigger belongs to mode: two_way (one_way runs the DEM once)");
   int rc = gs_cfg_require_kind(tr, GS_CFG_MAP, err);
-  if (!rc && !gs_cfg_get(tr, "mean_volume_change") && !gs_cfg_get(tr, "interval"))
+  /* a misspelt key is named as such (did you mean), before the missing one */
+  if (!rc && !gs_cfg_get(tr, "mean_volume_change") && !gs_cfg_get(tr, "interval") &&
+      !(rc = gs_cfg_check_unused(tr, err)))
     rc = gs_cfg_missing(tr, "mean_volume_change", "(relative change of the mean granule volume; or interval [s]; or both)",
                         err);
   if (!rc && gs_cfg_get(tr, "mean_volume_change"))
