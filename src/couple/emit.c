@@ -92,10 +92,10 @@ int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const
       rc = put_map_except(fp, v, dir, taken, "coupling.steady.sample_every", &first, err);
       fprintf(fp, "%severy: %.17g}\n", first ? "" : ", ", s->sample_every);
       have_out = 1;
-    } else if (!strcmp(key, "fill") && fractions) {
+    } else if ((!strcmp(key, "fill") || !strcmp(key, "feed")) && fractions) {
       static const char *const taken[] = {"fractions", "fractions_by", NULL};
       if (gs_cfg_require_kind(v, GS_CFG_SEQ, err)) return GS_EINPUT;
-      fputs("fill: [", fp);
+      fprintf(fp, "%s: [", key);
       for (size_t f = 0; f < gs_cfg_size(v) && !rc; f++) {
         first = 1;
         fputs(f ? ", {" : "{", fp);
