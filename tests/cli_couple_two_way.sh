@@ -172,6 +172,65 @@ for c in cyc:
         assert c["ended_by"] == "end" and (first is None or t[first] >= t1), c
 PY
 
+# Two components: the DEM material's restitution is the volume-weighted mean of
+# coupling.restitution over the population at each cycle's start.
+cat > "$WORK/two.yaml" <<'YAML'
+title: tiny two-component two-way case
+grid:
+  axes:
+    - {name: api, type: geometric, min: 1.0e-9, ratio: 2, cells: 9}
+    - {name: exc, type: geometric, min: 1.0e-9, ratio: 2, cells: 9}
+initial:
+  type: cells
+  number: 1000
+  indices: [[3, 1], [1, 3]]
+  weights: [0.2, 0.8]
+output: {end: 10, count: 11}
+mechanisms:
+  - type: aggregation
+    kernel: {type: table, beta0: 1.0e-4}
+dem:
+  dem:
+    time_step: 3.0e-6
+    box: {lo: [-0.03, -0.03, -0.001], hi: [0.03, 0.03, 0.021]}
+    gravity: [0, -9.81, 0]
+    seed: 3
+  materials:
+    - {name: granule, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}
+  walls:
+    - name: drum
+      cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.015}
+      material: granule
+      rotation: {origin: [0, 0, 0], axis: [0, 0, 1], rpm: 120}
+    - {name: front, plane: {point: [0, 0, 0], normal: [0, 0, 1]}, material: granule}
+    - {name: back, plane: {point: [0, 0, 0.02], normal: [0, 0, -1]}, material: granule}
+  fill:
+    - region: {cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.013, from: 0.002, to: 0.018}}
+      count: 250
+coupling:
+  mode: two_way
+  trigger: {interval: 4}
+  restitution: {api: 0.2, exc: 0.5}
+  classes: {min_diameter: 1.0e-3, max_diameter: 4.0e-3, count: 3, material: granule}
+  steady: {window: 3, tolerance: 0.5, sample_every: 0.005, max_time: 0.07}
+YAML
+run_rc 0 "$BIN" couple "$WORK/two.yaml" --out "$WORK/two" --threads 2
+stderr_has "restitution of granule: 0.404 (volume-weighted over the components)"
+/usr/bin/python3 - "$WORK/two" <<'PY' || fail "the DEM's restitution is not the volume-weighted mean of the components'"
+import sys, re, csv, h5py, numpy as np
+d = sys.argv[1]
+f = h5py.File(d + "/result.h5", "r")
+t = f["time"][:]
+xa, xe = f["grid"]["api"]["pivots"][:], f["grid"]["exc"]["pivots"][:]
+for c in csv.DictReader(open(d + "/cycles.csv")):
+    i = int(np.argmin(abs(t - float(c["t_start [s]"]))))
+    N = f["number"][i, 0].reshape(len(xa), len(xe))
+    va, ve = (N * xa[:, None]).sum(), (N * xe[None, :]).sum()
+    want = (0.2 * va + 0.5 * ve) / (va + ve)
+    e = float(re.search(r"name: \"granule\"[^}]*e: ([0-9.e+-]+)\}", open(d + "/cycle-%s/case.yaml" % c["cycle"]).read()).group(1))
+    assert abs(e - want) < 1e-12 and abs(float(c["restitution [1]"]) - want) < 1e-8, (c["cycle"], e, want)
+PY
+
 # Bad input and failure: clear messages, non-zero exits.
 bad() { # bad NAME SED_EXPRESSION EXPECTED_STDERR
   sed -e "$2" "$WORK/tw.yaml" > "$WORK/$1.yaml"
@@ -188,3 +247,7 @@ bad notsteady 's/max_time: 0.07/max_time: 0.02/' \
   "cycle 1 (process time 0 s): the DEM did not reach a steady state by t = 0.02 s (coupling.steady.max_time): over the last 3 samples"
 stderr_has "collision rate"
 [ -d "$WORK/bad-notsteady/cycle-1.partial" ] || fail "the failed DEM stage's files are not kept"
+bad norest 's/trigger: {interval: 4}/trigger: {interval: 4}\n  restitution: {apii: 0.3}/' \
+  "'apii' is not an axis of the grid (expected one of: solid)"
+bad onewayrest 's/mode: two_way/mode: one_way/; s/trigger: {interval: 4}/restitution: {solid: 0.3}/' \
+  "coupling.restitution: restitution belongs to mode: two_way"

@@ -54,6 +54,8 @@ static int read_settings(gs_cfg_node *root, gs_couple_settings *s, gs_cfg_node *
                                 &s->collect, err)) ||
       (rc = gs_cfg_check_unused(st, err)))
     return rc;
+  s->restitution = gs_cfg_get(cp, "restitution");
+  s->e_now = NAN;
   if ((im = gs_cfg_get(cp, "impacts")) &&
       ((rc = gs_cfg_string_opt(im, "wall", NULL, &s->wall, err)) || (rc = gs_cfg_check_unused(im, err))))
     return rc;
@@ -65,6 +67,30 @@ void gs_couple_free(couple *k) {
   gs_grid_free(&k->g);
   gs_cfg_free(k->cfg);
   gs_cfg_free(k->dem_cfg);
+}
+
+/* coupling.restitution: the restitution coefficient of each component (a
+ * grid axis), whose volume-weighted mean over the population is the DEM
+ * material's e in a two-way cycle. */
+static int read_restitution(couple *k, gs_error *err) {
+  gs_cfg_node *r = k->s.restitution;
+  for (int a = 0; a < GS_MAX_DIM; a++) k->s.e_axis[a] = NAN;
+  if (!r) return GS_OK;
+  if (!k->s.two_way) return gs_cfg_fail(r, err, "restitution belongs to mode: two_way (the DEM of the population)");
+  int rc = gs_cfg_require_kind(r, GS_CFG_MAP, err);
+  if (!rc && !gs_cfg_size(r)) rc = gs_cfg_fail(r, err, "expected the restitution of at least one grid axis (component)");
+  for (size_t i = 0; i < gs_cfg_size(r) && !rc; i++) {
+    const char *key = gs_cfg_key_at(r, i);
+    int a = 0;
+    while (a < k->g.dim && strcmp(k->g.axis[a].name, key)) a++;
+    if (a == k->g.dim) {
+      char names[256] = "";
+      for (int b = 0; b < k->g.dim; b++)
+        snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", b ? ", " : "", k->g.axis[b].name);
+      rc = gs_cfg_fail(gs_cfg_value_at(r, i), err, "'%s' is not an axis of the grid (expected one of: %s)", key, names);
+    } else rc = gs_cfg_double_range(r, key, 1, 0, 0, 0, 1, 0, &k->s.e_axis[a], err);
+  }
+  return rc;
 }
 
 /* Load the case, its coupling section, the grid and the DEM section; derive the classes. */
@@ -115,6 +141,7 @@ int gs_couple_load(const char *path, couple *k, int progress, gs_error *err) {
   size_t ncells = g.ncells;
   k->g = g; /* the two-way loop bins the population with it (gs_couple_free) */
   k->mask = (unsigned)mask;
+  if (!rc) rc = read_restitution(k, err);
   if (!rc && progress) {
     fprintf(stderr, "gransim couple: %zu DEM classes from the grid, diameters [%g, %g] m", k->cl.n, k->cl.edges[0],
             k->cl.edges[k->cl.n]);
@@ -382,6 +409,7 @@ int gs_couple_dem_stage(couple *k, const char *part, const double *fractions, in
     gs_dem_case_set_observer(dc, &ob);
     rc = gs_dem_case_run(dc, part, progress, err);
     rec->steps = ss.steps;
+    rec->e = k->s.e_now;
     rec->particles = ss.particles;
   }
   gs_dem_case_free(dc);

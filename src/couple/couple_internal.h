@@ -24,6 +24,9 @@ typedef struct {
   double min_fraction;   /* classes.min_fraction: least share of DEM particles a class gets (two-way) */
   double trig_dv;        /* trigger.mean_volume_change (0: off) */
   double trig_interval;  /* trigger.interval [s] (0: off) */
+  gs_cfg_node *restitution; /* coupling.restitution: e per grid axis (two-way), or NULL */
+  double e_axis[GS_MAX_DIM]; /* its values (NAN: the axis does not count) */
+  double e_now;          /* the DEM material's e for this stage (NAN: the case's own) */
 } gs_couple_settings;
 
 /* DEM classes derived from the grid: edges in volume-equivalent diameter. */
@@ -71,6 +74,7 @@ typedef struct {
   double t_dem;    /* [s] DEM time run */
   double wall;     /* [s] */
   double t_steady; /* [s] when the detector fired */
+  double e;        /* restitution of classes.material (NAN: the case's own) */
 } gs_couple_dem_record;
 
 int gs_couple_load(const char *path, couple *k, int progress, gs_error *err);

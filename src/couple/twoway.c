@@ -101,6 +101,21 @@ static int class_fractions(const couple *k, const double *Y, double t, double *f
   return GS_OK;
 }
 
+/* The volume-weighted mean restitution of the components given in
+ * coupling.restitution over the population (NAN: none given, or no volume). */
+static double restitution(const couple *k, const double *Y) {
+  double ev = 0, v = 0;
+  for (int a = 0; a < k->g.dim; a++) {
+    if (isnan(k->s.e_axis[a])) continue;
+    double va = 0;
+    for (size_t p = 0; p < k->g.ncomp; p++)
+      for (size_t c = 0; c < k->g.ncells; c++) va += Y[p * k->g.ncells + c] * k->g.x[c * (size_t)k->g.dim + a];
+    ev += k->s.e_axis[a] * va;
+    v += va;
+  }
+  return v > 0 ? ev / v : NAN;
+}
+
 /* ---- the cycle files ------------------------------------------------------ */
 
 /* cycle-N/start.bin: where the cycle starts. */
@@ -169,7 +184,7 @@ static int write_cycles(const char *out, long ncycles, size_t n, double t_last, 
   FILE *fp = gs_csv_open(&t, p, err);
   if (!fp) return err->code;
   fprintf(fp, "cycle,t_start [s],t_end [s],trigger,volume_change [1],ended_by,particles [1],l_i [1],dem_steps [1],"
-              "dem_time [s],dem_wall [s],t_steady [s]\n");
+              "dem_time [s],dem_wall [s],t_steady [s],restitution [1]\n");
   fprintf(fp, "# the coupling cycles of gransim couple (mode: two_way): cycle N's DEM ran on the population at "
               "t_start (trigger: what started it, volume_change: the relative change of the mean granule volume "
               "since the previous cycle's start), its collision frequencies drove the PBM to t_end (ended_by)\n");
@@ -186,12 +201,14 @@ static int write_cycles(const char *out, long ncycles, size_t n, double t_last, 
     }
     const double t_end = have_next ? next.t : t_last;
     const int by = have_next ? next.trigger : last_trigger;
-    fprintf(fp, "%ld,%.9g,%.9g,%s,%.9g,%s,%zu,%.9g,%ld,%.9g,%.6g,%.9g\n", N, h.t, t_end, trig_names[h.trigger],
+    fprintf(fp, "%ld,%.9g,%.9g,%s,%.9g,%s,%zu,%.9g,%ld,%.9g,%.6g,%.9g,", N, h.t, t_end, trig_names[h.trigger],
             h.change, trig_names[by], r.particles, 1.0, r.steps, r.t_dem, r.wall, r.t_steady);
+    if (isnan(r.e)) fputs("\n", fp); /* the case's own */
+    else fprintf(fp, "%.9g\n", r.e);
   }
   static const char *const units[] = {"cycle", "1", "t_start", "s", "t_end", "s", "volume_change", "1",
                                       "particles", "1", "l_i", "1", "dem_steps", "1", "dem_time", "s",
-                                      "dem_wall", "s", "t_steady", "s", NULL};
+                                      "dem_wall", "s", "t_steady", "s", "restitution", "1", NULL};
   return gs_csv_close(&t, "gransim couple", units, err);
 }
 
@@ -314,6 +331,10 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
         for (size_t j = 0; j < k->cl.n; j++) fprintf(stderr, " %.3g", fr[j]);
         fputc('\n', stderr);
       }
+      k->s.e_now = restitution(k, Y);
+      if (!rc && opt->progress && !isnan(k->s.e_now))
+        fprintf(stderr, "gransim couple: restitution of %s: %.4g (volume-weighted over the components)\n",
+                k->s.material, k->s.e_now);
       if (!rc) rc = gs_couple_dem_stage(k, part, fr, opt->progress, &rec, err);
       if (!rc) rc = write_record(part, &rec, err);
       if (!rc && rename(part, dir)) rc = gs_error_set(err, GS_EIO, "%s: cannot rename to %s: %s", part, dir, strerror(errno));
