@@ -81,6 +81,11 @@ int gs_output_finish(gs_output *o, int ok, gs_error *err);
  * and the journal: gs_output_resume continues from the last time written
  * (a run an observer stopped to change the model and go on).  Frees o. */
 int gs_output_hold(gs_output *o, gs_error *err);
+/* Add (or replace) a double dataset of rank dims at path (groups made as
+ * needed) in the published file h5_path, with its `units` and `dimensions`
+ * attributes (the coupling's /coupling/cycles). */
+int gs_output_add_dataset(const char *h5_path, const char *path, int rank, const unsigned long long *dims,
+                          const double *data, const char *units, const char *dimensions, gs_error *err);
 
 #ifdef __cplusplus
 }

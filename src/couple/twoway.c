@@ -176,9 +176,39 @@ static int read_record(const char *dir, gs_couple_dem_record *r) {
   return ok;
 }
 
-/* DIR/cycles.csv: a row per cycle whose DEM stage is complete; the last ends at t_last. */
-static int write_cycles(const char *out, long ncycles, size_t n, double t_last, int last_trigger, gs_error *err) {
-  char p[4400], dir[4400];
+/* A cycle's row of the cycle table. */
+typedef struct {
+  start_head h;
+  gs_couple_dem_record r;
+  double t_end;
+  int by;
+} cycle_row;
+
+/* The rows of cycles 1..ncycles whose DEM stage is complete; the last ends at t_last. */
+static size_t collect_cycles(const char *out, long ncycles, size_t n, double t_last, int last_trigger, cycle_row *rows) {
+  char dir[4400];
+  size_t m = 0;
+  for (long N = 1; N <= ncycles; N++) {
+    cycle_row *w = &rows[m];
+    start_head next;
+    cycle_dir(dir, sizeof dir, out, N, 0);
+    if (!read_start(dir, &w->h, NULL, n) || !read_record(dir, &w->r)) break;
+    cycle_dir(dir, sizeof dir, out, N + 1, 0);
+    int have_next = read_start(dir, &next, NULL, n);
+    if (!have_next) {
+      cycle_dir(dir, sizeof dir, out, N + 1, 1);
+      have_next = read_start(dir, &next, NULL, n);
+    }
+    w->t_end = have_next ? next.t : t_last;
+    w->by = have_next ? next.trigger : last_trigger;
+    m++;
+  }
+  return m;
+}
+
+/* DIR/cycles.csv. */
+static int write_cycles(const char *out, const cycle_row *rows, size_t m, gs_error *err) {
+  char p[4400];
   snprintf(p, sizeof p, "%s/cycles.csv", out);
   gs_csv_out t;
   FILE *fp = gs_csv_open(&t, p, err);
@@ -188,28 +218,82 @@ static int write_cycles(const char *out, long ncycles, size_t n, double t_last, 
   fprintf(fp, "# the coupling cycles of gransim couple (mode: two_way): cycle N's DEM ran on the population at "
               "t_start (trigger: what started it, volume_change: the relative change of the mean granule volume "
               "since the previous cycle's start), its collision frequencies drove the PBM to t_end (ended_by)\n");
-  for (long N = 1; N <= ncycles; N++) {
-    start_head h, next;
-    gs_couple_dem_record r;
-    cycle_dir(dir, sizeof dir, out, N, 0);
-    if (!read_start(dir, &h, NULL, n) || !read_record(dir, &r)) break;
-    cycle_dir(dir, sizeof dir, out, N + 1, 0);
-    int have_next = read_start(dir, &next, NULL, n);
-    if (!have_next) {
-      cycle_dir(dir, sizeof dir, out, N + 1, 1);
-      have_next = read_start(dir, &next, NULL, n);
-    }
-    const double t_end = have_next ? next.t : t_last;
-    const int by = have_next ? next.trigger : last_trigger;
-    fprintf(fp, "%ld,%.9g,%.9g,%s,%.9g,%s,%zu,%.9g,%ld,%.9g,%.6g,%.9g,", N, h.t, t_end, trig_names[h.trigger],
-            h.change, trig_names[by], r.particles, 1.0, r.steps, r.t_dem, r.wall, r.t_steady);
-    if (isnan(r.e)) fputs("\n", fp); /* the case's own */
-    else fprintf(fp, "%.9g\n", r.e);
+  for (size_t i = 0; i < m; i++) {
+    const cycle_row *w = &rows[i];
+    fprintf(fp, "%zu,%.9g,%.9g,%s,%.9g,%s,%zu,%.9g,%ld,%.9g,%.6g,%.9g,", i + 1, w->h.t, w->t_end,
+            trig_names[w->h.trigger], w->h.change, trig_names[w->by], w->r.particles, 1.0, w->r.steps, w->r.t_dem,
+            w->r.wall, w->r.t_steady);
+    if (isnan(w->r.e)) fputs("\n", fp); /* the case's own */
+    else fprintf(fp, "%.9g\n", w->r.e);
   }
   static const char *const units[] = {"cycle", "1", "t_start", "s", "t_end", "s", "volume_change", "1",
                                       "particles", "1", "l_i", "1", "dem_steps", "1", "dem_time", "s",
                                       "dem_wall", "s", "t_steady", "s", "restitution", "1", NULL};
   return gs_csv_close(&t, "gransim couple", units, err);
+}
+
+/* A cycle's collision_kernel.csv: its nc x nc values, and the nc + 1 edges. */
+static int read_kernel(const char *dir, size_t nc, double *edges, double *C, gs_error *err) {
+  char p[4600], line[16384];
+  snprintf(p, sizeof p, "%s/collision_kernel.csv", dir);
+  FILE *fp = fopen(p, "r");
+  size_t r = 0, got = 0;
+  while (fp && fgets(line, sizeof line, fp) && r <= nc) {
+    char *q = line + (strncmp(line, "edges", 5) ? 0 : 6);
+    double *to = r == 0 ? edges : C + (r - 1) * nc;
+    size_t want = r == 0 ? nc + 1 : nc, j = 0;
+    for (char *end; j < want; j++, q = end + (*end == ',')) {
+      to[j] = strtod(q, &end);
+      if (end == q) break;
+    }
+    got += j == want;
+    r++;
+  }
+  if (fp) fclose(fp);
+  if (got != nc + 1) return gs_error_set(err, GS_EINPUT, "%s: not a table of %zu classes", p, nc);
+  for (size_t i = 0; i < nc * nc; i++)
+    if (!isfinite(C[i]) || C[i] < 0)
+      return gs_error_set(err, GS_ENUMERIC, "%s: C_%zu%zu = %g, not a finite frequency >= 0", p, i / nc + 1,
+                          i % nc + 1, C[i]);
+  return GS_OK;
+}
+
+/* result.h5's /coupling/cycles: the cycle table's columns (trigger and
+ * ended_by as codes: 0 start, 1 mean_volume_change, 2 interval, 3 end) and
+ * every cycle's kernel table. */
+static int write_cycles_h5(const char *out, const couple *k, const cycle_row *rows, size_t m, gs_error *err) {
+  char h5[4400], dir[4400];
+  snprintf(h5, sizeof h5, "%s/result.h5", out);
+  const size_t nc = k->cl.n;
+  double *col = gs_malloc((m * nc * nc + m + nc + 1) * sizeof *col, err), *edges = col + m * nc * nc + m;
+  if (!col) return GS_ENOMEM;
+  int rc = GS_OK;
+  static const struct {
+    const char *name, *units;
+  } cols[] = {{"t_start", "s"}, {"t_end", "s"}, {"trigger", "1"}, {"volume_change", "1"}, {"ended_by", "1"},
+              {"particles", "1"}, {"l_i", "1"}, {"dem_steps", "1"}, {"dem_time", "s"}, {"dem_wall", "s"},
+              {"t_steady", "s"}, {"restitution", "1"}};
+  unsigned long long d1[1] = {m}, d3[3] = {m, nc, nc}, de[1] = {nc + 1};
+  for (size_t c = 0; c < sizeof cols / sizeof cols[0] && !rc; c++) {
+    for (size_t i = 0; i < m; i++) {
+      const cycle_row *w = &rows[i];
+      const double v[] = {w->h.t, w->t_end, w->h.trigger, w->h.change, w->by, (double)w->r.particles, 1.0,
+                          (double)w->r.steps, w->r.t_dem, w->r.wall, w->r.t_steady, w->r.e};
+      col[i] = v[c];
+    }
+    char path[128];
+    snprintf(path, sizeof path, "/coupling/cycles/%s", cols[c].name);
+    rc = gs_output_add_dataset(h5, path, 1, d1, col, cols[c].units, "cycle", err);
+  }
+  for (size_t i = 0; i < m && !rc; i++) {
+    cycle_dir(dir, sizeof dir, out, (long)i + 1, 0);
+    rc = read_kernel(dir, nc, edges, col + i * nc * nc, err);
+  }
+  if (!rc) rc = gs_output_add_dataset(h5, "/coupling/cycles/collision_frequency", 3, d3, col, "1/s",
+                                      "cycle,class,class", err);
+  if (!rc) rc = gs_output_add_dataset(h5, "/coupling/class_edges", 1, de, edges, "m", "class_edge", err);
+  free(col);
+  return rc;
 }
 
 /* ---- the trigger, a run observer ------------------------------------------ */
@@ -319,6 +403,7 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
     if (!rc) rc = write_start(part, &h, Y, err);
   }
   const int fresh_pbm = !opt->resume || N == 1;
+  cycle_row *rows = NULL;
   for (int first_stretch = 1; !rc; first_stretch = 0) {
     cycle_dir(dir, sizeof dir, out, N, 0);
     cycle_dir(part, sizeof part, out, N, 1);
@@ -343,6 +428,21 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
         break;
       }
       dem_done = 1;
+    }
+    cycle_row *grown = realloc(rows, (size_t)(N + 1) * sizeof *rows);
+    if (!grown) {
+      rc = gs_error_set(err, GS_ENOMEM, "out of memory for the cycle table");
+      break;
+    }
+    rows = grown;
+    { /* the DEM's frequencies must be finite numbers of the derived classes (an empty or NaN table: an error) */
+      double *C = gs_malloc((k->cl.n * k->cl.n + k->cl.n + 1) * sizeof *C, err);
+      rc = C ? read_kernel(dir, k->cl.n, C + k->cl.n * k->cl.n, C, err) : GS_ENOMEM;
+      free(C);
+      if (rc) {
+        gs_error_prefix(err, "cycle %ld (process time %g s): ", N, h.t);
+        break;
+      }
     }
     /* the PBM stretch from h.t with cycle N's tables until the trigger fires */
     rc = load_pbm(k, path, dir, 0, &c, err);
@@ -369,7 +469,9 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
       break;
     }
     if (!rep.stopped) { /* the process time is over */
-      rc = write_cycles(out, N, n, rep.t_end, TRIG_END, err);
+      size_t m = collect_cycles(out, N, n, rep.t_end, TRIG_END, rows);
+      rc = write_cycles(out, rows, m, err);
+      if (!rc) rc = write_cycles_h5(out, k, rows, m, err);
       if (!rc && opt->progress)
         fprintf(stderr, "gransim couple: %ld cycles to t = %g s; results in %s, cycles in %s/cycles.csv\n", N,
                 rep.t_end, out, out);
@@ -385,8 +487,9 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
     remove_tree(part);
     if (mkdir(part, 0777)) rc = gs_error_set(err, GS_EIO, "%s: cannot create: %s", part, strerror(errno));
     if (!rc) rc = write_start(part, &h, Y, err);
-    if (!rc) rc = write_cycles(out, N - 1, n, rep.t_end, tr.fired, err);
+    if (!rc) rc = write_cycles(out, rows, collect_cycles(out, N - 1, n, rep.t_end, tr.fired, rows), err);
   }
+  free(rows);
   free(Y);
   return rc;
 }
