@@ -362,7 +362,7 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
   rc = load_pbm(k, path, out, 1, &c, err);
   if (rc) return rc;
   const size_t n = c.ode.n;
-  const double t_first = c.t0;
+  const double t_first = c.t0, t_last = c.times[c.ntimes - 1];
   double *Y = gs_malloc(n * sizeof *Y, err);
   if (Y) memcpy(Y, c.y0, n * sizeof *Y);
   gs_case_free(&c);
@@ -384,8 +384,14 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
               dem_done ? "its DEM stage complete, the PBM stretch resumed" : "its DEM stage run again");
     if (N && dem_done && !gs_couple_exists(out, ".result.journal") && gs_couple_exists(out, "result.h5")) {
       if (opt->progress) fprintf(stderr, "gransim couple: --resume: the coupled run is complete in %s\n", out);
+      /* its cycle table again, in case a kill came between the result's publication and the table */
+      cycle_row *rows = malloc((size_t)(N + 1) * sizeof *rows);
+      size_t m = rows ? collect_cycles(out, N, n, t_last, TRIG_END, rows) : 0;
+      rc = rows ? write_cycles(out, rows, m, err) : gs_error_set(err, GS_ENOMEM, "out of memory for the cycle table");
+      if (!rc) rc = write_cycles_h5(out, k, rows, m, err);
+      free(rows);
       free(Y);
-      return GS_OK;
+      return rc;
     }
   }
   if (!N) { /* a fresh run: earlier cycles go */
