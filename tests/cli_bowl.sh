@@ -55,7 +55,7 @@ echo "cli_bowl: ok"
 # DEM's restitution the volume-weighted 0.2 x 0.2 + 0.275 x 0.8 = 0.26 of the API:excipient mix
 # (constant: aggregation and liquid move no solid).
 sed -e 's/      count: 280/      count: 150/' \
-    -e 's/steady: {window: 6, tolerance: 0.15, sample_every: 2.0e-3, max_time: 0.045}/steady: {window: 3, tolerance: 0.5, sample_every: 1.0e-3, max_time: 0.03}/' \
+    -e 's/steady: {window: 4, tolerance: 0.35, sample_every: 3.0e-3, max_time: 0.06}/steady: {window: 3, tolerance: 0.5, sample_every: 1.0e-3, max_time: 0.03}/' \
     -e 's/    end: 250/    end: 50/' -e 's/output: {end: 500, count: 51}/output: {end: 80, count: 9}/' \
     -e 's/trigger: {mean_volume_change: 0.5}/trigger: {mean_volume_change: 0.5, interval: 30}/' \
     "$SRC/examples/bowl-two-way.yaml" >"$WORK/bowl2.yaml"
