@@ -48,3 +48,31 @@ if command -v "${GRANSIM_LIGGGHTS:-liggghts}" >/dev/null && command -v mpirun >/
   [ "$(tail -1 "$WORK/lig/timeseries.csv" | cut -d, -f2)" = 20 ] || fail "LIGGGHTS lost particles of the bowl"
 fi
 echo "cli_bowl: ok"
+
+# The two-way example (examples/bowl-two-way.yaml) in the same kind of quick variant (150 DEM
+# particles, since a two-way DEM fills its classes by the population's numbers, nearly all
+# primaries at first; cycles every 30 s): three cycles; the conservation identities as above; the
+# DEM's restitution the volume-weighted 0.2 x 0.2 + 0.275 x 0.8 = 0.26 of the API:excipient mix
+# (constant: aggregation and liquid move no solid).
+sed -e 's/      count: 280/      count: 150/' \
+    -e 's/steady: {window: 4, tolerance: 0.35, sample_every: 3.0e-3, max_time: 0.06}/steady: {window: 3, tolerance: 0.5, sample_every: 1.0e-3, max_time: 0.03}/' \
+    -e 's/    end: 250/    end: 50/' -e 's/output: {end: 500, count: 51}/output: {end: 80, count: 9}/' \
+    -e 's/trigger: {mean_volume_change: 0.5}/trigger: {mean_volume_change: 0.5, interval: 30}/' \
+    "$SRC/examples/bowl-two-way.yaml" >"$WORK/bowl2.yaml"
+[ "$(grep -c 'count: 150\|max_time: 0.03\|    end: 50\|interval: 30' "$WORK/bowl2.yaml")" = 4 ] ||
+  fail "the two-way quick variant's edits did not apply: examples/bowl-two-way.yaml changed"
+run_rc 0 "$BIN" couple "$WORK/bowl2.yaml" --out "$WORK/out2" --quiet
+[ "$(awk -F, 'NR > 1' "$WORK/out2/cycles.csv" | wc -l)" = 3 ] || fail "the two-way quick variant: not 3 cycles"
+awk -F, 'NR > 1 && ($13 < 0.26 * (1 - 1e-9) || $13 > 0.26 * (1 + 1e-9)) { bad = 1 } END { exit bad }' \
+  "$WORK/out2/cycles.csv" || fail "the two-way DEM's restitution is not 0.26: $(cat "$WORK/out2/cycles.csv")"
+awk -F, '
+  NR == 1 { for (i = 1; i <= NF; i++) col[$i] = i; next }
+  { api = $col["total_api [m^3]"]; exc = $col["total_excipient [m^3]"]; liq = $col["total_liquid [m^3]"]
+    n = $col["M0 [1]"]
+    r = api / exc; if (r < 0.25 * (1 - 1e-12) || r > 0.25 * (1 + 1e-12)) { print "API:excipient " r " at t = " $1; bad = 1 }
+    if (NR == 2) n0 = n }
+  END {
+    want = 0.15 * 1668 / 1000 * (api + exc)
+    if (liq < want * (1 - 1e-9) || liq > want * (1 + 1e-9)) { print "liquid " liq " want " want; bad = 1 }
+    if (!(n < 0.999 * n0)) { print "number " n0 " -> " n ": no aggregation"; bad = 1 }
+    exit bad }' "$WORK/out2/summary.csv" || fail "the two-way run's summary.csv (above)"

@@ -186,8 +186,9 @@ bad duration 's/^    time_step: 5.0e-6/&\n    duration: 1/' \
 bad file 's/type: table, /type: table, file: x.csv, /' \
   "mechanisms[0].kernel.file = 'x.csv': set by the coupling in a coupled case"
 bad wall 's/  steady: {window/  impacts: {wall: lid}\n  steady: {window/' "coupling.impacts: wall 'lid' is not a wall of the DEM case"
-bad nomode 's/mode: one_way/mode_: one_way/' "missing key 'mode' (one_way)"
-bad mode 's/mode: one_way/mode: two_way/' "coupling.mode = 'two_way'"
+bad nomode 's/mode: one_way/mode_: one_way/' "missing key 'mode' (one_way | two_way)"
+bad mode 's/mode: one_way/mode: three_way/' "coupling.mode = 'three_way'"
+bad twofrac 's/mode: one_way/mode: two_way/' "dem.fill[0].fractions: set by the coupling (the PBM population, coupling.mode two_way)"
 bad nodem '/^dem:/,/^coupling:/{/^coupling:/!d}' "missing key 'dem' (the DEM case"
 bad nosteady '/steady: {window/d' "missing key 'steady' in coupling"
 sed '/^coupling:/,$d' "$WORK/tiny.yaml" > "$WORK/nocoupling.yaml"

@@ -3,7 +3,8 @@
 # repository, fails here), at its full length: all take seconds. A case with a
 # top-level `coupling:` section runs with `gransim couple`, one with `dem:` with
 # `gransim dem`, the rest with `gransim run`; each result is then plotted
-# with the clone's own plotting script.
+# with the clone's own plotting script.  An example that takes minutes says
+# `# cli_examples: quick variant in tests/NAME.sh` and runs there instead.
 source "$(dirname "$0")/cli-lib.sh" "$@"
 command -v git >/dev/null || fail "git is not installed"
 git -C "$SRC" rev-parse --git-dir >/dev/null 2>&1 || fail "$SRC is not a git checkout: cannot test a fresh clone"
@@ -11,6 +12,8 @@ git clone -q "$SRC" "$WORK/clone" || fail "git clone $SRC"
 n=0
 for case in "$WORK"/clone/examples/*.yaml; do
   name=$(basename "$case" .yaml)
+  # an example of minutes runs in a quick variant in the test it names
+  grep -q '^# cli_examples: quick variant in tests/' "$case" && continue
   if grep -q '^coupling:' "$case"; then cmd=couple
   elif grep -q '^dem:' "$case"; then cmd=dem
   else cmd=run

@@ -5,8 +5,11 @@
  * `mode: one_way` (uni-directional coupling, Sampat et al. 2018) the DEM runs
  * once, its size classes derived from the PBM grid, until the steady-state
  * detector fires; its tables become the PBM's `table` kernel and `dem_impact`
- * selection, and the PBM runs with them.  Stages are resumable: the DEM's
- * tables appear atomically, the PBM resumes from its partial files. */
+ * selection, and the PBM runs with them.  With `mode: two_way` (De et al.
+ * 2025) the PBM runs in stretches that a trigger ends (coupling.trigger), each
+ * with the tables of a fresh DEM of the population at its start (DIR/cycle-N/,
+ * DIR/cycles.csv).  Stages are resumable: the DEM's tables appear atomically,
+ * the PBM resumes from its partial files. */
 #ifndef GRANSIM_COUPLE_H
 #define GRANSIM_COUPLE_H
 
@@ -19,7 +22,7 @@ extern "C" {
 #endif
 
 typedef struct gs_couple_options {
-  const char *out_dir; /* DIR: DIR/dem/ the DEM stage, DIR/result.h5 the PBM */
+  const char *out_dir; /* DIR: DIR/dem/ the DEM stage (two-way: DIR/cycle-N/), DIR/result.h5 the PBM */
   int resume;          /* skip a complete DEM stage, resume the PBM from its partial files */
   int progress;        /* progress lines on stderr */
 } gs_couple_options;

@@ -77,6 +77,15 @@ gs_output *gs_output_resume(const char *dir, const gs_model *m, size_t nresume, 
  * before that leaves it, and --resume publishes again); ok = 0: close and
  * delete the partial files and the journal.  Frees o in both cases. */
 int gs_output_finish(gs_output *o, int ok, gs_error *err);
+/* Commit every output time written and close, keeping the partial files
+ * and the journal: gs_output_resume continues from the last time written
+ * (a run an observer stopped to change the model and go on).  Frees o. */
+int gs_output_hold(gs_output *o, gs_error *err);
+/* Add (or replace) a double dataset of rank dims at path (groups made as
+ * needed) in the published file h5_path, with its `units` and `dimensions`
+ * attributes (the coupling's /coupling/cycles). */
+int gs_output_add_dataset(const char *h5_path, const char *path, int rank, const unsigned long long *dims,
+                          const double *data, const char *units, const char *dimensions, gs_error *err);
 
 #ifdef __cplusplus
 }

@@ -75,6 +75,11 @@ typedef struct gs_run_options {
   /* 1: this process runs the case alone, whatever the MPI ranks (the ranks
    * of a sweep each run their own cases) */
   int one_process;
+  /* 1: a run an observer stops before its last output time keeps its result
+   * files partial, everything committed to the journal, so that a run with
+   * resume = 1 (of the same grid, the mechanisms' data may differ) continues
+   * it exactly where it stopped; 0: the stopped run publishes them */
+  int hold_on_stop;
   /* more observers, called after the built-in ones (owned by the caller:
    * their free is not called) */
   const gs_observer *observers;

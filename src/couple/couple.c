@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "couple/couple_internal.h"
@@ -24,32 +25,24 @@
 #include "gransim/output.h"
 #include "gransim/run.h"
 
-typedef struct {
-  gs_cfg *cfg;        /* the coupled case; handed to the PBM case at the end */
-  gs_cfg *dem_cfg;    /* the DEM case when `dem:` names a file */
-  gs_cfg_node *dem;   /* root of the DEM case */
-  char dem_dir[4096]; /* its directory, for relative mesh paths */
-  const char *path;   /* the coupled case, and the line of its dem section, for messages */
-  int dem_line;
-  gs_couple_settings s;
-  gs_couple_classes cl;
-} couple;
-
 static int read_settings(gs_cfg_node *root, gs_couple_settings *s, gs_cfg_node **classes, gs_error *err) {
   gs_cfg_node *cp, *cls, *st, *im;
-  static const char *const modes[] = {"one_way", NULL}, *const outside[] = {"nearest", "error", NULL};
+  static const char *const modes[] = {"one_way", "two_way", NULL}, *const outside[] = {"nearest", "error", NULL};
   int mode, rc;
   memset(s, 0, sizeof *s);
   if ((rc = gs_cfg_map_req(root, "coupling", &cp, err)) ||
       (rc = gs_cfg_enum_opt(cp, "mode", modes, -1, &mode, err)))
     return rc;
-  if (mode < 0) return gs_cfg_missing(cp, "mode", "(one_way)", err);
+  if (mode < 0) return gs_cfg_missing(cp, "mode", "(one_way | two_way)", err);
+  s->two_way = mode == 1;
+  if ((rc = gs_couple_read_trigger(cp, s, err))) return rc;
   if ((rc = gs_cfg_map_req(cp, "classes", &cls, err)) ||
       (rc = gs_cfg_double_range(cls, "min_diameter", 1, 0, 0, 0, HUGE_VAL, 0, &s->dmin, err)) ||
       (rc = gs_cfg_double_range(cls, "max_diameter", 1, 0, s->dmin, 0, HUGE_VAL, 0, &s->dmax, err)) ||
       (rc = gs_cfg_long_range(cls, "count", 0, 0, 1, GS_COUPLE_MAX_CLASSES, &s->count, err)) ||
       (rc = gs_cfg_string_req(cls, "material", &s->material, err)) ||
       (rc = gs_cfg_enum_opt(cls, "outside", outside, 0, &s->outside_error, err)) ||
+      (rc = gs_cfg_double_range(cls, "min_fraction", 0, 0.02, 0, 0, 0.5, 0, &s->min_fraction, err)) ||
       (rc = gs_cfg_check_unused(cls, err)))
     return rc;
   if ((rc = gs_cfg_map_req(cp, "steady", &st, err)) ||
@@ -61,6 +54,8 @@ static int read_settings(gs_cfg_node *root, gs_couple_settings *s, gs_cfg_node *
                                 &s->collect, err)) ||
       (rc = gs_cfg_check_unused(st, err)))
     return rc;
+  s->restitution = gs_cfg_get(cp, "restitution");
+  s->e_now = NAN;
   if ((im = gs_cfg_get(cp, "impacts")) &&
       ((rc = gs_cfg_string_opt(im, "wall", NULL, &s->wall, err)) || (rc = gs_cfg_check_unused(im, err))))
     return rc;
@@ -68,13 +63,38 @@ static int read_settings(gs_cfg_node *root, gs_couple_settings *s, gs_cfg_node *
   return gs_cfg_check_unused(cp, err);
 }
 
-static void couple_free(couple *k) {
+void gs_couple_free(couple *k) {
+  gs_grid_free(&k->g);
   gs_cfg_free(k->cfg);
   gs_cfg_free(k->dem_cfg);
 }
 
+/* coupling.restitution: the restitution coefficient of each component (a
+ * grid axis), whose volume-weighted mean over the population is the DEM
+ * material's e in a two-way cycle. */
+static int read_restitution(couple *k, gs_error *err) {
+  gs_cfg_node *r = k->s.restitution;
+  for (int a = 0; a < GS_MAX_DIM; a++) k->s.e_axis[a] = NAN;
+  if (!r) return GS_OK;
+  if (!k->s.two_way) return gs_cfg_fail(r, err, "restitution belongs to mode: two_way (the DEM of the population)");
+  int rc = gs_cfg_require_kind(r, GS_CFG_MAP, err);
+  if (!rc && !gs_cfg_size(r)) rc = gs_cfg_fail(r, err, "expected the restitution of at least one grid axis (component)");
+  for (size_t i = 0; i < gs_cfg_size(r) && !rc; i++) {
+    const char *key = gs_cfg_key_at(r, i);
+    int a = 0;
+    while (a < k->g.dim && strcmp(k->g.axis[a].name, key)) a++;
+    if (a == k->g.dim) {
+      char names[256] = "";
+      for (int b = 0; b < k->g.dim; b++)
+        snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", b ? ", " : "", k->g.axis[b].name);
+      rc = gs_cfg_fail(gs_cfg_value_at(r, i), err, "'%s' is not an axis of the grid (expected one of: %s)", key, names);
+    } else rc = gs_cfg_double_range(r, key, 1, 0, 0, 0, 1, 0, &k->s.e_axis[a], err);
+  }
+  return rc;
+}
+
 /* Load the case, its coupling section, the grid and the DEM section; derive the classes. */
-static int couple_load(const char *path, couple *k, int progress, gs_error *err) {
+int gs_couple_load(const char *path, couple *k, int progress, gs_error *err) {
   memset(k, 0, sizeof *k);
   if (!(k->cfg = gs_cfg_load_file(path, err))) return err->code;
   gs_cfg_node *root = gs_cfg_root(k->cfg), *cls = NULL, *section;
@@ -119,7 +139,9 @@ static int couple_load(const char *path, couple *k, int progress, gs_error *err)
   rc = gs_case_read_grid_only(root, &g, &mask, &section, err);
   if (!rc) rc = gs_couple_classes_derive(&g, (unsigned)mask, &k->s, cls, &k->cl, err);
   size_t ncells = g.ncells;
-  gs_grid_free(&g);
+  k->g = g; /* the two-way loop bins the population with it (gs_couple_free) */
+  k->mask = (unsigned)mask;
+  if (!rc) rc = read_restitution(k, err);
   if (!rc && progress) {
     fprintf(stderr, "gransim couple: %zu DEM classes from the grid, diameters [%g, %g] m", k->cl.n, k->cl.edges[0],
             k->cl.edges[k->cl.n]);
@@ -132,7 +154,7 @@ static int couple_load(const char *path, couple *k, int progress, gs_error *err)
 }
 
 /* Point every `table` kernel and `dem_impact` selection at the DEM's tables. */
-static int point_at_tables(gs_cfg_node *root, const char *kernel, const char *impacts, gs_error *err) {
+int gs_couple_point_at_tables(gs_cfg_node *root, const char *kernel, const char *impacts, gs_error *err) {
   gs_cfg_node *mechs = gs_cfg_get(root, "mechanisms");
   int found = 0, rc = GS_OK;
   for (size_t i = 0; i < gs_cfg_size(mechs) && !rc; i++) {
@@ -162,7 +184,7 @@ static int point_at_tables(gs_cfg_node *root, const char *kernel, const char *im
 
 /* grid.size_axes also measures the PBM's classes: the kernels may not choose other axes */
 static int pbm_case(couple *k, const char *kernel, const char *impacts, gs_case *c, gs_error *err) {
-  int rc = point_at_tables(gs_cfg_root(k->cfg), kernel, impacts, err);
+  int rc = gs_couple_point_at_tables(gs_cfg_root(k->cfg), kernel, impacts, err);
   memset(c, 0, sizeof *c);
   gs_cfg *cfg = k->cfg;
   k->cfg = NULL; /* taken over by the case, also on failure */
@@ -173,10 +195,10 @@ static int pbm_case(couple *k, const char *kernel, const char *impacts, gs_case 
   return gs_case_from_cfg(cfg, c, err);
 }
 
-static int write_dem_case(couple *k, const char *path, gs_error *err) {
+static int write_dem_case(couple *k, const char *path, const double *fractions, gs_error *err) {
   FILE *fp = fopen(path, "w");
   if (!fp) return gs_error_set(err, GS_EIO, "%s: cannot write: %s", path, strerror(errno));
-  int rc = gs_couple_write_dem_case(fp, k->dem, k->dem_dir, &k->s, &k->cl, err);
+  int rc = gs_couple_write_dem_case(fp, k->dem, k->dem_dir, &k->s, &k->cl, fractions, err);
   if (fclose(fp) && !rc) rc = gs_error_set(err, GS_EIO, "%s: cannot write", path);
   return rc;
 }
@@ -234,7 +256,7 @@ static int engine_check(const couple *k, const gs_dem_case *dc, gs_error *err) {
 }
 
 /* Placeholder tables of the derived classes, for `check` (no DEM run). */
-static int write_placeholders(const couple *k, const char *kernel, const char *impacts, gs_error *err) {
+int gs_couple_write_placeholders(const couple *k, const char *kernel, const char *impacts, gs_error *err) {
   FILE *a = fopen(kernel, "w"), *b = fopen(impacts, "w");
   for (size_t r = 0; a && b && r <= 3 * k->cl.n + 1; r++) {
     fputs(r == 0 ? "edges" : "", a);
@@ -260,7 +282,7 @@ static int write_placeholders(const couple *k, const char *kernel, const char *i
 
 int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
   couple k;
-  int rc = couple_load(path, &k, 0, err);
+  int rc = gs_couple_load(path, &k, 0, err);
   char tmp[] = "/tmp/gransim-couple-XXXXXX", dcase[64], kt[64], it[64];
   int have_tmp = !rc && mkdtemp(tmp);
   if (!rc && !have_tmp) rc = gs_error_set(err, GS_EIO, "cannot create a temporary folder: %s", strerror(errno));
@@ -268,25 +290,29 @@ int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
   snprintf(kt, sizeof kt, "%s/collision_kernel.csv", tmp);
   snprintf(it, sizeof it, "%s/impact_table.csv", tmp);
   char dd[512] = "";
-  if (!rc) rc = write_dem_case(&k, dcase, err);
+  /* two-way: the fill's fractions come from the population; any will do here */
+  double equal[GS_COUPLE_MAX_CLASSES];
+  for (size_t c = 0; c < GS_COUPLE_MAX_CLASSES; c++) equal[c] = 1;
+  if (!rc) rc = write_dem_case(&k, dcase, k.s.two_way ? equal : NULL, err);
   if (!rc) {
     gs_dem_case *dc = gs_dem_case_load(dcase, err);
     if (!dc) rc = dem_error(&k, dcase, err);
     else if (!(rc = engine_check(&k, dc, err))) gs_dem_case_describe(dc, dd, sizeof dd);
     gs_dem_case_free(dc);
   }
-  if (!rc) rc = write_placeholders(&k, kt, it, err);
+  if (!rc) rc = gs_couple_write_placeholders(&k, kt, it, err);
   gs_case c;
   memset(&c, 0, sizeof c);
   size_t nclass = k.cl.n, outside = k.cl.outside;
+  const int two = k.s.two_way;
   double lo = k.cl.edges[0], hi = k.cl.edges[k.cl.n];
   if (!rc) rc = pbm_case(&k, kt, it, &c, err);
   if (!rc)
-    snprintf(desc, n, "one_way: %zu DEM classes from the grid, diameters [%.4g, %.4g] m (%zu PBM cells outside: "
+    snprintf(desc, n, "%s: %zu DEM classes from the grid, diameters [%.4g, %.4g] m (%zu PBM cells outside: "
              "nearest class); PBM %zu cells x %zu compartments, %zu mechanisms; DEM: %s",
-             nclass, lo, hi, outside, c.model.grid.ncells, c.model.grid.ncomp, c.model.nmech, dd);
+             two ? "two_way" : "one_way", nclass, lo, hi, outside, c.model.grid.ncells, c.model.grid.ncomp, c.model.nmech, dd);
   gs_case_free(&c);
-  couple_free(&k);
+  gs_couple_free(&k);
   if (have_tmp) {
     unlink(dcase);
     unlink(kt);
@@ -298,7 +324,7 @@ int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
 
 /* classes.csv: the derived classes and how many PBM cells each holds, so that
  * a user sees what the DEM sampled and what was extrapolated. */
-static int write_classes(const couple *k, const char *dir, gs_error *err) {
+int gs_couple_write_classes(const couple *k, const char *dir, gs_error *err) {
   char p[4400];
   snprintf(p, sizeof p, "%s/classes.csv", dir);
   gs_csv_out t;
@@ -314,7 +340,7 @@ static int write_classes(const couple *k, const char *dir, gs_error *err) {
   return gs_csv_close(&t, "gransim couple", units, err);
 }
 
-static int rm_entry(const char *p, const struct stat *sb, int flag, struct FTW *f) {
+int gs_couple_rm_entry(const char *p, const struct stat *sb, int flag, struct FTW *f) {
   (void)sb;
   (void)flag;
   (void)f;
@@ -326,12 +352,16 @@ static int rm_entry(const char *p, const struct stat *sb, int flag, struct FTW *
  * seconds and stop, rather than running on to max_time. */
 typedef struct {
   double collect, t_fired, t_stop;
+  long steps;       /* at the last sample */
+  size_t particles; /* at the last sample */
 } stage_stop;
 
 static int stop_when_collected(const gs_dem_sample *smp, void *user, int *open_window, int *stop, gs_error *err) {
   (void)open_window;
   (void)err;
   stage_stop *o = user;
+  o->steps = smp->step;
+  o->particles = smp->particles;
   if (smp->steady && o->t_fired < 0) o->t_fired = smp->t;
   /* half a sample of slack: the samples' times carry round-off */
   if (o->t_fired >= 0 && smp->t >= o->t_fired + o->collect * (1 - 1e-9)) {
@@ -341,11 +371,62 @@ static int stop_when_collected(const gs_dem_sample *smp, void *user, int *open_w
   return GS_OK;
 }
 
-static int exists(const char *dir, const char *name) {
+double gs_couple_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int gs_couple_exists(const char *dir, const char *name) {
   char p[4400];
   struct stat sb;
   snprintf(p, sizeof p, "%s/%s", dir, name);
   return stat(p, &sb) == 0;
+}
+
+/* A DEM stage into the folder part (made): its case (fractions: the fill's
+ * class fractions by number, NULL for the case's own), classes.csv, the run
+ * stopped steady.collect after the detector fired, the case rewritten as run
+ * and steady.csv.  rec: what the cycle table records. */
+int gs_couple_dem_stage(couple *k, const char *part, const double *fractions, int progress,
+                        gs_couple_dem_record *rec, gs_error *err) {
+  char dcase[4400];
+  int rc = GS_OK;
+  memset(rec, 0, sizeof *rec);
+  snprintf(dcase, sizeof dcase, "%s/case.yaml", part);
+  rc = write_dem_case(k, dcase, fractions, err);
+  if (!rc) rc = gs_couple_write_classes(k, part, err);
+  gs_dem_case *dc = rc ? NULL : gs_dem_case_load(dcase, err);
+  if (!rc && !dc) rc = dem_error(k, dcase, err);
+  if (!rc) rc = engine_check(k, dc, err);
+  stage_stop ss = {.collect = k->s.collect, .t_fired = -1, .t_stop = -1};
+  const double w0 = gs_couple_now();
+  if (!rc) {
+    if (progress)
+      fprintf(stderr, "gransim couple: DEM stage (%g s at most; %g s of statistics once steady) in %s\n",
+              k->s.max_time, k->s.collect, part);
+    gs_dem_observer ob = {.sample = stop_when_collected, .user = &ss};
+    gs_dem_case_set_observer(dc, &ob);
+    rc = gs_dem_case_run(dc, part, progress, err);
+    rec->steps = ss.steps;
+    rec->e = k->s.e_now;
+    rec->particles = ss.particles;
+  }
+  gs_dem_case_free(dc);
+  rec->wall = gs_couple_now() - w0;
+  rec->t_dem = ss.t_stop >= 0 ? ss.t_stop : k->s.max_time;
+  /* the case as run: its duration ends where the observer stopped it, so that
+   * `gransim dem dem/case.yaml` gives the same tables */
+  if (!rc && ss.t_stop >= 0) {
+    gs_couple_settings as_run = k->s;
+    as_run.max_time = ss.t_stop;
+    const gs_couple_settings keep = k->s;
+    k->s = as_run;
+    rc = write_dem_case(k, dcase, fractions, err);
+    k->s = keep;
+  }
+  if (!rc) rc = gs_couple_steady_report(part, &k->s, &rec->t_steady, err);
+  return rc;
 }
 
 int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err) {
@@ -355,49 +436,28 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
   memset(&k, 0, sizeof k);
   int rc = gs_couple_check(path, desc, sizeof desc, err);
   if (rc) return rc;
-  rc = couple_load(path, &k, opt->progress, err);
+  rc = gs_couple_load(path, &k, opt->progress, err);
+  if (!rc && k.s.two_way) rc = gs_couple_two_way(&k, path, opt, err);
+  if (rc || k.s.two_way) {
+    gs_couple_free(&k);
+    return rc;
+  }
   const char *out = opt->out_dir;
-  char dem[4200], part[4200], kt[4400], it[4400], dcase[4400];
+  char dem[4200], part[4200], kt[4400], it[4400];
   snprintf(dem, sizeof dem, "%s/dem", out);
   snprintf(part, sizeof part, "%s/dem.partial", out);
   if (!rc) rc = gs_output_mkdir_p(out, err);
   char impname[300] = "impact_table.csv";
   if (k.s.wall) snprintf(impname, sizeof impname, "impact_table_%s.csv", k.s.wall);
-  int have = !rc && opt->resume && exists(dem, "collision_kernel.csv") && exists(dem, impname) && exists(dem, "steady.csv");
+  int have = !rc && opt->resume && gs_couple_exists(dem, "collision_kernel.csv") && gs_couple_exists(dem, impname) && gs_couple_exists(dem, "steady.csv");
   if (!rc && have && opt->progress) fprintf(stderr, "gransim couple: --resume: DEM stage complete in %s, skipped\n", dem);
   if (!rc && !have) {
-    nftw(part, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
-    nftw(dem, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
+    nftw(part, gs_couple_rm_entry, 16, FTW_DEPTH | FTW_PHYS);
+    nftw(dem, gs_couple_rm_entry, 16, FTW_DEPTH | FTW_PHYS);
     if (mkdir(part, 0777)) rc = gs_error_set(err, GS_EIO, "%s: cannot create: %s", part, strerror(errno));
-    snprintf(dcase, sizeof dcase, "%s/case.yaml", part);
-    if (!rc) rc = write_dem_case(&k, dcase, err);
-    if (!rc) rc = write_classes(&k, part, err);
-    gs_dem_case *dc = rc ? NULL : gs_dem_case_load(dcase, err);
-    if (!rc && !dc) rc = dem_error(&k, dcase, err);
-    if (!rc) rc = engine_check(&k, dc, err);
-    stage_stop ss = {.collect = k.s.collect, .t_fired = -1, .t_stop = -1};
-    if (!rc) {
-      if (opt->progress)
-        fprintf(stderr, "gransim couple: DEM stage (%g s at most; %g s of statistics once steady) in %s\n",
-                k.s.max_time, k.s.collect, part);
-      gs_dem_observer ob = {.sample = stop_when_collected, .user = &ss};
-      gs_dem_case_set_observer(dc, &ob);
-      rc = gs_dem_case_run(dc, part, opt->progress, err);
-    }
-    gs_dem_case_free(dc);
-    /* the case as run: its duration ends where the observer stopped it, so that
-     * `gransim dem dem/case.yaml` gives the same tables */
-    if (!rc && ss.t_stop >= 0) {
-      gs_couple_settings as_run = k.s;
-      as_run.max_time = ss.t_stop;
-      const gs_couple_settings keep = k.s;
-      k.s = as_run;
-      rc = write_dem_case(&k, dcase, err);
-      k.s = keep;
-    }
-    double ts;
-    if (!rc) rc = gs_couple_steady_report(part, &k.s, &ts, err);
-    if (!rc && opt->progress) fprintf(stderr, "gransim couple: DEM steady at t = %g s; tables in %s\n", ts, dem);
+    gs_couple_dem_record rec;
+    if (!rc) rc = gs_couple_dem_stage(&k, part, NULL, opt->progress, &rec, err);
+    if (!rc && opt->progress) fprintf(stderr, "gransim couple: DEM steady at t = %g s; tables in %s\n", rec.t_steady, dem);
     /* the stage is complete only once renamed: a kill before leaves dem.partial */
     if (!rc && rename(part, dem)) rc = gs_error_set(err, GS_EIO, "%s: cannot rename to %s: %s", part, dem, strerror(errno));
   }
@@ -421,17 +481,17 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
       rc = gs_error_set(err, GS_EINPUT, "%s: %zu classes, but the grid and coupling.classes give %zu: the case changed "
                         "since the DEM stage; rerun without --resume", kt, ne ? ne - 1 : 0, k.cl.n);
   }
-  if (!rc && !exists(dem, impname))
+  if (!rc && !gs_couple_exists(dem, impname))
     rc = gs_error_set(err, GS_EINPUT, "%s: no %s (coupling.impacts.wall names no wall of the DEM case?)", dem, impname);
   gs_case c;
   memset(&c, 0, sizeof c);
   /* the PBM resumes from its journal (a kill even while publishing leaves it:
    * docs/design-notes.md); a finished one on tables that were
    * not rerun is complete; otherwise (new tables) it starts again */
-  int pbm_resume = opt->resume && exists(out, ".result.journal");
-  if (!rc && have && opt->resume && !pbm_resume && exists(out, "result.h5")) {
+  int pbm_resume = opt->resume && gs_couple_exists(out, ".result.journal");
+  if (!rc && have && opt->resume && !pbm_resume && gs_couple_exists(out, "result.h5")) {
     if (opt->progress) fprintf(stderr, "gransim couple: --resume: PBM stage complete in %s, nothing to do\n", out);
-    couple_free(&k);
+    gs_couple_free(&k);
     return GS_OK;
   }
   if (!rc) rc = pbm_case(&k, kt, it, &c, err);
@@ -444,6 +504,6 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
       fprintf(stderr, "gransim couple: PBM to t = %g in %.2f s; results in %s\n", rep.t_end, rep.wall_seconds, out);
   }
   gs_case_free(&c);
-  couple_free(&k);
+  gs_couple_free(&k);
   return rc;
 }

@@ -5,6 +5,7 @@
  * double-quoted (the reader takes a scalar's text whatever its style), in
  * flow style, one top-level key per line; mesh paths are made absolute,
  * since the file lives in the output folder. */
+#include <math.h>
 #include <string.h>
 
 #include "couple/couple_internal.h"
@@ -62,7 +63,7 @@ static int put_map_except(FILE *fp, gs_cfg_node *m, const char *dir, const char 
 }
 
 int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const gs_couple_settings *s,
-                             const gs_couple_classes *cl, gs_error *err) {
+                             const gs_couple_classes *cl, const double *fractions, gs_error *err) {
   if (gs_cfg_require_kind(root, GS_CFG_MAP, err)) return GS_EINPUT;
   int rc = GS_OK, have_dem = 0, have_stats = 0, have_out = 0;
   fprintf(fp, "# written by gransim couple: the dem section with the classes derived from the PBM grid\n");
@@ -92,6 +93,40 @@ int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const
       rc = put_map_except(fp, v, dir, taken, "coupling.steady.sample_every", &first, err);
       fprintf(fp, "%severy: %.17g}\n", first ? "" : ", ", s->sample_every);
       have_out = 1;
+    } else if (!strcmp(key, "materials") && !isnan(s->e_now) && gs_cfg_kind_of(v) == GS_CFG_SEQ) {
+      /* the coupling's material takes the population's restitution (two-way) */
+      fputs("materials: [", fp);
+      for (size_t m = 0; m < gs_cfg_size(v); m++) {
+        gs_cfg_node *mat = gs_cfg_item(v, m);
+        const char *name = gs_cfg_kind_of(mat) == GS_CFG_MAP ? gs_cfg_scalar(gs_cfg_get(mat, "name")) : NULL;
+        if (m) fputs(", ", fp);
+        if (!name || strcmp(name, s->material)) {
+          put_node(fp, mat, dir);
+          continue;
+        }
+        fputc('{', fp);
+        for (size_t i2 = 0; i2 < gs_cfg_size(mat); i2++)
+          if (strcmp(gs_cfg_key_at(mat, i2), "e")) {
+            fprintf(fp, "%s: ", gs_cfg_key_at(mat, i2));
+            put_node(fp, gs_cfg_value_at(mat, i2), dir);
+            fputs(", ", fp);
+          }
+        fprintf(fp, "e: %.17g}", s->e_now);
+      }
+      fputs("]\n", fp);
+    } else if ((!strcmp(key, "fill") || !strcmp(key, "feed")) && fractions) {
+      static const char *const taken[] = {"fractions", "fractions_by", NULL};
+      if (gs_cfg_require_kind(v, GS_CFG_SEQ, err)) return GS_EINPUT;
+      fprintf(fp, "%s: [", key);
+      for (size_t f = 0; f < gs_cfg_size(v) && !rc; f++) {
+        first = 1;
+        fputs(f ? ", {" : "{", fp);
+        rc = put_map_except(fp, gs_cfg_item(v, f), dir, taken, "the PBM population, coupling.mode two_way", &first, err);
+        fprintf(fp, "%sfractions_by: number, fractions: [", first ? "" : ", ");
+        for (size_t c = 0; c < cl->n; c++) fprintf(fp, "%s%.17g", c ? ", " : "", fractions[c]);
+        fputs("]}", fp);
+      }
+      fputs("]\n", fp);
     } else {
       fprintf(fp, "%s: ", key);
       put_node(fp, v, dir);

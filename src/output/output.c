@@ -977,6 +977,21 @@ int gs_output_finish(gs_output *o, int ok, gs_error *err) {
   return rc;
 }
 
+/* Commit what is pending and close, leaving the partial files and the
+ * journal for a resume (a coupled run's PBM stretch that a trigger ended). */
+int gs_output_hold(gs_output *o, gs_error *err) {
+  if (!o) return GS_OK;
+  int rc = o->next_part ? gs_error_set(err, GS_EINPUT, "an output time was only partly written") : GS_OK;
+  if (!rc) rc = commit(o, 0, err);
+  int crc = output_close(o, rc ? NULL : err);
+  if (!rc) rc = crc;
+  int jrc = gs_journal_close(o->journal, rc ? NULL : err);
+  o->journal = NULL;
+  if (!rc) rc = jrc;
+  output_free(o);
+  return rc;
+}
+
 /* ---- resume: the journal ----------------------------------------------------- */
 
 /* Writes the journal's committed rows into o's fresh files through the

@@ -80,7 +80,6 @@ static int output_idle(void *self) {
 }
 
 static int output_finish(void *self, const gs_run_view *view, int ok, gs_error *err) {
-  (void)view;
   output_t *o = self;
   int rc = GS_OK;
   if (ok && o->idle_rc) {
@@ -90,7 +89,9 @@ static int output_finish(void *self, const gs_run_view *view, int ok, gs_error *
   if (ok && !rc && o->deferred) rc = gs_deferred_output_drain(o->deferred, err);
   if (o->out) {
     gs_error ferr;
-    int frc = gs_output_finish(o->out, ok && !rc, &ferr);
+    /* stopped early to be continued: the journal stays (gs_run_options.hold_on_stop) */
+    const int hold = ok && !rc && o->run->opt->hold_on_stop && o->run->stop && o->run->t < view->t_end;
+    int frc = hold ? gs_output_hold(o->out, &ferr) : gs_output_finish(o->out, ok && !rc, &ferr);
     o->out = NULL;
     if (ok && !rc && frc) {
       *err = ferr;
