@@ -17,7 +17,7 @@
 #define MAX_CELL_DIAMETERS 50.0
 /* fewest particles for which the per-particle loops use threads: below,
  * starting them costs more than the loops */
-#define PAR_MIN 256
+#define PAR_MIN 1024
 
 /* Linear weights of coordinate s (in lattice units, nodes at integers) on
  * the nodes first..last, clamped to the end nodes. */
