@@ -80,7 +80,7 @@ int gs_cfd_pressure_solve(gs_cfd_psolver *ps, const double *nb, const double *di
                           double *res);
 
 /* output.c: the rows and field files due at the current time */
-int gs_cfd_write_outputs(gs_cfd *g, gs_error *err);
+int gs_cfd_write_outputs(gs_cfd *g, const gs_dem_view *v, gs_error *err);
 
 /* particles.c: trilinear weights of point x on the lattice of cell centres
  * (axis = -1) or of the faces of one axis. */

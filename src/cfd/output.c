@@ -45,12 +45,40 @@ static void write_row(gs_cfd *g) {
   fflush(g->csv);
 }
 
-static int write_vtk(gs_cfd *g, gs_error *err) {
+/* The particles' liquid content l/(s + l) per cell: the liquid over the
+ * particle volume of the particles whose centre lies in the cell (0 where
+ * none), the map of the wetter spray zone beside the gas fields. */
+static int cell_liquid(const gs_cfd *g, const gs_dem_view *v, double **out, gs_error *err) {
+  double *lq = gs_calloc(2 * g->ncell, sizeof(double), err);
+  if (!lq) return err->code;
+  for (size_t i = 0; v->vs && v->vl && i < v->n; i++) {
+    const double x[3] = {v->x[i], v->y[i], v->z[i]};
+    size_t c = 0, stride = 1;
+    for (int a = 0; a < 3; a++) {
+      long k = (long)floor((x[a] - g->prm.lo[a]) / g->h[a]);
+      k = k < 0 ? 0 : k >= g->n[a] ? g->n[a] - 1 : k;
+      c += (size_t)k * stride;
+      stride *= (size_t)g->n[a];
+    }
+    lq[c] += v->vl[i];
+    lq[g->ncell + c] += v->vs[i] + v->vl[i];
+  }
+  for (size_t c = 0; c < g->ncell; c++) lq[c] = lq[g->ncell + c] > 0 ? lq[c] / lq[g->ncell + c] : 0;
+  *out = lq;
+  return GS_OK;
+}
+
+static int write_vtk(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
+  double *lq = NULL;
+  if (cell_liquid(g, v, &lq, err)) return err->code;
   char path[4200], tmp[4300];
   snprintf(path, sizeof path, "%s/vtk/gas_%06d.vtr", g->out_dir, g->nvtk);
   snprintf(tmp, sizeof tmp, "%s.partial", path);
   FILE *fp = fopen(tmp, "w");
-  if (!fp) return gs_error_set(err, GS_EIO, "%s: %s", tmp, strerror(errno));
+  if (!fp) {
+    free(lq);
+    return gs_error_set(err, GS_EIO, "%s: %s", tmp, strerror(errno));
+  }
   const int *n = g->n;
   fprintf(fp, "<?xml version=\"1.0\"?>\n<VTKFile type=\"RectilinearGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
               "<RectilinearGrid WholeExtent=\"0 %d 0 %d 0 %d\">\n<Piece Extent=\"0 %d 0 %d 0 %d\">\n<Coordinates>\n",
@@ -72,6 +100,9 @@ static int write_vtk(gs_cfd *g, gs_error *err) {
     gs_cfd_cell_velocity(g, c, u);
     fprintf(fp, "%.9g %.9g %.9g\n", u[0], u[1], u[2]);
   }
+  fprintf(fp, "</DataArray>\n<DataArray type=\"Float64\" Name=\"liquid_content\" format=\"ascii\">\n");
+  for (size_t c = 0; c < g->ncell; c++) fprintf(fp, "%.9g\n", lq[c]);
+  free(lq);
   fprintf(fp, "</DataArray>\n</CellData>\n</Piece>\n</RectilinearGrid>\n</VTKFile>\n");
   if (fclose(fp) || rename(tmp, path)) return gs_error_set(err, GS_EIO, "%s: %s", path, strerror(errno));
   /* the time series, rewritten whole after every file */
@@ -90,14 +121,14 @@ static int write_vtk(gs_cfd *g, gs_error *err) {
   return GS_OK;
 }
 
-int gs_cfd_write_outputs(gs_cfd *g, gs_error *err) {
+int gs_cfd_write_outputs(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
   const double eps_t = 1e-9 * g->prm.dt;
   if (g->csv && g->t >= g->next_out - eps_t) {
     write_row(g);
     while (g->next_out <= g->t + eps_t) g->next_out += g->out_every;
   }
   if (g->vtk_every > 0 && g->t >= g->next_vtk - eps_t) {
-    int rc = write_vtk(g, err);
+    int rc = write_vtk(g, v, err);
     if (rc) return rc;
     while (g->next_vtk <= g->t + eps_t) g->next_vtk += g->vtk_every;
   }

@@ -15,6 +15,9 @@
  * resolves the bed at all. */
 #define MIN_CELL_DIAMETERS 2.0
 #define MAX_CELL_DIAMETERS 50.0
+/* fewest particles for which the per-particle loops use threads: below,
+ * starting them costs more than the loops */
+#define PAR_MIN 1024
 
 /* Linear weights of coordinate s (in lattice units, nodes at integers) on
  * the nodes first..last, clamped to the end nodes. */
@@ -193,11 +196,16 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
    * the void fraction averaged with the same shares */
   memcpy(g->eps_old, g->eps, g->ncell * sizeof(double));
   for (size_t c = 0; c < g->ncell; c++) g->eps[c] = 1;
+  /* the stencils, each particle's own, on threads; the deposits that sum
+   * over particles stay in view order on one thread, so every result is
+   * the same on any number of threads (bit for bit, tests/test_cfd.c) */
+#pragma omp parallel for schedule(static) if (n >= PAR_MIN)
   for (size_t i = 0; i < n; i++) {
     const double x[3] = {v->x[i], v->y[i], v->z[i]};
     divide_volume(g, x, v->r[i], &g->st_cell[i]);
     for (int a = 0; a < 3; a++) gs_cfd_stencil_at(g, a, x, &g->st_face[a][i]);
-    if (!two_way) continue;
+  }
+  for (size_t i = 0; i < n && two_way; i++) {
     const double vp = 4.0 / 3.0 * M_PI * v->r[i] * v->r[i] * v->r[i] / g->vol;
     for (int q = 0; q < 8; q++) g->eps[g->st_cell[i].idx[q]] -= g->st_cell[i].w[q] * vp;
   }
@@ -217,6 +225,7 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
     memset(g->k[a], 0, g->nface[a] * sizeof(double));
     memset(g->kv[a], 0, g->nface[a] * sizeof(double));
   }
+#pragma omp parallel for schedule(static) if (n >= PAR_MIN)
   for (size_t i = 0; i < n; i++) {
     const double vel[3] = {v->vx[i], v->vy[i], v->vz[i]};
     g->epsp[i] = interp(&g->st_cell[i], g->eps);
@@ -227,15 +236,18 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
     }
     const gs_cfd_drag_in in = {.eps = g->epsp[i], .d = 2 * v->r[i], .slip = sqrt(s2),
                                .rho = g->prm.rho, .mu = g->prm.mu};
-    const double b = g->prm.drag->beta(&in);
-    g->beta[i] = b;
+    g->beta[i] = g->prm.drag->beta(&in);
+  }
+  for (size_t i = 0; i < n; i++) {
+    const double vel[3] = {v->vx[i], v->vy[i], v->vz[i]};
+    const double b = g->beta[i];
     /* the drag is held over the DEM steps of a gas step: explicit in the
      * particle velocity, stable only if the step is below m / beta */
     if (!(b * g->prm.dt < v->m[i]))
       return gs_error_set(err, GS_ENUMERIC,
                           "gas step %ld (t = %g s): gas.time_step %g s is above the drag response time "
                           "m/beta = %g s of particle %ld (d = %g m, void fraction %g): reduce gas.time_step",
-                          g->steps, g->t, g->prm.dt, v->m[i] / b, v->id[i], in.d, in.eps);
+                          g->steps, g->t, g->prm.dt, v->m[i] / b, v->id[i], 2 * v->r[i], g->epsp[i]);
     if (!two_way) continue;
     for (int a = 0; a < 3; a++)
       for (int q = 0; q < 8; q++) {
@@ -273,16 +285,20 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
           grad[a][f] = gr;
         }
   }
-  double exp_[3] = {0, 0, 0};
+#pragma omp parallel for schedule(static) if (n >= PAR_MIN)
   for (size_t i = 0; i < n; i++) {
     const double vel[3] = {v->vx[i], v->vy[i], v->vz[i]};
     const double vp = 4.0 / 3.0 * M_PI * v->r[i] * v->r[i] * v->r[i];
     double *f = g->force + 3 * v->id[i];
-    for (int a = 0; a < 3; a++) {
-      const double drag = g->beta[i] * (gas_at(g, i, a) - vel[a]);
-      if (two_way) exp_[a] += drag;
-      f[a] = drag - vp * interp(&g->st_face[a][i], grad[a]);
-    }
+    for (int a = 0; a < 3; a++)
+      f[a] = g->beta[i] * (gas_at(g, i, a) - vel[a]) - vp * interp(&g->st_face[a][i], grad[a]);
+  }
+  /* the drag the particles received, summed in view order (the same
+   * expression as above, so it matches the forces bit for bit) */
+  double exp_[3] = {0, 0, 0};
+  for (size_t i = 0; i < n && two_way; i++) {
+    const double vel[3] = {v->vx[i], v->vy[i], v->vz[i]};
+    for (int a = 0; a < 3; a++) exp_[a] += g->beta[i] * (gas_at(g, i, a) - vel[a]);
   }
   /* what the gas lost: its sinks k u - kv over every face */
   for (int a = 0; a < 3; a++) {
@@ -292,5 +308,5 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
     g->ex_part[a] = exp_[a];
   }
   g->steps++;
-  return gs_cfd_write_outputs(g, err);
+  return gs_cfd_write_outputs(g, v, err);
 }

@@ -175,9 +175,13 @@ typedef struct {
   double weight; /* bed weight less buoyancy per unit area [Pa] */
 } column;
 
-/* frictionless, so that the poured bed packs nearly as densely as the beds
- * Wen & Yu's correlation was fitted to (eps about 0.4) */
-static const gs_dem_material powder = {.E = 1e6, .nu = 0.25, .e = 0.5, .mu_s = 0, .mu_r = 0, .density = 1030};
+/* Wen & Yu's correlation is Ergun's balance at eps_mf about 0.40 (for these
+ * particles 0.400): the check needs a bed poured that loose.  Frictionless
+ * spheres settle to random close packing with the walls (0.372-0.378 for
+ * two seeds), whose Ergun U_mf lies 10-14 % under Wen & Yu; a little sliding
+ * friction, as real particles have, holds the pour at 0.400 (mu_s 0.05:
+ * 0.405; docs/validation-cfd.md). */
+static const gs_dem_material powder = {.E = 1e6, .nu = 0.25, .e = 0.5, .mu_s = 0.03, .mu_r = 0, .density = 1030};
 
 #define NPART 1000
 
@@ -251,7 +255,10 @@ int gs_cfd_check_fluidisation(gs_cfd_check out[4], gs_error *err) {
     gs_cfd_set_inlet_velocity(c.gas, 0.1 * k * umf);
     if ((rc = gs_dem_run(c.dem, 2000, err)) || (rc = column_measure(&c, 2000, &dp, &h, err))) break;
     if (k == 1) h0 = h;
-    if (dp > 0.85 * c.weight) continue;
+    /* the packed branch ends at the first point near the bed weight: once
+     * fluidised, the pressure drop levels off below the weight (the walls
+     * carry part of it) and a dip under the cut-off is no packed-bed point */
+    if (dp > 0.85 * c.weight) break;
     const double u = 0.1 * k * umf;
     su2 += u * u, su3 += u * u * u, su4 += u * u * u * u, spu += dp * u, spu2 += dp * u * u;
     npts++;
@@ -267,7 +274,7 @@ int gs_cfd_check_fluidisation(gs_cfd_check out[4], gs_error *err) {
     snprintf(out[0].name, sizeof out[0].name, "minimum fluidisation velocity");
     snprintf(out[0].unit, sizeof out[0].unit, "m/s");
     snprintf(out[0].detail, sizeof out[0].detail,
-             "1000 frictionless spheres d = 2 mm, 1030 kg/m3, in a 14 x 14 mm column, di_felice; packed "
+             "1000 spheres d = 2 mm (mu_s 0.03), 1030 kg/m3, in a 14 x 14 mm column, di_felice; packed "
              "void fraction %.3f, %d packed-bed points, bed weight %.1f Pa", 1 - NPART * M_PI / 6 * 8e-9 / (14e-3 * 14e-3 * h0), npts, c.weight);
   }
   const double prev0 = h0;
@@ -275,12 +282,13 @@ int gs_cfd_check_fluidisation(gs_cfd_check out[4], gs_error *err) {
   for (int k = 0; k < 3 && !rc; k++) {
     const double f = 1.5 + 0.5 * k;
     gs_cfd_set_inlet_velocity(c.gas, f * umf);
-    if ((rc = gs_dem_run(c.dem, 8000, err)) || (rc = column_measure(&c, 8000, &dp, &h, err))) break;
+    /* 0.4 s: the 7-diameter column slugs, and a 0.2 s window held one slug */
+    if ((rc = gs_dem_run(c.dem, 8000, err)) || (rc = column_measure(&c, 16000, &dp, &h, err))) break;
     out[1 + k] = (gs_cfd_check){.got = h, .want = prev, .tol = 0};
     snprintf(out[1 + k].name, sizeof out[1 + k].name, "bed height at %.1f U_mf (above the previous)", f);
     snprintf(out[1 + k].unit, sizeof out[1 + k].unit, "m");
     snprintf(out[1 + k].detail, sizeof out[1 + k].detail,
-             "twice the mean particle height over 0.2 s after 0.2 s; pressure drop %.1f Pa of %.1f", dp,
+             "twice the mean particle height over 0.4 s after 0.2 s; pressure drop %.1f Pa of %.1f", dp,
              c.weight);
     prev = h;
   }

@@ -388,7 +388,7 @@ static int load(gs_dem_case *c, gs_error *err) {
   static const char *const mesh_contacts[] = {"closest", "liggghts", NULL};
   static const char *const engines[] = {"embedded", "liggghts", NULL};
   const double g0[3] = {0, 0, -9.81};
-  long seed = 1;
+  long seed = 1, threads_from = 20000;
   gs_cfg_node *box;
   if ((rc = gs_cfg_double_range(dem, "time_step", 1, 0, 0, 1, 1, 0, &p->dt, err)) ||
       (rc = gs_cfg_double_range(dem, "max_lost", 0, 0.01, 0, 0, 1, 0, &c->max_lost, err)) ||
@@ -398,6 +398,7 @@ static int load(gs_dem_case *c, gs_error *err) {
       (rc = gs_cfg_enum_opt(dem, "engine", engines, GS_DEM_ENGINE_EMBEDDED, &c->engine, err)) ||
       (rc = gs_cfg_enum_opt(dem, "mesh_contacts", mesh_contacts, 0, &p->mesh_contacts, err)) ||
       (rc = gs_cfg_long_range(dem, "seed", 0, 1, 0, LONG_MAX, &seed, err)) ||
+      (rc = gs_cfg_long_range(dem, "threads_from", 0, 20000, 1, LONG_MAX, &threads_from, err)) ||
       (rc = gs_cfg_map_req(dem, "box", &box, err)) || (rc = vec3(box, "lo", 1, NULL, p->lo, err)) ||
       (rc = vec3(box, "hi", 1, NULL, p->hi, err)) || (rc = gs_cfg_check_unused(box, err)))
     return rc;
@@ -462,6 +463,7 @@ static int load(gs_dem_case *c, gs_error *err) {
     rc = gs_cfg_check_unused(dem, err);
   }
   if (!rc && !(c->dem = gs_dem_alloc(p, err))) rc = err->code;
+  if (!rc) gs_dem_set_parallel_min(c->dem, (size_t)threads_from);
   for (size_t k = 0; k < c->nclass && !rc; k++) {
     c->cls[k].type = gs_dem_add_type(c->dem, cmat[k], (int)k, err);
     if (c->cls[k].type < 0) rc = err->code;
