@@ -23,7 +23,7 @@ _gransim() {
     list) opts="" ;;
     validate) opts="--out --quick --only --threads --max-loss --help" ;;
     validate-cfd) opts="--out --long --help" ;;
-    validate-fit) opts="--out --quick --help" ;;
+    validate-fit) opts="--out --quick --max-runs --help" ;;
     plot) opts="--times --format --out --help" ;;
     sweep) opts="--set --design --range --seed --out --outputs --at --resume --threads --quiet --progress --help" ;;
     fit) opts="--data --batches --params --global --seed --porosity-tol --max-runs --predict --out --help" ;;

@@ -16,7 +16,9 @@ CASE=$SRC/examples/recipe-recovery.yaml
 run_rc 2 "$BIN" validate-fit
 stderr_has "needs CASE"
 run_rc 0 "$BIN" validate-fit --help
-stdout_has "usage: gransim validate-fit CASE [--quick] [--out FILE]"
+stdout_has "usage: gransim validate-fit CASE [--quick] [--max-runs N] [--out FILE]"
+run_rc 2 "$BIN" validate-fit "$CASE" --max-runs 0
+stderr_has "--max-runs needs a positive integer, got '0'"
 run_rc 1 "$BIN" validate-fit "$WORK/none.yaml" --quick
 stderr_has "none.yaml"
 [ "${GRANSIM_TEST_LONG:-}" = 1 ] || { echo "cli_validate_fit: ok (arguments; the study runs under -L long)"; exit 0; }
