@@ -8,7 +8,8 @@
 # bug breaks): the start is really off the recipe (start objective > 0.05; it
 # was the recipe itself while gs_cfg_copy lost set values), each method lowers
 # the objective at least 100-fold (225- and 1300-fold there), BOBYQA recovers
-# every control within 20 % (at most 15.5 % there) and both the end of wet
+# every spray rate within 20 % (at most 15.5 % there; the binder viscosity and impeller speed
+# the target does not determine) and both the end of wet
 # massing within 1 % (0.26 and 0.014 % there).
 # ctest-long
 source "$(dirname "$0")/cli-lib.sh" "$@"
@@ -36,8 +37,9 @@ awk '/^- (Nelder-Mead|bounded).*objective/ {
     if (!(x * 100 < y + 0)) bad = bad "objective " x " not 100 times below the start " y "; "; n++ }
   END { if (n != 2 || bad) { print n " objectives; " bad; exit 1 } }' "$WORK/v.md" ||
   { cat "$WORK/v.md"; fail "objectives"; }
-# BOBYQA (column 8) every control within 20 %; both methods the end of wet massing within 1 %
-awk -F'|' '/^\| (liquid rate|binder|impeller|end of wet)/ {
+# BOBYQA (column 8) every spray rate within 20 %; both methods the end of wet massing within 1 %
+# (the binder viscosity and the impeller speed are not determined by the target: docs/validation-fit.md)
+awk -F'|' '/^\| (liquid rate|end of wet)/ {
     e = $8; sub(/ %.*/, "", e); if (!(e + 0 <= 20)) bad = bad $2 ": bounded " e " %; "
     if ($2 ~ /end of wet/) for (c = 6; c <= 8; c += 2) { e = $c; sub(/ %.*/, "", e); if (!(e + 0 <= 1)) bad = bad $2 ": " e " %; " } }
   END { if (bad) { print bad; exit 1 } }' "$WORK/v.md" || { cat "$WORK/v.md"; fail "recipe not recovered"; }

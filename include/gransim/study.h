@@ -308,7 +308,8 @@ typedef struct gs_opt_result {
   long runs;
   long failed_runs;       /* trial runs that failed (treated as very bad points) */
   gs_error first_failure; /* the first one's message */
-  int converged;          /* 0: stopped at max_runs */
+  int converged;          /* 0: stopped at max_runs, or by round-off (see stop) */
+  const char *stop;       /* why the method stopped, in words (static text) */
 } gs_opt_result;
 
 /* GS_EINPUT for no controls, a list instead of a range, a negative weight,

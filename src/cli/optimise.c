@@ -134,10 +134,10 @@ int gs_cmd_optimise(int argc, char **argv) {
   for (size_t k = 0; k < nc; k++)
     printf("%-32s %24.17g  [%g, %g]%s\n", ctl[k].key, res.x[k], ctl[k].lo, ctl[k].hi,
            ctl[k].log ? " log" : "");
-  printf("objective %.6g (start %.6g); %zu times x %zu columns; %s; %ld model runs%s\n",
+  printf("objective %.6g (start %.6g); %zu times x %zu columns; %s; %ld model runs%s%s\n",
          res.objective, res.start_objective, target.ntimes, target.ncols,
          opt.method == GS_OPT_BOUNDED ? "bounded (NLopt BOBYQA)" : "nelder-mead (GSL nmsimplex2)",
-         res.runs, res.converged ? "" : "; NOT CONVERGED (run limit)");
+         res.runs, res.converged ? "" : "; NOT CONVERGED: ", res.converged ? "" : res.stop);
   if (res.failed_runs)
     printf("%ld trial runs failed (not taken); the first: %s\n", res.failed_runs,
            res.first_failure.msg);

@@ -63,7 +63,8 @@ static double nm_f(const gsl_vector *z, void *params) {
 
 /* Nelder & Mead (1965) as GSL's nmsimplex2 in z, x = logistic(z) on each
  * range: unconstrained steps, every trial a valid case. */
-static int run_nelder_mead(opt_ctx *oc, const double *x0, double tol, int *converged, gs_error *err) {
+static int run_nelder_mead(opt_ctx *oc, const double *x0, double tol, int *converged, const char **stop,
+                           gs_error *err) {
   const size_t n = oc->fp.np;
   gsl_multimin_fminimizer *s = gsl_multimin_fminimizer_alloc(gsl_multimin_fminimizer_nmsimplex2, n);
   gsl_vector *z = gsl_vector_alloc(n), *step = gsl_vector_alloc(n);
@@ -79,6 +80,7 @@ static int run_nelder_mead(opt_ctx *oc, const double *x0, double tol, int *conve
   }
   gsl_multimin_function f = {.f = nm_f, .n = n, .params = oc};
   int st = gsl_multimin_fminimizer_set(s, &f, z, step);
+  *stop = "stopped at its run limit";
   while (!st && oc->fp.runs < oc->max_runs) {
     st = gsl_multimin_fminimizer_iterate(s);
     if (st) break;
@@ -86,6 +88,7 @@ static int run_nelder_mead(opt_ctx *oc, const double *x0, double tol, int *conve
      * the middle (dx/dz = range/4 there), tol in those units */
     if (gsl_multimin_test_size(gsl_multimin_fminimizer_size(s), 4 * tol) == GSL_SUCCESS) {
       *converged = 1;
+      *stop = "converged";
       break;
     }
   }
@@ -109,7 +112,8 @@ static double bobyqa_f(unsigned n, const double *u, double *grad, void *data) {
 /* Powell's (2009) BOBYQA from NLopt: quadratic models inside the box, each
  * range mapped onto [0,1] (in log for log ranges) so that the trust region
  * sees every control at one scale. */
-static int run_bobyqa(opt_ctx *oc, const double *x0, double tol, int *converged, gs_error *err) {
+static int run_bobyqa(opt_ctx *oc, const double *x0, double tol, int *converged, const char **stop,
+                      gs_error *err) {
   const unsigned n = (unsigned)oc->fp.np;
   nlopt_opt o = nlopt_create(NLOPT_LN_BOBYQA, n);
   if (!o) return gs_error_set(err, GS_ENOMEM, "out of memory");
@@ -129,7 +133,16 @@ static int run_bobyqa(opt_ctx *oc, const double *x0, double tol, int *converged,
   double f;
   nlopt_result st = nlopt_optimize(o, u, &f);
   nlopt_destroy(o);
-  *converged = st == NLOPT_XTOL_REACHED || st == NLOPT_FTOL_REACHED || st == NLOPT_STOPVAL_REACHED;
+  *converged = st == NLOPT_XTOL_REACHED || st == NLOPT_FTOL_REACHED || st == NLOPT_STOPVAL_REACHED ||
+               st == NLOPT_SUCCESS;
+  /* NLOPT_SUCCESS is NLopt's generic success (BOBYQA's trust region at its
+   * final radius); round-off limited: it cannot shrink further in floating
+   * point, short of the step tolerance but not at the run limit */
+  *stop = st == NLOPT_SUCCESS            ? "converged (NLopt: success)"
+          : *converged                   ? "converged"
+          : st == NLOPT_ROUNDOFF_LIMITED ? "stopped by round-off (NLopt), before its run limit"
+          : st == NLOPT_MAXEVAL_REACHED  ? "stopped at its run limit"
+                                         : "stopped by NLopt before its run limit";
   if (st < 0 && st != NLOPT_ROUNDOFF_LIMITED)
     return gs_error_set(err, GS_ENUMERIC, "BOBYQA failed (NLopt result %d)", (int)st);
   return GS_OK;
@@ -178,8 +191,8 @@ int gs_optimise_run(const gs_cfg *base, const gs_study_axis *controls, size_t nc
     }
   }
   if (!rc)
-    rc = opt->method == GS_OPT_NELDER_MEAD ? run_nelder_mead(&oc, x0, tol, &res->converged, err)
-                                           : run_bobyqa(&oc, x0, tol, &res->converged, err);
+    rc = opt->method == GS_OPT_NELDER_MEAD ? run_nelder_mead(&oc, x0, tol, &res->converged, &res->stop, err)
+                                           : run_bobyqa(&oc, x0, tol, &res->converged, &res->stop, err);
   if (!rc) {
     res->ncontrols = nc;
     memcpy(res->x, oc.best_x, nc * sizeof *res->x);
