@@ -163,9 +163,11 @@ static int run_bed(double mass_rate, double inlet, bed_figures *f, gs_error *err
   gs_dem_case_free(c);
   nftw(dir, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
   if (!rc && !f->have_speed) {
-    gs_error_set(err, GS_ENUMERIC, "qualitative bed: no statistics sample at %.2f s", T_SPEED);
+    gs_error_set(err, GS_ENUMERIC, "no statistics sample at %.2f s", T_SPEED);
     rc = 1;
   }
+  /* say which of the three runs failed */
+  if (rc) gs_error_prefix(err, "sprayed bed of Sen et al. at %g g/s and %g m/s: ", mass_rate * 1e3, inlet);
   return rc;
 }
 
