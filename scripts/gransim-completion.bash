@@ -22,7 +22,7 @@ _gransim() {
     check) opts="--help" ;;
     list) opts="" ;;
     validate) opts="--out --quick --only --threads --max-loss --help" ;;
-    validate-cfd) opts="--out --long --help" ;;
+    validate-cfd) opts="--out --long --qualitative --help" ;;
     validate-fit) opts="--out --quick --max-runs --help" ;;
     plot) opts="--times --format --out --help" ;;
     sweep) opts="--set --design --range --seed --out --outputs --at --resume --threads --quiet --progress --help" ;;

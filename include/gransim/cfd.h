@@ -152,6 +152,17 @@ int gs_cfd_check_ergun(const char *drag, double u, gs_cfd_check *out, gs_error *
  * higher). */
 int gs_cfd_check_fluidisation(gs_cfd_check out[4], gs_error *err);
 
+/* The qualitative results of Sen et al. (2014) on the sprayed lab bed of
+ * examples/fluid-bed-cfd.yaml (src/cfd/validate_sen.c; three runs of 0.8 s,
+ * a few minutes): out[0] the speed percentile ratio p90/p10 at 0.7 s against
+ * GS_SEN_SPEED_RATIO; out[1] the mean liquid content l/(s+l) under the nozzle
+ * over that elsewhere, against GS_SEN_ZONE_RATIO; out[2] the mean diameter at
+ * 8 g/s against 4 g/s; out[3] at 1.8 m/s against 1.2 m/s.  Each is a trend
+ * (tol 0): got must exceed want. */
+#define GS_SEN_SPEED_RATIO 3.0
+#define GS_SEN_ZONE_RATIO 5.0
+int gs_cfd_check_sen(gs_cfd_check out[4], gs_error *err);
+
 #ifdef __cplusplus
 }
 #endif
