@@ -6,7 +6,7 @@
 # a granular gas whose temperature is conserved): side 16 mm with 800
 # particles and side 8 mm with 100 (l = 2).  Each pair's exponent
 # p = log2(C_scaled / C_resolved) must be 3 within 0.25; its Poisson error
-# (from the event counts) is about 0.03-0.05, the rest of the band is the
+# (from the event counts) is about 0.02-0.04, the rest of the band is the
 # walls' share of the small box (docs/models.md gives the figures).  The
 # paper's l^4 (p = 4) and the coarse-grained reading's l^2 (p = 2) fail.
 source "$(dirname "$0")/cli-lib.sh" "$@"
