@@ -278,3 +278,47 @@ bad norest 's/trigger: {interval: 4}/trigger: {interval: 4}\n  restitution: {api
   "'apii' is not an axis of the grid (expected one of: solid)"
 bad onewayrest 's/mode: two_way/mode: one_way/; s/trigger: {interval: 4}/restitution: {solid: 0.3}/' \
   "coupling.restitution: restitution belongs to mode: two_way"
+
+# System scaling (coupling.scaling): the DEM holds scaling.particles particles
+# whatever the population's number; l_i = (N_PBM(t_i) / N)^(1/3) and the table
+# the PBM reads is the DEM's own (collision_kernel_dem.csv) times l_i^-3
+# (docs/models.md, "System scaling": C_ij per pair goes as 1/volume).
+sed -e 's/trigger: {interval: 4}/trigger: {interval: 4}\n  scaling: {particles: 120}/' -e '/^      count: 250$/d' \
+  -e 's/count: 1001, checkpoint: 0/count: 11/' \
+  "$WORK/tw.yaml" > "$WORK/sc.yaml"
+run_rc 0 "$BIN" check "$WORK/sc.yaml"
+run_rc 0 "$BIN" couple "$WORK/sc.yaml" --out "$WORK/sc" --threads 2
+stderr_has "system scaling: 120 DEM particles for 1000 granules, l_i = 2.0"
+/usr/bin/python3 - "$WORK/sc" <<'PY' || fail "system scaling: l_i or the scaled tables are wrong"
+import sys, csv, re, h5py, numpy as np
+d = sys.argv[1]
+f = h5py.File(d + "/result.h5", "r")
+t = f["time"][:]
+cyc = list(csv.DictReader(open(d + "/cycles.csv")))
+assert len(cyc) == 3, cyc
+def table(p):
+    rows = [l for l in open(p) if not l.startswith("#")]
+    return np.array([[float(x) for x in r.split(",")] for r in rows[1:]])
+for i, c in enumerate(cyc):
+    n = f["number"][int(np.argmin(abs(t - float(c["t_start [s]"]))))].sum()
+    l = (n / 120) ** (1 / 3)
+    assert abs(float(c["l_i [1]"]) / l - 1) < 1e-8, (c, l)
+    assert abs(f["coupling"]["cycles"]["l_i"][i] / l - 1) < 1e-12
+    assert 0 < int(c["particles [1]"]) <= 120, c
+    assert re.search(r"count: 120\b", open(d + "/cycle-%s/case.yaml" % c["cycle"]).read())
+    raw = table(d + "/cycle-%s/collision_kernel_dem.csv" % c["cycle"])
+    scaled = table(d + "/cycle-%s/collision_kernel.csv" % c["cycle"])
+    assert raw.shape == (3, 3) and raw.max() > 0
+    assert np.allclose(scaled, raw / l ** 3, rtol=1e-8, atol=0), (scaled, raw / l ** 3)
+    assert np.allclose(f["coupling"]["cycles"]["collision_frequency"][i], scaled, rtol=1e-12)
+# the population shrinks by aggregation: l_i falls from cycle to cycle
+assert float(cyc[0]["l_i [1]"]) > float(cyc[2]["l_i [1]"])
+PY
+bad scalefew 's/trigger: {interval: 4}/trigger: {interval: 4}\n  scaling: {particles: 2}/' \
+  "coupling.scaling.particles = '2': fewer than the 3 DEM classes derived from the grid"
+bad scalezero 's/trigger: {interval: 4}/trigger: {interval: 4}\n  scaling: {particles: 0}/' \
+  "coupling.scaling.particles = '0': expected"
+bad scaleoneway 's/mode: two_way/mode: one_way/; s/trigger: {interval: 4}/scaling: {particles: 100}/' \
+  "coupling.scaling: scaling belongs to mode: two_way"
+bad scalecount 's/trigger: {interval: 4}/trigger: {interval: 4}\n  scaling: {particles: 100}/' \
+  "set by the coupling (the PBM population and coupling.scaling)"

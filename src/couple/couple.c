@@ -56,6 +56,13 @@ static int read_settings(gs_cfg_node *root, gs_couple_settings *s, gs_cfg_node *
     return rc;
   s->restitution = gs_cfg_get(cp, "restitution");
   s->e_now = NAN;
+  gs_cfg_node *sc = gs_cfg_get(cp, "scaling");
+  if (sc && !s->two_way)
+    return gs_cfg_fail(sc, err, "scaling belongs to mode: two_way (the DEM is sized from the PBM population of each cycle)");
+  if (sc && ((rc = gs_cfg_require_kind(sc, GS_CFG_MAP, err)) ||
+             (rc = gs_cfg_long_range(sc, "particles", 1, 0, 1, 100000000, &s->scale_n, err)) ||
+             (rc = gs_cfg_check_unused(sc, err))))
+    return rc;
   if ((im = gs_cfg_get(cp, "impacts")) &&
       ((rc = gs_cfg_string_opt(im, "wall", NULL, &s->wall, err)) || (rc = gs_cfg_check_unused(im, err))))
     return rc;
@@ -142,6 +149,10 @@ int gs_couple_load(const char *path, couple *k, int progress, gs_error *err) {
   k->g = g; /* the two-way loop bins the population with it (gs_couple_free) */
   k->mask = (unsigned)mask;
   if (!rc) rc = read_restitution(k, err);
+  if (!rc && k->s.scale_n && (size_t)k->s.scale_n < k->cl.n) /* every class needs a particle to be measured */
+    rc = gs_cfg_fail(gs_cfg_get(gs_cfg_get(gs_cfg_get(root, "coupling"), "scaling"), "particles"), err,
+                     "fewer than the %zu DEM classes derived from the grid: expected at least "
+                     "one particle per class", k->cl.n);
   if (!rc && progress) {
     fprintf(stderr, "gransim couple: %zu DEM classes from the grid, diameters [%g, %g] m", k->cl.n, k->cl.edges[0],
             k->cl.edges[k->cl.n]);

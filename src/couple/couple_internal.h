@@ -27,6 +27,7 @@ typedef struct {
   gs_cfg_node *restitution; /* coupling.restitution: e per grid axis (two-way), or NULL */
   double e_axis[GS_MAX_DIM]; /* its values (NAN: the axis does not count) */
   double e_now;          /* the DEM material's e for this stage (NAN: the case's own) */
+  long scale_n;          /* scaling.particles: the DEM's particle count (0: no system scaling) */
 } gs_couple_settings;
 
 /* DEM classes derived from the grid: edges in volume-equivalent diameter. */
@@ -75,6 +76,7 @@ typedef struct {
   double wall;     /* [s] */
   double t_steady; /* [s] when the detector fired */
   double e;        /* restitution of classes.material (NAN: the case's own) */
+  double l;        /* system scaling ratio l_i (1: no scaling) */
 } gs_couple_dem_record;
 
 int gs_couple_load(const char *path, couple *k, int progress, gs_error *err);

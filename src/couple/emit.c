@@ -114,17 +114,33 @@ int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const
         fprintf(fp, "e: %.17g}", s->e_now);
       }
       fputs("]\n", fp);
-    } else if ((!strcmp(key, "fill") || !strcmp(key, "feed")) && fractions) {
-      static const char *const taken[] = {"fractions", "fractions_by", NULL};
+    } else if ((!strcmp(key, "fill") || !strcmp(key, "feed")) && (fractions || s->scale_n)) {
+      static const char *const taken_all[] = {"count", "mass", "fractions", "fractions_by", NULL};
+      /* the population sets the fractions, system scaling the count */
+      static const char *const taken_count[] = {"count", "mass", NULL};
+      const char *const *taken = !fractions ? taken_count : taken_all + (s->scale_n ? 0 : 2);
       if (gs_cfg_require_kind(v, GS_CFG_SEQ, err)) return GS_EINPUT;
+      /* system scaling fixes the DEM's particle count: one fill holds them all */
+      if (s->scale_n && (!strcmp(key, "feed") || gs_cfg_size(v) != 1))
+        return gs_cfg_fail(v, err, "coupling.scaling keeps the DEM at scaling.particles = %ld particles: expected one "
+                           "`fill` and no `feed` (this %s has %zu entries)", s->scale_n, key, gs_cfg_size(v));
       fprintf(fp, "%s: [", key);
       for (size_t f = 0; f < gs_cfg_size(v) && !rc; f++) {
         first = 1;
         fputs(f ? ", {" : "{", fp);
-        rc = put_map_except(fp, gs_cfg_item(v, f), dir, taken, "the PBM population, coupling.mode two_way", &first, err);
-        fprintf(fp, "%sfractions_by: number, fractions: [", first ? "" : ", ");
-        for (size_t c = 0; c < cl->n; c++) fprintf(fp, "%s%.17g", c ? ", " : "", fractions[c]);
-        fputs("]}", fp);
+        rc = put_map_except(fp, gs_cfg_item(v, f), dir, taken,
+                            s->scale_n ? "the PBM population and coupling.scaling" : "the PBM population, coupling.mode two_way",
+                            &first, err);
+        if (s->scale_n) {
+          fprintf(fp, "%scount: %ld", first ? "" : ", ", s->scale_n);
+          first = 0;
+        }
+        if (fractions) {
+          fprintf(fp, "%sfractions_by: number, fractions: [", first ? "" : ", ");
+          for (size_t c = 0; c < cl->n; c++) fprintf(fp, "%s%.17g", c ? ", " : "", fractions[c]);
+          fputc(']', fp);
+        }
+        fputc('}', fp);
       }
       fputs("]\n", fp);
     } else {

@@ -101,6 +101,59 @@ static int class_fractions(const couple *k, const double *Y, double t, double *f
   return GS_OK;
 }
 
+/* Total number of granules of the population (every compartment). */
+static double total_number(const couple *k, const double *Y) {
+  double n = 0;
+  for (size_t i = 0; i < k->g.ncomp * k->g.ncells; i++) n += Y[i];
+  return n;
+}
+
+/* System scaling (coupling.scaling; docs/models.md, "System scaling"): the
+ * DEM held scale_n particles of the real sizes in the user's (scaled-down)
+ * geometry at the real fill level, so it stands for a volume l^3 times
+ * smaller than the real one, l^3 = N_PBM / N.  A per-pair frequency goes as
+ * 1/volume, so the real system's C_ij is the DEM's times l^-3.  The DEM's
+ * own table stays as collision_kernel_dem.csv. */
+static int scale_kernel(const char *dir, size_t nc, double l, gs_error *err) {
+  char p[4600], raw[4600], line[16384];
+  snprintf(p, sizeof p, "%s/collision_kernel.csv", dir);
+  snprintf(raw, sizeof raw, "%s/collision_kernel_dem.csv", dir);
+  if (rename(p, raw)) return gs_error_set(err, GS_EIO, "%s: cannot rename to %s: %s", p, raw, strerror(errno));
+  FILE *in = fopen(raw, "r"), *out = in ? fopen(p, "w") : NULL;
+  const double f = 1 / (l * l * l);
+  size_t rows = 0;
+  int ok = in && out;
+  while (ok && fgets(line, sizeof line, in)) {
+    if (!strncmp(line, "edges", 5) || line[0] == '#' || rows >= nc) {
+      fputs(line, out);
+      continue;
+    }
+    char *q = line, *end;
+    for (size_t j = 0; j < nc && ok; j++, q = end + (*end == ',')) {
+      const double v = strtod(q, &end);
+      ok = end != q;
+      fprintf(out, "%s%.9g", j ? ", " : "", v * f);
+    }
+    fputc('\n', out);
+    rows++;
+  }
+  if (in) fclose(in);
+  if (out && fclose(out)) ok = 0;
+  if (!ok || rows != nc)
+    return gs_error_set(err, GS_EIO, "%s: cannot scale the DEM's table of %zu classes into %s", raw, nc, p);
+  /* the DEM's table keeps its units sidecar too */
+  snprintf(p, sizeof p, "%s/collision_kernel.json", dir);
+  snprintf(raw, sizeof raw, "%s/collision_kernel_dem.json", dir);
+  in = fopen(p, "r");
+  out = in ? fopen(raw, "w") : NULL;
+  size_t got;
+  while (out && (got = fread(line, 1, sizeof line, in)) > 0) ok = fwrite(line, 1, got, out) == got && ok;
+  if (in) fclose(in);
+  if (out && fclose(out)) ok = 0;
+  if (!in || !out || !ok) return gs_error_set(err, GS_EIO, "%s: cannot copy to %s", p, raw);
+  return GS_OK;
+}
+
 /* The volume-weighted mean restitution of the components given in
  * coupling.restitution over the population (NAN: none given, or no volume). */
 static double restitution(const couple *k, const double *Y) {
@@ -221,7 +274,7 @@ static int write_cycles(const char *out, const cycle_row *rows, size_t m, gs_err
   for (size_t i = 0; i < m; i++) {
     const cycle_row *w = &rows[i];
     fprintf(fp, "%zu,%.9g,%.9g,%s,%.9g,%s,%zu,%.9g,%ld,%.9g,%.6g,%.9g,", i + 1, w->h.t, w->t_end,
-            trig_names[w->h.trigger], w->h.change, trig_names[w->by], w->r.particles, 1.0, w->r.steps, w->r.t_dem,
+            trig_names[w->h.trigger], w->h.change, trig_names[w->by], w->r.particles, w->r.l, w->r.steps, w->r.t_dem,
             w->r.wall, w->r.t_steady);
     if (isnan(w->r.e)) fputs("\n", fp); /* the case's own */
     else fprintf(fp, "%.9g\n", w->r.e);
@@ -277,7 +330,7 @@ static int write_cycles_h5(const char *out, const couple *k, const cycle_row *ro
   for (size_t c = 0; c < sizeof cols / sizeof cols[0] && !rc; c++) {
     for (size_t i = 0; i < m; i++) {
       const cycle_row *w = &rows[i];
-      const double v[] = {w->h.t, w->t_end, w->h.trigger, w->h.change, w->by, (double)w->r.particles, 1.0,
+      const double v[] = {w->h.t, w->t_end, w->h.trigger, w->h.change, w->by, (double)w->r.particles, w->r.l,
                           (double)w->r.steps, w->r.t_dem, w->r.wall, w->r.t_steady, w->r.e};
       col[i] = v[c];
     }
@@ -427,6 +480,13 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
         fprintf(stderr, "gransim couple: restitution of %s: %.4g (volume-weighted over the components)\n",
                 k->s.material, k->s.e_now);
       if (!rc) rc = gs_couple_dem_stage(k, part, fr, opt->progress, &rec, err);
+      rec.l = k->s.scale_n ? cbrt(total_number(k, Y) / (double)k->s.scale_n) : 1;
+      if (!rc && k->s.scale_n) {
+        rc = scale_kernel(part, k->cl.n, rec.l, err);
+        if (!rc && opt->progress)
+          fprintf(stderr, "gransim couple: system scaling: %ld DEM particles for %.6g granules, l_i = %.6g, C_ij x "
+                  "l_i^-3 = %.6g\n", k->s.scale_n, total_number(k, Y), rec.l, 1 / (rec.l * rec.l * rec.l));
+      }
       if (!rc) rc = write_record(part, &rec, err);
       if (!rc && rename(part, dir)) rc = gs_error_set(err, GS_EIO, "%s: cannot rename to %s: %s", part, dir, strerror(errno));
       if (rc) {
