@@ -220,6 +220,10 @@ static void test_exact_ranks(void) {
     }
     fix_free(&f);
   }
+  for (int i = 0; i < 2; i++) {
+    free(tables[i]);
+    remove(path[i]);
+  }
 }
 
 static int by_magnitude(const void *x, const void *y) {
