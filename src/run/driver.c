@@ -218,6 +218,7 @@ int gs_case_run(gs_case *c, const gs_run_options *opt_in, double *yout, gs_run_r
     rc = gs_error_set(err, GS_EINPUT, "this case's exchange network couples every compartment, "
                                       "which runs on one process: run it without mpirun");
   if (rc) {
+    gs_dist_free(&run.dist);
     free(run.Y);
     free(run.resume_state);
     return rc;
