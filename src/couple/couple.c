@@ -336,10 +336,8 @@ int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
 /* classes.csv: the derived classes and how many PBM cells each holds, so that
  * a user sees what the DEM sampled and what was extrapolated. */
 int gs_couple_write_classes(const couple *k, const char *dir, gs_error *err) {
-  char p[4400];
-  snprintf(p, sizeof p, "%s/classes.csv", dir);
   gs_csv_out t;
-  FILE *fp = gs_csv_open(&t, p, err);
+  FILE *fp = gs_csv_open_in(&t, dir, "classes.csv", err);
   if (!fp) return err->code;
   fprintf(fp, "# DEM classes derived from the PBM grid (volume-equivalent diameters of grid.size_axes, "
           "window [%g, %g] m); %zu PBM cells outside them take the nearest class (coupling.classes.outside: %s)\n"

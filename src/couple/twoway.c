@@ -261,10 +261,8 @@ static size_t collect_cycles(const char *out, long ncycles, size_t n, double t_l
 
 /* DIR/cycles.csv. */
 static int write_cycles(const char *out, const cycle_row *rows, size_t m, gs_error *err) {
-  char p[4400];
-  snprintf(p, sizeof p, "%s/cycles.csv", out);
   gs_csv_out t;
-  FILE *fp = gs_csv_open(&t, p, err);
+  FILE *fp = gs_csv_open_in(&t, out, "cycles.csv", err);
   if (!fp) return err->code;
   fprintf(fp, "cycle,t_start [s],t_end [s],trigger,volume_change [1],ended_by,particles [1],l_i [1],dem_steps [1],"
               "dem_time [s],dem_wall [s],t_steady [s],restitution [1]\n");

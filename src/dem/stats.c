@@ -173,9 +173,7 @@ int gs_dem_table_close(FILE *fp, const char *path, gs_error *err) {
 }
 
 FILE *gs_dem_table_begin(gs_csv_out *t, const char *dir, const char *name, gs_error *err) {
-  char path[4200];
-  snprintf(path, sizeof path, "%s/%s", dir, name);
-  return gs_csv_open(t, path, err);
+  return gs_csv_open_in(t, dir, name, err);
 }
 
 int gs_dem_table_end(gs_csv_out *t, const char *const *units, gs_error *err) {

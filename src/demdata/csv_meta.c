@@ -70,6 +70,15 @@ FILE *gs_csv_open(gs_csv_out *t, const char *path, gs_error *err) {
   return t->fp;
 }
 
+FILE *gs_csv_open_in(gs_csv_out *t, const char *dir, const char *name, gs_error *err) {
+  char path[sizeof t->path];
+  if ((size_t)snprintf(path, sizeof path, "%s/%s", dir, name) >= sizeof path) {
+    gs_error_set(err, GS_EIO, "%s/%s: path too long", dir, name);
+    return t->fp = NULL;
+  }
+  return gs_csv_open(t, path, err);
+}
+
 int gs_csv_close(gs_csv_out *t, const char *written_by, const char *const *units, gs_error *err) {
   int rc = GS_OK;
   if (fclose(t->fp) || !t->buf) rc = gs_error_set(err, GS_ENOMEM, "out of memory");

@@ -26,5 +26,7 @@ typedef struct {
   FILE *fp;
 } gs_csv_out;
 FILE *gs_csv_open(gs_csv_out *t, const char *path, gs_error *err);
+/* gs_csv_open on DIR/NAME. */
+FILE *gs_csv_open_in(gs_csv_out *t, const char *dir, const char *name, gs_error *err);
 int gs_csv_close(gs_csv_out *t, const char *written_by, const char *const *units, gs_error *err);
 #endif

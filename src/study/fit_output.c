@@ -12,10 +12,8 @@
 
 static int write_estimates(const char *dir, const gs_study_axis *params, size_t np,
                            const gs_fit_result *res, gs_error *err) {
-  char path[4096];
-  snprintf(path, sizeof path, "%s/estimates.csv", dir);
   gs_csv_out t;
-  FILE *f = gs_csv_open(&t, path, err);
+  FILE *f = gs_csv_open_in(&t, dir, "estimates.csv", err);
   if (!f) return err->code;
   fprintf(f, "# The estimates of gransim fit, in the units of their keys in the case file; "
              "std_error from the Jacobian at the estimates, ci95 the 95 %% interval "
@@ -61,10 +59,8 @@ int gs_fit_write(const char *dir, const gs_study_axis *params, size_t np, const 
     return gs_error_set(err, GS_EIO, "cannot make folder '%s': %s", dir, strerror(errno));
   int rc = write_estimates(dir, params, np, res, err);
   if (rc) return rc;
-  char path[4096];
-  snprintf(path, sizeof path, "%s/fitted.csv", dir);
   gs_csv_out t;
-  FILE *f = gs_csv_open(&t, path, err);
+  FILE *f = gs_csv_open_in(&t, dir, "fitted.csv", err);
   if (!f) return err->code;
   fprintf(f, "# Every measured value of gransim fit's batches (role fit) and held-out batches "
              "(role predict, --predict) beside the case's value at the estimates; measured and "
