@@ -130,6 +130,21 @@ write_case() {
   printf '%s\n' "$WORK/$1"
 }
 
+# write_beta_breakage_case: writes $WORK/beta.yaml, a 1-D breakage case with
+# beta daughters whose `shape` a study may push to where GSL's incomplete beta
+# fails (cli_fit, cli_optimise); prints its path.
+write_beta_breakage_case() {
+  write_case beta.yaml "grid:
+  axes:
+    - {name: v, type: geometric, min: 1.0, ratio: 2, cells: 20}
+initial: {type: point, number: 1, at: [1000]}
+mechanisms:
+  - type: breakage
+    selection: {type: power, s0: 1.0e-4, exponent: 1}
+    daughters: {type: beta, fragments: 2, shape: 2}
+output: {times: [0.5, 1]}"
+}
+
 # rel_close A B TOL: |A - B| <= TOL * max(|A|, |B|) (numbers as text; nan == nan).
 rel_close() {
   awk -v a="$1" -v b="$2" -v tol="$3" 'BEGIN {

@@ -60,15 +60,7 @@ run_rc 1 "$BIN" fit "$start" --data "$WORK/shifted.csv" "${P[@]}"
 stderr_has "shifted.csv:3: column 1 (time) = 1.5 is not an output time of the case"
 # A GSL failure in a model run keeps GSL's reason (the fit used to switch
 # GSL's error handler off): a beta daughter of shape ~3e299 cannot be evaluated.
-beta=$(write_case beta.yaml "grid:
-  axes:
-    - {name: v, type: geometric, min: 1.0, ratio: 2, cells: 20}
-initial: {type: point, number: 1, at: [1000]}
-mechanisms:
-  - type: breakage
-    selection: {type: power, s0: 1.0e-4, exponent: 1}
-    daughters: {type: beta, fragments: 2, shape: 2}
-output: {times: [0.5, 1]}")
+beta=$(write_beta_breakage_case)
 printf 'time,M0\n0.5,1.0001\n1,1.0002\n' >"$WORK/beta-data.csv"
 run_rc 1 "$BIN" fit "$beta" --data "$WORK/beta-data.csv" --params mechanisms.0.daughters.shape=1e299:1e300:log
 stderr_has "the model at mechanisms.0.daughters.shape=3.16" "GSL: error (exceeded max number of iterations, in GSL's beta_inc.c"

@@ -69,15 +69,7 @@ check_controls bounded
 # GSL's error handler off, so the message named a stale reason ("not finite")
 # or none.  A beta daughter of shape ~3e299 (the middle of the range) cannot be
 # evaluated: the incomplete beta's continued fraction does not converge.
-beta=$(write_case beta.yaml "grid:
-  axes:
-    - {name: v, type: geometric, min: 1.0, ratio: 2, cells: 20}
-initial: {type: point, number: 1, at: [1000]}
-mechanisms:
-  - type: breakage
-    selection: {type: power, s0: 1.0e-4, exponent: 1}
-    daughters: {type: beta, fragments: 2, shape: 2}
-output: {times: [0.5, 1]}")
+beta=$(write_beta_breakage_case)
 printf 'time,M0\n0.5,1.0001\n1,1.0002\n' >"$WORK/beta-target.csv"
 run_rc 2 "$BIN" optimise "$beta" --target "$WORK/beta-target.csv" --controls mechanisms.0.daughters.shape=1e299:1e300:log
 stderr_has "the start: batch 'target', the model at mechanisms.0.daughters.shape=3.16" "beta.yaml:8: mechanisms[0].daughters" \
