@@ -34,6 +34,18 @@ def dyssol_psd(path, line_key):
     sys.exit(f"compare.py: {path}: no line starting with {line_key!r}")
 
 
+def closed_form_m0(m00, feed, beta0, tau, t):
+    """Total number at t in a well-mixed holdup with the constant kernel: the
+    Riccati equation dM0/dt = feed - M0/tau - beta0 M0^2 / 2 from M0(0) = m00,
+    through its two equilibria m+ > 0 > m-: (M0 - m+)/(M0 - m-) decays as
+    exp(-beta0/2 (m+ - m-) t)."""
+    b = beta0 / 2
+    disc = math.sqrt(1 / tau ** 2 + 4 * feed * b)
+    mp, mm = (-1 / tau + disc) / (2 * b), (-1 / tau - disc) / (2 * b)
+    e = (m00 - mp) / (m00 - mm) * math.exp(-b * (mp - mm) * t)
+    return (mp - e * mm) / (1 - e)
+
+
 def d50_by_mass(edges, w):
     """Mass median diameter: mass fractions cumulated over the diameter edges, interpolated."""
     d = (6 * edges / math.pi) ** (1 / 3)
@@ -88,12 +100,7 @@ def main():
         print(f"  constant kernel, M0 against the closed form from each code's own M0(0) and feed:")
         for name, m00, feed, m0 in (("Dyssol", float(np.sum(n_d0)), feed_d, md[0]),
                                     ("gransim", float(np.sum(n_g[0])), feed_g(h5), mg[0])):
-            b = beta0 / 2
-            disc = math.sqrt(1 / TAU ** 2 + 4 * feed * b)
-            mp, mm = (-1 / TAU + disc) / (2 * b), (-1 / TAU - disc) / (2 * b)
-            c = (m00 - mp) / (m00 - mm)
-            e = c * math.exp(-b * (mp - mm) * t_end)
-            exact = (mp - e * mm) / (1 - e)
+            exact = closed_form_m0(m00, feed, beta0, TAU, t_end)
             print(f"    {name:8} M0 {m0:.7g}, closed form {exact:.7g}: {m0 / exact - 1:+.2e} "
                   f"(M0(0) {m00:.7g}, feed {feed:.6g}/s)")
 
