@@ -304,7 +304,8 @@ static void model_hold(void *ctx, int on) {
 /* Absolute-tolerance scale of the ledger entries of axis k: the coordinate
  * of a typical particle (the initial mean, else the geometric mean of the
  * positive pivots), so that the ledger is resolved to atol particles' worth
- * of volume.  The ledger takes part in the error control because implicit
+ * of volume, or to a share of the balance it serves (LEDGER_SHARE, below)
+ * where that is looser.  The ledger takes part in the error control because implicit
  * integrators solve their Newton systems only in the components that do:
  * left out, its entries would drift and break the volume balance. */
 static double ledger_scale(const gs_model *m, const double *y0, int k) {
@@ -325,50 +326,76 @@ static double ledger_scale(const gs_model *m, const double *y0, int k) {
   return count ? exp(logsum / (double)count) : 1.0;
 }
 
-/* The default absolute tolerance of a case without solver.atol, in
- * particles: rtol times the smallest, over the grid's axes, of the case's
- * volume of that coordinate divided by the axis' largest pivot, i.e. a cell
- * at the top of the grid holding atol particles carries rtol of the volume
- * (docs/models.md, "Default tolerances").  The volume is the initial one
- * and what the rates at the start would bring in over the run (feeds,
- * binder sprayed).  A fixed 1e-12 particles had made BDF steps resolve 1e-20 of
- * a batch's particles and crawl. */
-static double default_atol(gs_case *c, double rtol, gs_error *err) {
+/* The volume of every coordinate k (axes, then carried quantities) the run
+ * handles: what the case holds at the start plus what the rates at the
+ * start would bring in over the run (feeds, binder sprayed).  0 on failure
+ * (out of memory, with err set). */
+static int case_volumes(gs_case *c, double V[GS_MAX_VOL], gs_error *err) {
   const gs_model *m = &c->model;
-  const gs_grid *g = &m->grid;
   const size_t n = m->nstate + m->nledger;
-  double total[GS_MAX_DIM] = {0}, rate[GS_MAX_DIM] = {0};
   double *f = gs_calloc(n, sizeof(double), err);
-  if (!f) return NAN;
+  if (!f) return 0;
   c->eval.in_integrator = 1;
   gs_model_rhs(m, &c->eval, c->t0, c->y0, f, f + m->nstate);
   c->eval.in_integrator = 0;
-  for (size_t i = 0; i < m->nnum; i++)
-    for (int k = 0; k < g->dim; k++) {
-      const double x = g->x[(i % g->ncells) * (size_t)g->dim + (size_t)k];
-      total[k] += c->y0[i] * x;
-      rate[k] += f[i] * x;
-    }
-  free(f);
   const double span = c->times[c->ntimes - 1] - c->t0;
+  for (int k = 0; k < m->nvol; k++) {
+    double total = 0, rate = 0;
+    for (size_t comp = 0; comp < m->grid.ncomp; comp++) {
+      total += gs_model_held(m, c->y0, comp, k);
+      rate += gs_model_held(m, f, comp, k);
+    }
+    V[k] = total + fmax(rate, 0.0) * span;
+  }
+  free(f);
+  return 1;
+}
+
+/* The default absolute tolerance of a case without solver.atol, in
+ * particles: rtol times the smallest, over the grid's axes, of the case's
+ * volume of that coordinate (case_volumes) divided by the axis' largest
+ * pivot, i.e. a cell at the top of the grid holding atol particles carries
+ * rtol of the volume (docs/models.md, "Default tolerances").  A fixed 1e-12
+ * particles had made BDF steps resolve 1e-20 of a batch's particles and
+ * crawl. */
+static double default_atol(const gs_case *c, double rtol, const double V[GS_MAX_VOL]) {
+  const gs_grid *g = &c->model.grid;
   double atol = HUGE_VAL;
   for (int k = 0; k < g->dim; k++) {
-    const double v = total[k] + fmax(rate[k], 0.0) * span, top = g->axis[k].pivots[g->axis[k].n - 1];
-    if (v > 0 && top > 0 && isfinite(v)) atol = fmin(atol, rtol * v / top);
+    const double top = g->axis[k].pivots[g->axis[k].n - 1];
+    if (V[k] > 0 && top > 0 && isfinite(V[k])) atol = fmin(atol, rtol * V[k] / top);
   }
   return atol < HUGE_VAL && atol > 0 ? atol : GS_INTEGRATOR_ATOL;
 }
+
+/* The ledger's entries need no finer resolution than the balance they
+ * serve, which is checked relative to the coordinate's volume: their
+ * absolute tolerance is at least LEDGER_SHARE * rtol * V_k.  A typical
+ * particle's worth (ledger_scale) alone had the volume lost beyond a coarse
+ * grid's last pivot, made of the largest particles, resolved to 1e-11 of
+ * the liquid, and the 3-D Madec case at 16 cells per axis took 2 258 BDF
+ * steps where 26 cells take 270 (docs/design-notes.md, "Step counts"). */
+#define LEDGER_SHARE 1e-2
 
 /* solver.atol, or the case's default (above), which the integrator gets as a
  * scale of its own default on every component (abs_scale). */
 static int case_atol(gs_cfg_node *solver, gs_case *c, double *atol, gs_error *err) {
   gs_cfg_node *an = solver ? gs_cfg_get(solver, "atol") : NULL;
-  if (an) return gs_cfg_node_double(an, atol, err); /* validated again by the integrator */
+  gs_cfg_node *rn = solver ? gs_cfg_get(solver, "rtol") : NULL;
   double rtol = 1e-6;
-  gs_cfg_node *rn = gs_cfg_get(solver, "rtol");
+  /* both validated again by the integrator */
+  if (an && gs_cfg_node_double(an, atol, err)) return GS_EINPUT;
   if (rn && gs_cfg_node_double(rn, &rtol, err)) return GS_EINPUT;
-  *atol = default_atol(c, rtol, err);
-  if (isnan(*atol)) return GS_ENOMEM;
+  double V[GS_MAX_VOL];
+  if (!case_volumes(c, V, err)) return GS_ENOMEM;
+  if (!an) *atol = default_atol(c, rtol, V);
+  const gs_model *m = &c->model;
+  for (size_t i = m->nstate; i < m->nstate + m->nledger; i++) {
+    const int k = (int)((i - m->nstate) % (size_t)m->nvol);
+    if (*atol > 0 && isfinite(V[k]) && V[k] > 0)
+      c->abs_scale[i] = fmax(c->abs_scale[i], LEDGER_SHARE * rtol * V[k] / *atol);
+  }
+  if (an) return GS_OK;
   const double factor = *atol / GS_INTEGRATOR_ATOL;
   for (size_t i = 0; i < c->ode.n; i++) c->abs_scale[i] *= factor;
   return GS_OK;
