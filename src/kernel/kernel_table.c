@@ -11,7 +11,14 @@
  * outside the classes take the nearest class; a warning says how many.
  * A particle off the pivots (stochastic solver) takes the class of its own
  * size measure, the same way; the majorant is the constant beta0 max C of
- * its compartment, a true bound as every pair's beta is an entry of C. */
+ * its compartment, a true bound as every pair's beta is an entry of C.
+ *
+ * `times` composes the table with another registered kernel:
+ * beta = beta0 C[class][class'] * beta_times(a, b), e.g. the Madec
+ * liquid-content kernel, which is De et al.'s (2025) eq. 5 (f_c from the
+ * DEM times Madec's beta0 (V + V') [...]).  The other kernel is created and
+ * evaluated by its own type, so its formula lives in one place; the
+ * majorant is its form with the coefficient times beta0 max C. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -32,6 +39,8 @@ typedef struct {
   int diameter, dim;
   unsigned axes;   /* axes of the size measure */
   double *bound;   /* per compartment: beta0 max C */
+  gs_kernel times; /* the kernel the table multiplies (type NULL: none) */
+  double *coef;    /* per compartment: the composed majorant's coefficient */
 } table_kernel;
 
 static void table_free(void *self) {
@@ -41,6 +50,8 @@ static void table_free(void *self) {
   free(k->bound);
   free(k->table);
   free(k->cls);
+  free(k->coef);
+  gs_kernel_free(&k->times);
   free(k);
 }
 
@@ -90,15 +101,24 @@ static int table_create(gs_cfg_node *node, const gs_grid *g, const char *dir, vo
     }
     gs_class_table_free(&tf);
   }
+  gs_cfg_node *times = rc ? NULL : gs_cfg_get(node, "times");
+  if (times) {
+    rc = gs_cfg_require_kind(times, GS_CFG_MAP, err);
+    if (!rc) rc = gs_kernel_create(times, g, dir, &k->times, err);
+  }
   if (!rc) rc = gs_cfg_check_unused(node, err);
   free(size);
   if (!rc && !(k->bound = gs_malloc(g->ncomp * sizeof(double), err))) rc = GS_ENOMEM;
+  if (!rc && k->times.type && !(k->coef = gs_malloc(g->ncomp * sizeof(double), err))) rc = GS_ENOMEM;
   if (rc) { table_free(k); return rc; }
+  gs_kernel_form inner = {.kind = GS_KERNEL_FORM_CONSTANT};
+  if (k->times.type) k->times.type->form(k->times.self, &inner);
   for (size_t z = 0; z < g->ncomp; z++) {
     const double *c = k->table + z * k->nclass * k->nclass;
     double top = 0;
     for (size_t i = 0; i < k->nclass * k->nclass; i++) top = fmax(top, c[i]);
     k->bound[z] = k->beta0[z] * top;
+    if (k->coef) k->coef[z] = k->bound[z] * inner.coef[z];
   }
   *self = k;
   return GS_OK;
@@ -109,6 +129,13 @@ static void table_row(const void *self, size_t comp, size_t a, size_t b0, size_t
   const double *row = k->table + (comp * k->nclass + k->cls[a]) * k->nclass;
   const double beta0 = k->beta0[comp]; /* hoisted: out might alias it as far as the compiler knows */
   for (size_t b = b0; b < b1; b++) out[b - b0] = beta0 * row[k->cls[b]];
+  if (!k->times.type) return;
+  double f[256]; /* the other kernel's row in pieces on the stack: rows may be filled by several threads */
+  for (size_t s = b0; s < b1; s += 256) {
+    const size_t e = s + 256 < b1 ? s + 256 : b1;
+    k->times.type->row(k->times.self, comp, a, s, e, f);
+    for (size_t b = s; b < e; b++) out[b - b0] *= f[b - s];
+  }
 }
 
 /* Class of a point, as gs_class_table_assign places cells (nearest class outside). */
@@ -121,21 +148,30 @@ static size_t table_class(const table_kernel *k, const double *x) {
 
 static double table_at(const void *self, size_t comp, const double *x, const double *y) {
   const table_kernel *k = self;
-  return k->beta0[comp] * k->table[(comp * k->nclass + table_class(k, x)) * k->nclass + table_class(k, y)];
+  const double c = k->beta0[comp] * k->table[(comp * k->nclass + table_class(k, x)) * k->nclass + table_class(k, y)];
+  return k->times.type ? c * k->times.type->at(k->times.self, comp, x, y) : c;
 }
 
 static void table_form(const void *self, gs_kernel_form *out) {
   const table_kernel *k = self;
+  if (k->times.type) { /* beta0 C <= bound: the other kernel's majorant times it */
+    k->times.type->form(k->times.self, out);
+    out->coef = k->coef;
+    out->exact = 0;
+    return;
+  }
   *out = (gs_kernel_form){.kind = GS_KERNEL_FORM_CONSTANT, .coef = k->bound, .axes = 0, .exact = 0};
 }
 
 static int table_per_compartment(const void *self) {
-  return ((const table_kernel *)self)->per_comp;
+  const table_kernel *k = self;
+  const gs_kernel *t = &k->times;
+  return k->per_comp || (t->type && t->type->per_compartment && t->type->per_compartment(t->self));
 }
 
 const gs_kernel_type gs_kernel_table = {
     .name = "table",
-    .summary = "beta0 * C[class][class'] from a CSV file (DEM collision frequencies)",
+    .summary = "beta0 * C[class][class'] from a CSV file (DEM collision frequencies), times another kernel (times)",
     .create = table_create,
     .row = table_row,
     .free = table_free,
