@@ -30,6 +30,7 @@
 #include "kernel/lowrank.h"
 #include "kernel/size_measure.h"
 #include "pbm/aggregation_fft.h"
+#include "pbm/aggregation_split.h"
 
 enum { PLACED = 0, CLAMPED = 1, OUTSIDE = 2 };
 
@@ -52,6 +53,7 @@ typedef struct {
   fftw_complex *spec[2]; /* ncplx each: transforms of phi_m N */
   fftw_complex *acc;    /* ncplx: sum of the terms' products */
   double *mom;          /* the moments sum_c phi_m(c) N_c, one per phi */
+  double *u, *v;        /* split: ncells each, phi_m1 N and phi_m2 N */
 } slot_t;
 
 /* The separable form of the kernel in a set of compartments: terms
@@ -73,6 +75,7 @@ struct gs_agg_fft {
   form_set *set;
   axis_map map[3];         /* 2 n[q] - 1 entries each */
   fftw_plan fwd, inv;
+  gs_agg_split *split;     /* pivots not equally spaced: the near/far split instead of the FFT */
   int nslots;
   slot_t *slot;
 };
@@ -96,9 +99,13 @@ static int exact_form(const gs_kernel *k) {
   return f.exact;
 }
 
-const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k, double rank_tolerance) {
+static int grid_uniform(const gs_grid *g) {
   for (int q = 0; q < g->dim; q++)
-    if (!axis_uniform(&g->axis[q])) return "needs equally spaced pivots on every axis (type: linear)";
+    if (!axis_uniform(&g->axis[q])) return 0;
+  return 1;
+}
+
+const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k, double rank_tolerance) {
   if (exact_form(k)) return NULL;
   if (!(rank_tolerance > 0))
     return "needs a kernel of separable form (constant, sum or product) or rank_tolerance for a low-rank form";
@@ -126,7 +133,10 @@ void gs_agg_fft_free(gs_agg_fft *F) {
     fftw_free(F->slot[s].spec[1]);
     fftw_free(F->slot[s].acc);
     free(F->slot[s].mom);
+    free(F->slot[s].u);
+    free(F->slot[s].v);
   }
+  gs_agg_split_free(F->split);
   free(F->slot);
   if (F->fwd) fftw_destroy_plan(F->fwd);
   if (F->inv) fftw_destroy_plan(F->inv);
@@ -261,21 +271,29 @@ int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, double rank_toleranc
   F->nset = F->lowrank && k->type->per_compartment && k->type->per_compartment(k->self) ? (int)g->ncomp : 1;
   int rc = (F->set = gs_calloc((size_t)F->nset, sizeof(form_set), err)) ? GS_OK : GS_ENOMEM;
   if (!rc) rc = F->lowrank ? build_lowrank(F, g, k, rank_tolerance, err) : build_exact(F, g, k, err);
-  for (int q = 0; !rc && q < 3; q++) rc = build_map(F, g, q, err);
+  const int split = !grid_uniform(g);
+  if (!rc && split) rc = gs_agg_split_create(g, nslots, &F->split, err);
+  for (int q = 0; !rc && !split && q < 3; q++) rc = build_map(F, g, q, err);
   int maxphi = 0;
   for (int s = 0; !rc && s < F->nset; s++) maxphi = F->set[s].nphi > maxphi ? F->set[s].nphi : maxphi;
   F->nslots = nslots > 0 ? nslots : 1;
   if (!rc && !(F->slot = gs_calloc((size_t)F->nslots, sizeof(slot_t), err))) rc = GS_ENOMEM;
   for (int s = 0; !rc && s < F->nslots; s++) {
     slot_t *S = &F->slot[s];
+    S->mom = malloc((size_t)(maxphi > 0 ? maxphi : 1) * sizeof(double));
+    if (split) {
+      S->u = malloc(F->ncells * sizeof(double));
+      S->v = malloc(F->ncells * sizeof(double));
+      if (!S->mom || !S->u || !S->v) rc = gs_error_set(err, GS_ENOMEM, "out of memory for aggregation's scratch");
+      continue;
+    }
     S->real = fftw_malloc(F->nreal * sizeof(double));
     for (int m = 0; m < 2; m++) S->spec[m] = fftw_malloc(F->ncplx * sizeof(fftw_complex));
     S->acc = fftw_malloc(F->ncplx * sizeof(fftw_complex));
-    S->mom = malloc((size_t)(maxphi > 0 ? maxphi : 1) * sizeof(double));
     if (!S->mom || !S->real || !S->spec[0] || !S->spec[1] || !S->acc)
       rc = gs_error_set(err, GS_ENOMEM, "out of memory for the FFT arrays of aggregation");
   }
-  if (!rc) {
+  if (!rc && !split) {
     /* FFTW_ESTIMATE leaves the arrays alone; every slot's arrays come from
      * fftw_malloc (same alignment), so the plans serve them all through the
      * new-array execute functions, which are thread safe */
@@ -350,6 +368,55 @@ static double transform(const gs_agg_fft *F, slot_t *S, const double *phi, const
   return mom;
 }
 
+/* Deaths of compartment comp's numbers N from the moments of the form set
+ * fs (mom, filled by the caller); the box of the occupied cells per padded
+ * axis into klo, khi (klo[0] = SIZE_MAX: no particles). */
+static double deaths(const gs_agg_fft *F, const form_set *fs, double coef, const double *mom,
+                     const double *N, double *dN, size_t *klo, size_t *khi) {
+  double removed = 0;
+  for (int q = 0; q < 3; q++) {
+    klo[q] = SIZE_MAX;
+    khi[q] = 0;
+  }
+  for (size_t c = 0; c < F->ncells; c++) {
+    if (N[c] == 0.0) continue;
+    const size_t idx[3] = {c / (F->n[1] * F->n[2]), c / F->n[2] % F->n[1], c % F->n[2]};
+    for (int q = 0; q < 3; q++) {
+      if (2 * idx[q] < klo[q]) klo[q] = 2 * idx[q];
+      if (2 * idx[q] > khi[q]) khi[q] = 2 * idx[q];
+    }
+    double r = 0;
+    for (int t = 0; t < fs->nterm; t++) r += fs->t[t].c * fs->phi[(size_t)fs->t[t].m1 * F->ncells + c] * mom[fs->t[t].m2];
+    r *= coef * N[c];
+    removed += r;
+    if (dN) dN[c] -= r;
+  }
+  return removed;
+}
+
+/* Non-uniform pivots: the births of each term by the near/far split
+ * (aggregation_split.c), the deaths from the moments. */
+static void split_rates(gs_agg_fft *F, const form_set *fs, double coef, const double *N, int slot,
+                        double *dN, double *lost, double *born, double *dead) {
+  slot_t *S = &F->slot[slot > 0 ? slot : 0];
+  for (int m = 0; m < fs->nphi; m++) {
+    const double *phi = fs->phi + (size_t)m * F->ncells;
+    double mom = 0;
+    for (size_t c = 0; c < F->ncells; c++) mom += phi[c] * N[c];
+    S->mom[m] = mom;
+  }
+  size_t klo[3], khi[3];
+  *dead += deaths(F, fs, coef, S->mom, N, dN, klo, khi);
+  for (int t = 0; t < fs->nterm; t++) {
+    const int m1 = fs->t[t].m1, m2 = fs->t[t].m2;
+    const double *p1 = fs->phi + (size_t)m1 * F->ncells, *p2 = fs->phi + (size_t)m2 * F->ncells;
+    for (size_t c = 0; c < F->ncells; c++) S->u[c] = p1[c] * N[c];
+    if (m2 != m1)
+      for (size_t c = 0; c < F->ncells; c++) S->v[c] = p2[c] * N[c];
+    gs_agg_split_births(F->split, slot, S->u, m2 != m1 ? S->v : S->u, 0.5 * coef * fs->t[t].c, dN, lost, born);
+  }
+}
+
 void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, double *dN,
                       double *lost, double *born, double *dead) {
   slot_t *S = &F->slot[slot > 0 ? slot : 0];
@@ -358,6 +425,10 @@ void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, dou
   /* coef/2 sum_t c_t conv(phi_m1 N, phi_m2 N); FFTW's inverse is unscaled */
   const double scale = 0.5 * coef / (double)F->nreal;
   double *mom = S->mom;
+  if (F->split) {
+    split_rates(F, fs, coef, N, slot, dN, lost, born, dead);
+    return;
+  }
   if (!F->lowrank) {
     for (int m = 0; m < fs->nphi; m++) mom[m] = transform(F, S, fs->phi + (size_t)m * F->ncells, N, S->spec[m]);
     for (size_t i = 0; i < F->ncplx; i++) {
@@ -383,21 +454,7 @@ void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, dou
     }
   }
   fftw_execute_dft_c2r(F->inv, S->acc, S->real);
-  double removed = 0;
-  size_t klo[3] = {SIZE_MAX, SIZE_MAX, SIZE_MAX}, khi[3] = {0, 0, 0};
-  for (size_t c = 0; c < F->ncells; c++) {
-    if (N[c] == 0.0) continue;
-    const size_t idx[3] = {c / (F->n[1] * F->n[2]), c / F->n[2] % F->n[1], c % F->n[2]};
-    for (int q = 0; q < 3; q++) {
-      if (2 * idx[q] < klo[q]) klo[q] = 2 * idx[q];
-      if (2 * idx[q] > khi[q]) khi[q] = 2 * idx[q];
-    }
-    double r = 0;
-    for (int t = 0; t < fs->nterm; t++) r += fs->t[t].c * fs->phi[(size_t)fs->t[t].m1 * F->ncells + c] * mom[fs->t[t].m2];
-    r *= coef * N[c];
-    removed += r;
-    if (dN) dN[c] -= r;
-  }
-  *dead += removed;
+  size_t klo[3], khi[3];
+  *dead += deaths(F, fs, coef, mom, N, dN, klo, khi);
   if (klo[0] != SIZE_MAX) place(F, S->real, klo, khi, dN, lost, born); /* else no particles */
 }
