@@ -12,7 +12,8 @@
  *    pair scheme's in test_aggregation.c;
  *  - geometric, zero_first and explicit-edge grids (the near/far split,
  *    src/pbm/aggregation_split.c): the same comparison against the pairs,
- *    1-, 2- and 3-D, exact and low-rank kernel forms, all to 1e-12; and a
+ *    1-, 2- and 3-D, exact and low-rank kernel forms and the linear Madec
+ *    kernel's separable terms (also on linear grids), all to 1e-12; and a
  *    broken split (far partners not moved to node i + 1) fails it;
  *  - method: auto takes the FFT on a large grid and the pairs on a small one
  *    (identical results bit for bit); method: fft refuses what it cannot do. */
@@ -345,6 +346,9 @@ static void test_nonuniform_rates(void) {
   /* low-rank forms: continuum Brownian (exact rank 3) */
   CHECK(nonuniform_case(1, 40, "brownian", ", rank_tolerance: 1.0e-10") <= 1e-12);
   CHECK(nonuniform_case(2, 24, "brownian", ", rank_tolerance: 1.0e-10") <= 1e-12);
+  /* the linear Madec kernel's own separable terms (ten, six functions) */
+  CHECK(nonuniform_case(2, 30, "madec, liquid_axis: l", "") <= 1e-12);
+  CHECK(nonuniform_case(3, 12, "madec, liquid_axis: l, liquid_content: fraction", "") <= 1e-12);
 }
 
 static void test_refusals(void) {
@@ -376,6 +380,7 @@ int main(void) {
   test_auto();
   test_compartments_threads("sum", "fft");
   test_compartments_threads("brownian", "fft, rank_tolerance: 1.0e-10");
+  test_compartments_threads("madec, liquid_axis: l", "fft");
   test_refusals();
   TEST_EXIT();
 }

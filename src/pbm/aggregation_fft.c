@@ -50,10 +50,12 @@ typedef struct {
 
 typedef struct {
   double *real;         /* nreal: padded input, then the births */
-  fftw_complex *spec[2]; /* ncplx each: transforms of phi_m N */
+  fftw_complex **spec;  /* nspec, ncplx each: transforms of phi_m N */
+  int nspec;
   fftw_complex *acc;    /* ncplx: sum of the terms' products */
   double *mom;          /* the moments sum_c phi_m(c) N_c, one per phi */
-  double *u, *v;        /* split: ncells each, phi_m1 N and phi_m2 N */
+  double *x;            /* split: nphi x ncells, phi_m N */
+  const double **xp;    /* split: nphi pointers into x */
 } slot_t;
 
 /* The separable form of the kernel in a set of compartments: terms
@@ -105,8 +107,18 @@ static int grid_uniform(const gs_grid *g) {
   return 1;
 }
 
+/* The kernel's separable terms over ncells cells (kernel.h): their count,
+ * 0 if it has none, -1 if out of memory. */
+static int kernel_terms(const gs_kernel *k, size_t ncells, gs_kernel_terms *t) {
+  return k->type->terms ? k->type->terms(k->self, ncells, t) : 0;
+}
+
 const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k, double rank_tolerance) {
   if (exact_form(k)) return NULL;
+  gs_kernel_terms kt;
+  const int nt = kernel_terms(k, g->ncells, &kt);
+  if (nt > 0) free(kt.phi);
+  if (nt != 0) return NULL; /* out of memory (< 0) shows at create */
   if (!(rank_tolerance > 0))
     return "needs a kernel of separable form (constant, sum or product) or rank_tolerance for a low-rank form";
   if (g->ncells > GS_LOWRANK_MAX_CELLS)
@@ -129,12 +141,12 @@ void gs_agg_fft_free(gs_agg_fft *F) {
   if (!F) return;
   for (int s = 0; F->slot && s < F->nslots; s++) {
     fftw_free(F->slot[s].real);
-    fftw_free(F->slot[s].spec[0]);
-    fftw_free(F->slot[s].spec[1]);
+    for (int m = 0; F->slot[s].spec && m < F->slot[s].nspec; m++) fftw_free(F->slot[s].spec[m]);
+    free(F->slot[s].spec);
     fftw_free(F->slot[s].acc);
     free(F->slot[s].mom);
-    free(F->slot[s].u);
-    free(F->slot[s].v);
+    free(F->slot[s].x);
+    free(F->slot[s].xp);
   }
   gs_agg_split_free(F->split);
   free(F->slot);
@@ -220,6 +232,18 @@ static int build_exact(gs_agg_fft *F, const gs_grid *g, const gs_kernel *k, gs_e
   return GS_OK;
 }
 
+/* The kernel's own separable terms (taken over) */
+static int build_terms(gs_agg_fft *F, gs_kernel_terms *kt, gs_error *err) {
+  form_set *S = &F->set[0];
+  F->coef = kt->coef;
+  S->nphi = kt->nphi;
+  S->nterm = kt->nterm;
+  S->phi = kt->phi;
+  if (!(S->t = gs_malloc((size_t)kt->nterm * sizeof(term), err))) return GS_ENOMEM;
+  for (int t = 0; t < kt->nterm; t++) S->t[t] = (term){kt->c[t], kt->m1[t], kt->m2[t]};
+  return GS_OK;
+}
+
 /* The truncated eigendecomposition of the kernel matrix (kernel/lowrank.c)
  * per set of compartments: terms lambda_r v_r(a) v_r(b), beta0 inside. */
 static int build_lowrank(gs_agg_fft *F, const gs_grid *g, const gs_kernel *k, double tol,
@@ -267,30 +291,40 @@ int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, double rank_toleranc
       F->ncplx *= q == 2 ? F->M[q] / 2 + 1 : F->M[q];
     }
   }
-  F->lowrank = !exact_form(k);
+  gs_kernel_terms kt;
+  const int nt = kernel_terms(k, g->ncells, &kt);
+  F->lowrank = !exact_form(k) && nt == 0;
   F->nset = F->lowrank && k->type->per_compartment && k->type->per_compartment(k->self) ? (int)g->ncomp : 1;
   int rc = (F->set = gs_calloc((size_t)F->nset, sizeof(form_set), err)) ? GS_OK : GS_ENOMEM;
-  if (!rc) rc = F->lowrank ? build_lowrank(F, g, k, rank_tolerance, err) : build_exact(F, g, k, err);
+  if (nt < 0) rc = gs_error_set(err, GS_ENOMEM, "out of memory for the kernel's separable terms");
+  else if (!rc) rc = F->lowrank ? build_lowrank(F, g, k, rank_tolerance, err)
+                     : exact_form(k) ? build_exact(F, g, k, err)
+                                     : build_terms(F, &kt, err);
+  else if (nt > 0) free(kt.phi);
   const int split = !grid_uniform(g);
-  if (!rc && split) rc = gs_agg_split_create(g, nslots, &F->split, err);
-  for (int q = 0; !rc && !split && q < 3; q++) rc = build_map(F, g, q, err);
   int maxphi = 0;
   for (int s = 0; !rc && s < F->nset; s++) maxphi = F->set[s].nphi > maxphi ? F->set[s].nphi : maxphi;
+  if (!rc && split) rc = gs_agg_split_create(g, nslots, maxphi, &F->split, err);
+  for (int q = 0; !rc && !split && q < 3; q++) rc = build_map(F, g, q, err);
   F->nslots = nslots > 0 ? nslots : 1;
   if (!rc && !(F->slot = gs_calloc((size_t)F->nslots, sizeof(slot_t), err))) rc = GS_ENOMEM;
   for (int s = 0; !rc && s < F->nslots; s++) {
     slot_t *S = &F->slot[s];
     S->mom = malloc((size_t)(maxphi > 0 ? maxphi : 1) * sizeof(double));
     if (split) {
-      S->u = malloc(F->ncells * sizeof(double));
-      S->v = malloc(F->ncells * sizeof(double));
-      if (!S->mom || !S->u || !S->v) rc = gs_error_set(err, GS_ENOMEM, "out of memory for aggregation's scratch");
+      S->x = malloc((size_t)maxphi * F->ncells * sizeof(double));
+      S->xp = malloc((size_t)maxphi * sizeof(double *));
+      if (!S->mom || !S->x || !S->xp) rc = gs_error_set(err, GS_ENOMEM, "out of memory for aggregation's scratch");
       continue;
     }
     S->real = fftw_malloc(F->nreal * sizeof(double));
-    for (int m = 0; m < 2; m++) S->spec[m] = fftw_malloc(F->ncplx * sizeof(fftw_complex));
+    /* the lowrank terms take one transform at a time, the others one per phi */
+    S->nspec = F->lowrank || maxphi < 2 ? 2 : maxphi;
+    S->spec = calloc((size_t)S->nspec, sizeof(fftw_complex *));
+    for (int m = 0; S->spec && m < S->nspec; m++)
+      if (!(S->spec[m] = fftw_malloc(F->ncplx * sizeof(fftw_complex)))) rc = GS_ENOMEM;
     S->acc = fftw_malloc(F->ncplx * sizeof(fftw_complex));
-    if (!S->mom || !S->real || !S->spec[0] || !S->spec[1] || !S->acc)
+    if (rc || !S->mom || !S->real || !S->spec || !S->acc)
       rc = gs_error_set(err, GS_ENOMEM, "out of memory for the FFT arrays of aggregation");
   }
   if (!rc && !split) {
@@ -394,26 +428,40 @@ static double deaths(const gs_agg_fft *F, const form_set *fs, double coef, const
   return removed;
 }
 
-/* Non-uniform pivots: the births of each term by the near/far split
- * (aggregation_split.c), the deaths from the moments. */
+/* Non-uniform pivots: the births by the near/far split
+ * (aggregation_split.c), terms (m1, m2) and (m2, m1) merged (the placement
+ * of a pair does not depend on its order), the deaths from the moments. */
 static void split_rates(gs_agg_fft *F, const form_set *fs, double coef, const double *N, int slot,
                         double *dN, double *lost, double *born, double *dead) {
   slot_t *S = &F->slot[slot > 0 ? slot : 0];
   for (int m = 0; m < fs->nphi; m++) {
     const double *phi = fs->phi + (size_t)m * F->ncells;
-    double mom = 0;
-    for (size_t c = 0; c < F->ncells; c++) mom += phi[c] * N[c];
+    double *x = S->x + (size_t)m * F->ncells, mom = 0;
+    for (size_t c = 0; c < F->ncells; c++) {
+      x[c] = phi[c] * N[c];
+      mom += x[c];
+    }
     S->mom[m] = mom;
+    S->xp[m] = x;
   }
   size_t klo[3], khi[3];
   *dead += deaths(F, fs, coef, S->mom, N, dN, klo, khi);
+  int m1[GS_SPLIT_MAX_TERMS], m2[GS_SPLIT_MAX_TERMS], n = 0;
+  double sc[GS_SPLIT_MAX_TERMS];
   for (int t = 0; t < fs->nterm; t++) {
-    const int m1 = fs->t[t].m1, m2 = fs->t[t].m2;
-    const double *p1 = fs->phi + (size_t)m1 * F->ncells, *p2 = fs->phi + (size_t)m2 * F->ncells;
-    for (size_t c = 0; c < F->ncells; c++) S->u[c] = p1[c] * N[c];
-    if (m2 != m1)
-      for (size_t c = 0; c < F->ncells; c++) S->v[c] = p2[c] * N[c];
-    gs_agg_split_births(F->split, slot, S->u, m2 != m1 ? S->v : S->u, 0.5 * coef * fs->t[t].c, dN, lost, born);
+    const term *T = &fs->t[t];
+    int k = 0;
+    while (k < n && !((m1[k] == T->m1 && m2[k] == T->m2) || (m1[k] == T->m2 && m2[k] == T->m1))) k++;
+    if (k == n) {
+      m1[n] = T->m1;
+      m2[n] = T->m2;
+      sc[n++] = 0;
+    }
+    sc[k] += 0.5 * coef * T->c;
+    if (n == GS_SPLIT_MAX_TERMS || t == fs->nterm - 1) { /* a batch */
+      gs_agg_split_births(F->split, slot, fs->nphi, S->xp, n, m1, m2, sc, dN, lost, born);
+      n = 0;
+    }
   }
 }
 

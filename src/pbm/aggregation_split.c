@@ -56,10 +56,10 @@ typedef struct {
 } axis_t;
 
 typedef struct {
-  double *U, *V;    /* extended arrays */
-  unsigned char *act[2][3]; /* per axis: slice of U^ (0) / V^ (1) not all zero */
-  size_t *list[3];  /* entries taking part */
-  double *pre;      /* 2 (n + 1): prefix sums of one fibre */
+  double **E;            /* nphi extended arrays */
+  unsigned char **act;   /* nphi x 3: per axis, the slices of E[m] not all zero */
+  size_t *list[3];       /* entries taking part */
+  double *pre;           /* 2 (n + 1): prefix sums of one fibre */
 } slot_t;
 
 struct gs_agg_split {
@@ -68,21 +68,20 @@ struct gs_agg_split {
   size_t stride[3];  /* grid strides (0 on padding axes) */
   size_t estride[3]; /* strides of the extended arrays */
   size_t n_ext, ncells;
-  int nslots;
+  int nslots, nphi;
   slot_t *slot;
 };
 
 void gs_agg_split_free(gs_agg_split *S) {
   if (!S) return;
   for (int s = 0; S->slot && s < S->nslots; s++) {
-    free(S->slot[s].U);
-    free(S->slot[s].V);
-    free(S->slot[s].pre);
-    for (int q = 0; q < 3; q++) {
-      free(S->slot[s].act[0][q]);
-      free(S->slot[s].act[1][q]);
-      free(S->slot[s].list[q]);
-    }
+    slot_t *T = &S->slot[s];
+    for (int m = 0; T->E && m < S->nphi; m++) free(T->E[m]);
+    for (int m = 0; T->act && m < 3 * S->nphi; m++) free(T->act[m]);
+    free(T->E);
+    free(T->act);
+    free(T->pre);
+    for (int q = 0; q < 3; q++) free(T->list[q]);
   }
   free(S->slot);
   for (int q = 0; q < 3; q++) {
@@ -164,7 +163,7 @@ static int build_axis(gs_agg_split *S, const gs_grid *g, int q, gs_error *err) {
   return GS_OK;
 }
 
-int gs_agg_split_create(const gs_grid *g, int nslots, gs_agg_split **out, gs_error *err) {
+int gs_agg_split_create(const gs_grid *g, int nslots, int nphi, gs_agg_split **out, gs_error *err) {
   gs_agg_split *S = gs_calloc(1, sizeof *S, err);
   if (!S) return GS_ENOMEM;
   S->off = 3 - g->dim;
@@ -178,22 +177,24 @@ int gs_agg_split_create(const gs_grid *g, int nslots, gs_agg_split **out, gs_err
     S->estride[0] = S->ax[2].ne * S->ax[1].ne;
     S->n_ext = S->estride[0] * S->ax[0].ne;
     S->nslots = nslots > 0 ? nslots : 1;
+    S->nphi = nphi > 0 ? nphi : 1;
     if (!(S->slot = gs_calloc((size_t)S->nslots, sizeof(slot_t), err))) rc = GS_ENOMEM;
   }
   size_t maxn = 1;
   for (int q = 0; q < 3; q++) maxn = S->ax[q].n > maxn ? S->ax[q].n : maxn;
   for (int s = 0; !rc && s < S->nslots; s++) {
     slot_t *T = &S->slot[s];
-    T->U = gs_malloc(S->n_ext * sizeof(double), err);
-    T->V = gs_malloc(S->n_ext * sizeof(double), err);
+    T->E = gs_calloc((size_t)S->nphi, sizeof(double *), err);
+    T->act = gs_calloc(3 * (size_t)S->nphi, sizeof(unsigned char *), err);
     T->pre = gs_malloc(2 * (maxn + 1) * sizeof(double), err);
-    if (!T->U || !T->V || !T->pre) rc = GS_ENOMEM;
-    for (int q = 0; !rc && q < 3; q++) {
-      T->act[0][q] = gs_malloc(S->ax[q].ne, err);
-      T->act[1][q] = gs_malloc(S->ax[q].ne, err);
-      T->list[q] = gs_malloc(S->ax[q].nent * sizeof(size_t), err);
-      if (!T->act[0][q] || !T->act[1][q] || !T->list[q]) rc = GS_ENOMEM;
+    if (!T->E || !T->act || !T->pre) rc = GS_ENOMEM;
+    for (int m = 0; !rc && m < S->nphi; m++) {
+      if (!(T->E[m] = gs_malloc(S->n_ext * sizeof(double), err))) rc = GS_ENOMEM;
+      for (int q = 0; !rc && q < 3; q++)
+        if (!(T->act[3 * m + q] = gs_malloc(S->ax[q].ne, err))) rc = GS_ENOMEM;
     }
+    for (int q = 0; !rc && q < 3; q++)
+      if (!(T->list[q] = gs_malloc(S->ax[q].nent * sizeof(size_t), err))) rc = GS_ENOMEM;
   }
   if (rc) {
     gs_agg_split_free(S);
@@ -252,32 +253,33 @@ static void extend(const gs_agg_split *S, slot_t *T, const double *X, double *E,
     }
 }
 
-void gs_agg_split_births(gs_agg_split *S, int slot, const double *U, const double *V, double scale,
-                         double *dN, double *lost, double *born) {
+void gs_agg_split_births(gs_agg_split *S, int slot, int nphi, const double *const *X, int nterm,
+                         const int *m1, const int *m2, const double *scale, double *dN, double *lost,
+                         double *born) {
   slot_t *T = &S->slot[slot > 0 ? slot : 0];
-  extend(S, T, U, T->U, T->act[0]);
-  const double *Ve = T->U;
-  if (V != U) {
-    extend(S, T, V, T->V, T->act[1]);
-    Ve = T->V;
-  } else {
-    for (int q = 0; q < 3; q++) memcpy(T->act[1][q], T->act[0][q], S->ax[q].ne);
-  }
-  const double *Ue = T->U;
+  for (int m = 0; m < nphi && m < S->nphi; m++) extend(S, T, X[m], T->E[m], T->act + 3 * m);
   size_t m[3];
-  for (int q = 0; q < 3; q++) { /* entries whose two slices hold something */
+  for (int q = 0; q < 3; q++) { /* entries whose two slices hold something in some term */
     m[q] = 0;
     for (size_t k = 0; k < S->ax[q].nent; k++)
-      if (T->act[0][q][S->ax[q].e[k].u] && T->act[1][q][S->ax[q].e[k].v]) T->list[q][m[q]++] = k;
+      for (int t = 0; t < nterm; t++)
+        if (T->act[3 * m1[t] + q][S->ax[q].e[k].u] && T->act[3 * m2[t] + q][S->ax[q].e[k].v]) {
+          T->list[q][m[q]++] = k;
+          break;
+        }
   }
   const size_t s0 = S->stride[0], s1 = S->stride[1], s2 = S->stride[2];
   const size_t *es = S->estride;
+  const double *ur[GS_SPLIT_MAX_TERMS], *vr[GS_SPLIT_MAX_TERMS];
   double placed = 0, lv[3] = {0, 0, 0};
   for (size_t k0 = 0; k0 < m[0]; k0++) {
     const entry *a = &S->ax[0].e[T->list[0][k0]];
     for (size_t k1 = 0; k1 < m[1]; k1++) {
       const entry *b = &S->ax[1].e[T->list[1][k1]];
-      const double *ur = Ue + a->u * es[0] + b->u * es[1], *vr = Ve + a->v * es[0] + b->v * es[1];
+      for (int t = 0; t < nterm; t++) {
+        ur[t] = T->E[m1[t]] + a->u * es[0] + b->u * es[1];
+        vr[t] = T->E[m2[t]] + a->v * es[0] + b->v * es[1];
+      }
       const int out01 = a->state == OUTSIDE || b->state == OUTSIDE;
       const double n01 = a->num * b->num;
       const double w00 = a->w[0] * b->w[0], w01 = a->w[0] * b->w[1], w10 = a->w[1] * b->w[0],
@@ -285,7 +287,8 @@ void gs_agg_split_births(gs_agg_split *S, int slot, const double *U, const doubl
       const size_t lo01 = a->lo + b->lo;
       for (size_t k2 = 0; k2 < m[2]; k2++) {
         const entry *c = &S->ax[2].e[T->list[2][k2]];
-        const double p = scale * ur[c->u] * vr[c->v];
+        double p = 0;
+        for (int t = 0; t < nterm; t++) p += scale[t] * ur[t][c->u] * vr[t][c->v];
         if (p == 0.0) continue;
         if (out01 || c->state == OUTSIDE) { /* the products lie beyond the grid */
           lv[0] += p * a->vol * b->num * c->num;

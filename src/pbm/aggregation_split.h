@@ -11,20 +11,26 @@
 
 typedef struct gs_agg_split gs_agg_split;
 
-/* Per-axis tables of the grid g and scratch for nslots evaluators. */
-int gs_agg_split_create(const gs_grid *g, int nslots, gs_agg_split **out, gs_error *err);
+/* the most terms one evaluation takes */
+#define GS_SPLIT_MAX_TERMS 64
+
+/* Per-axis tables of the grid g and scratch for nslots evaluators, each for
+ * up to nphi arrays per evaluation. */
+int gs_agg_split_create(const gs_grid *g, int nslots, int nphi, gs_agg_split **out, gs_error *err);
 void gs_agg_split_free(gs_agg_split *S);
 
 /* The entries of the per-axis pair lists multiplied over the axes: the work
- * per term and evaluation on a full grid (the pairs take ncells^2 / 2). */
+ * per evaluation on a full grid (the pairs take ncells^2 / 2). */
 double gs_agg_split_tuples(const gs_agg_split *S);
 
-/* scale * sum over ordered pairs of cells (a, b) of U[a] V[b], each product
- * placed at x_a + x_b by the fixed-pivot lever rule (clamped to the last
- * pivot inside the last cell, lost beyond its edge): the number placed added
- * to dN (NULL: totals only) and to *born, the volume lost or clamped per
- * axis added to lost[k] (NULL: not wanted).  V == U is allowed. */
-void gs_agg_split_births(gs_agg_split *S, int slot, const double *U, const double *V, double scale,
-                         double *dN, double *lost, double *born);
+/* The births of sum_t scale[t] sum over ordered pairs of cells (a, b) of
+ * X[m1[t]][a] X[m2[t]][b] (nphi arrays X over the cells, nterm terms),
+ * each product placed at x_a + x_b by the fixed-pivot lever rule (clamped
+ * to the last pivot inside the last cell, lost beyond its edge): the number
+ * placed added to dN (NULL: totals only) and to *born, the volume lost or
+ * clamped per axis added to lost[k] (NULL: not wanted). */
+void gs_agg_split_births(gs_agg_split *S, int slot, int nphi, const double *const *X, int nterm,
+                         const int *m1, const int *m2, const double *scale, double *dN, double *lost,
+                         double *born);
 
 #endif
