@@ -137,6 +137,13 @@ int gs_agg_fft_rank(const gs_agg_fft *F, double *rel_err) {
   return F->lowrank ? rank : 0;
 }
 
+double gs_agg_fft_split_work(const gs_agg_fft *F) {
+  if (!F->split) return 0;
+  int terms = 0;
+  for (int s = 0; s < F->nset; s++) terms = F->set[s].nterm > terms ? F->set[s].nterm : terms;
+  return gs_agg_split_tuples(F->split) * terms;
+}
+
 void gs_agg_fft_free(gs_agg_fft *F) {
   if (!F) return;
   for (int s = 0; F->slot && s < F->nslots; s++) {

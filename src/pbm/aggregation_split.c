@@ -28,6 +28,7 @@
  * index holds nothing in U^ or V^ (empty slices) are skipped, so a sparse
  * population costs less, as with the pairs.  On equally spaced pivots the
  * band covers everything (use the FFT there). */
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -58,6 +59,8 @@ typedef struct {
 typedef struct {
   double **E;            /* nphi extended arrays */
   unsigned char **act;   /* nphi x 3: per axis, the slices of E[m] not all zero */
+  int **row;             /* nphi x 2 per row (e0, e1) of E[m]: first and last index holding a
+                          * non-zero (first > last: none) */
   size_t *list[3];       /* entries taking part */
   double *pre;           /* 2 (n + 1): prefix sums of one fibre */
 } slot_t;
@@ -78,6 +81,8 @@ void gs_agg_split_free(gs_agg_split *S) {
     slot_t *T = &S->slot[s];
     for (int m = 0; T->E && m < S->nphi; m++) free(T->E[m]);
     for (int m = 0; T->act && m < 3 * S->nphi; m++) free(T->act[m]);
+    for (int m = 0; T->row && m < S->nphi; m++) free(T->row[m]);
+    free(T->row);
     free(T->E);
     free(T->act);
     free(T->pre);
@@ -117,6 +122,11 @@ static entry near_entry(const gs_axis *ax, size_t stride, size_t i, size_t j) {
     e.state = OUTSIDE;
   }
   return e;
+}
+
+static int by_u(const void *a, const void *b) {
+  const entry *x = a, *y = b;
+  return x->u < y->u ? -1 : x->u > y->u ? 1 : x->v < y->v ? -1 : x->v > y->v;
 }
 
 static int build_axis(gs_agg_split *S, const gs_grid *g, int q, gs_error *err) {
@@ -160,6 +170,7 @@ static int build_axis(gs_agg_split *S, const gs_grid *g, int q, gs_error *err) {
     A->e[k++] = (entry){.u = 2 * n + i, .v = i, .lo = i * stride, .w = {-1 / h, 1 / h}, .num = 0, .vol = 1};
   }
   A->nent = k;
+  qsort(A->e, k, sizeof(entry), by_u); /* births look up a range of u */
   return GS_OK;
 }
 
@@ -186,10 +197,12 @@ int gs_agg_split_create(const gs_grid *g, int nslots, int nphi, gs_agg_split **o
     slot_t *T = &S->slot[s];
     T->E = gs_calloc((size_t)S->nphi, sizeof(double *), err);
     T->act = gs_calloc(3 * (size_t)S->nphi, sizeof(unsigned char *), err);
+    T->row = gs_calloc((size_t)S->nphi, sizeof(int *), err);
     T->pre = gs_malloc(2 * (maxn + 1) * sizeof(double), err);
-    if (!T->E || !T->act || !T->pre) rc = GS_ENOMEM;
+    if (!T->E || !T->act || !T->row || !T->pre) rc = GS_ENOMEM;
     for (int m = 0; !rc && m < S->nphi; m++) {
       if (!(T->E[m] = gs_malloc(S->n_ext * sizeof(double), err))) rc = GS_ENOMEM;
+      if (!rc && !(T->row[m] = gs_malloc(2 * S->ax[0].ne * S->ax[1].ne * sizeof(int), err))) rc = GS_ENOMEM;
       for (int q = 0; !rc && q < 3; q++)
         if (!(T->act[3 * m + q] = gs_malloc(S->ax[q].ne, err))) rc = GS_ENOMEM;
     }
@@ -208,7 +221,8 @@ int gs_agg_split_create(const gs_grid *g, int nslots, int nphi, gs_agg_split **o
  * axis: E[.., n + i, ..] = sum_{j < J_i} E[.., j, ..] and E[.., 2n + i, ..]
  * the same weighted by x_j, axis after axis (so the prefixes of prefixes
  * too), and act[q][e]: slice e of axis q holds a non-zero. */
-static void extend(const gs_agg_split *S, slot_t *T, const double *X, double *E, unsigned char **act) {
+static void extend(const gs_agg_split *S, slot_t *T, const double *X, double *E, unsigned char **act,
+                   int *rowact) {
   const axis_t *A = S->ax;
   memset(E, 0, S->n_ext * sizeof(double));
   for (size_t i0 = 0; i0 < A[0].n; i0++)
@@ -243,12 +257,16 @@ static void extend(const gs_agg_split *S, slot_t *T, const double *X, double *E,
   for (size_t e0 = 0; e0 < A[0].ne; e0++)
     for (size_t e1 = 0; e1 < A[1].ne; e1++) {
       const double *row = E + e0 * S->estride[0] + e1 * S->estride[1];
-      int any = 0;
+      int any = 0, first = 1, last = 0;
       for (size_t e2 = 0; e2 < A[2].ne; e2++)
         if (row[e2] != 0.0) {
           act[2][e2] = 1;
+          if (!any) first = (int)e2;
+          last = (int)e2;
           any = 1;
         }
+      rowact[2 * (e0 * A[1].ne + e1)] = first;
+      rowact[2 * (e0 * A[1].ne + e1) + 1] = last;
       if (any) act[0][e0] = act[1][e1] = 1;
     }
 }
@@ -257,7 +275,7 @@ void gs_agg_split_births(gs_agg_split *S, int slot, int nphi, const double *cons
                          const int *m1, const int *m2, const double *scale, double *dN, double *lost,
                          double *born) {
   slot_t *T = &S->slot[slot > 0 ? slot : 0];
-  for (int m = 0; m < nphi && m < S->nphi; m++) extend(S, T, X[m], T->E[m], T->act + 3 * m);
+  for (int m = 0; m < nphi && m < S->nphi; m++) extend(S, T, X[m], T->E[m], T->act + 3 * m, T->row[m]);
   size_t m[3];
   for (int q = 0; q < 3; q++) { /* entries whose two slices hold something in some term */
     m[q] = 0;
@@ -270,25 +288,49 @@ void gs_agg_split_births(gs_agg_split *S, int slot, int nphi, const double *cons
   }
   const size_t s0 = S->stride[0], s1 = S->stride[1], s2 = S->stride[2];
   const size_t *es = S->estride;
-  const double *ur[GS_SPLIT_MAX_TERMS], *vr[GS_SPLIT_MAX_TERMS];
   double placed = 0, lv[3] = {0, 0, 0};
   for (size_t k0 = 0; k0 < m[0]; k0++) {
     const entry *a = &S->ax[0].e[T->list[0][k0]];
     for (size_t k1 = 0; k1 < m[1]; k1++) {
       const entry *b = &S->ax[1].e[T->list[1][k1]];
+      /* the terms whose two rows hold something (a population along a
+       * curve through the grid fills few of them) */
+      const size_t ru = a->u * S->ax[1].ne + b->u, rv = a->v * S->ax[1].ne + b->v;
+      int nt = 0, ulo = INT_MAX, uhi = -1, vlo = INT_MAX, vhi = -1;
+      const double *ur[GS_SPLIT_MAX_TERMS], *vr[GS_SPLIT_MAX_TERMS];
+      double sc[GS_SPLIT_MAX_TERMS];
       for (int t = 0; t < nterm; t++) {
-        ur[t] = T->E[m1[t]] + a->u * es[0] + b->u * es[1];
-        vr[t] = T->E[m2[t]] + a->v * es[0] + b->v * es[1];
+        const int *u = T->row[m1[t]] + 2 * ru, *v = T->row[m2[t]] + 2 * rv;
+        if (u[0] > u[1] || v[0] > v[1]) continue;
+        ulo = u[0] < ulo ? u[0] : ulo;
+        uhi = u[1] > uhi ? u[1] : uhi;
+        vlo = v[0] < vlo ? v[0] : vlo;
+        vhi = v[1] > vhi ? v[1] : vhi;
+        {
+          ur[nt] = T->E[m1[t]] + a->u * es[0] + b->u * es[1];
+          vr[nt] = T->E[m2[t]] + a->v * es[0] + b->v * es[1];
+          sc[nt++] = scale[t];
+        }
       }
+      if (!nt) continue;
       const int out01 = a->state == OUTSIDE || b->state == OUTSIDE;
       const double n01 = a->num * b->num;
       const double w00 = a->w[0] * b->w[0], w01 = a->w[0] * b->w[1], w10 = a->w[1] * b->w[0],
                    w11 = a->w[1] * b->w[1];
       const size_t lo01 = a->lo + b->lo;
-      for (size_t k2 = 0; k2 < m[2]; k2++) {
+      /* the entries along axis 2 come sorted by u: those in [ulo, uhi] */
+      size_t k2 = 0, top = m[2];
+      while (top > k2) { /* the first with u >= ulo */
+        const size_t mid = k2 + (top - k2) / 2;
+        if (S->ax[2].e[T->list[2][mid]].u < (size_t)ulo) k2 = mid + 1;
+        else top = mid;
+      }
+      for (; k2 < m[2]; k2++) {
         const entry *c = &S->ax[2].e[T->list[2][k2]];
+        if (c->u > (size_t)uhi) break;
+        if (c->v < (size_t)vlo || c->v > (size_t)vhi) continue;
         double p = 0;
-        for (int t = 0; t < nterm; t++) p += scale[t] * ur[t][c->u] * vr[t][c->v];
+        for (int t = 0; t < nt; t++) p += sc[t] * ur[t][c->u] * vr[t][c->v];
         if (p == 0.0) continue;
         if (out01 || c->state == OUTSIDE) { /* the products lie beyond the grid */
           lv[0] += p * a->vol * b->num * c->num;
