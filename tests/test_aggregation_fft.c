@@ -15,6 +15,8 @@
  *    1-, 2- and 3-D, exact and low-rank kernel forms and the linear Madec
  *    kernel's separable terms (also on linear grids), all to 1e-12; and a
  *    broken split (far partners not moved to node i + 1) fails it;
+ *  - T1 (constant kernel, exponential initial) on a geometric grid by the
+ *    split: errors against the analytical solution those of the pairs;
  *  - method: auto takes the FFT on a large grid and the pairs on a small one
  *    (identical results bit for bit); method: fft refuses what it cannot do. */
 #include <omp.h>
@@ -351,6 +353,89 @@ static void test_nonuniform_rates(void) {
   CHECK(nonuniform_case(3, 12, "madec, liquid_axis: l, liquid_content: fraction", "") <= 1e-12);
 }
 
+/* T1 (constant kernel, exponential initial, N0 = v0 = beta0 = 1) to tau =
+ * 10 on the zero_first geometric grid of ratio 2^(1/4) of test_aggregation.c:
+ * method fft (the split) against the analytical solution, with the pairs'
+ * errors on the same grid as the yardstick (the two schemes are the same
+ * fixed pivot, so their errors must agree to the integrator's tolerance). */
+static double t1_density(double v, void *p) {
+  const double tau = *(const double *)p;
+  return 4 / ((tau + 2) * (tau + 2)) * exp(-2 * v / (tau + 2));
+}
+
+static void test_t1_geometric(void) {
+  const double ratio = pow(2, 0.25), tau = 10;
+  const int cells = 1 + (int)ceil(log(3e2 / 1e-3) / log(ratio));
+  double err[2][3];
+  const char *methods[2] = {"pairs", "fft"};
+  for (int s = 0; s < 2; s++) {
+    char *yaml = tl_fmt("grid: {axes: [{name: v, type: geometric, min: 1.0e-3, ratio: %.17g, cells: %d, zero_first: true}]}\n"
+                        "initial: {type: exponential, number: 1, mean: 1}\n"
+                        "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: %s,"
+                        " kernel: {type: constant, beta0: 1}}\n"
+                        "output: {times: [2, 10]}\n",
+                        ratio, cells, methods[s]);
+    gs_case c;
+    gs_run_report rep;
+    double *y = tl_build_run(yaml, &c, &rep);
+    free(yaml);
+    CHECK(y != NULL);
+    if (!y) return;
+    const double M0 = tl_mom(&c, y, 0, 0, 0, 0), M1 = tl_mom(&c, y, 0, 1, 0, 0), M2 = tl_mom(&c, y, 0, 2, 0, 0);
+    err[s][0] = tl_relerr(M0, 2 / (2 + tau));
+    err[s][1] = tl_relerr(M2, 2 + M1 * M1 * tau);
+    const gs_axis *ax = &c.model.grid.axis[0];
+    double *P = malloc(ax->n * sizeof(double)), t = tau;
+    tl_project(ax, t1_density, &t, P);
+    err[s][2] = tl_wl1(ax, y, P);
+    free(P);
+    free(y);
+    gs_case_free(&c);
+  }
+  printf("T1 exponential, geometric 2^(1/4), %d cells, tau = 10: fft (split) M0 %.3g M2 %.3g dist %.3g; "
+         "pairs M0 %.3g M2 %.3g dist %.3g\n", cells, err[1][0], err[1][1], err[1][2], err[0][0], err[0][1], err[0][2]);
+  /* test_aggregation.c's tolerances for fixed pivot on this grid */
+  CHECK(err[1][0] < 3e-8);
+  CHECK(err[1][1] < 0.03);
+  CHECK(err[1][2] < 0.035);
+  for (int k = 1; k < 3; k++) CHECK(fabs(err[1][k] - err[0][k]) <= 1e-3 * err[0][k]);
+}
+
+/* auto on geometric grids: the split in 2-D (32 x 32, ratio 1.6: its work
+ * within cells^2 / 8), the pairs in 3-D (sparse 3-D states ran faster on the
+ * pairs) and on a 2-D grid too small to pay; bit for bit one method's rates. */
+static void test_auto_geometric(void) {
+  const int dims[3] = {2, 3, 2}, ns[3] = {32, 8, 12}, want_split[3] = {1, 0, 0};
+  for (int i = 0; i < 3; i++) {
+    char axes[256] = "";
+    for (int q = 0; q < dims[i]; q++) {
+      char *ax = tl_fmt("%s{name: a%d, type: geometric, min: 1, ratio: 1.6, cells: %d}", q ? ", " : "", q, ns[i]);
+      strcat(axes, ax);
+      free(ax);
+    }
+    gs_case c[3];
+    double *d[3], *dl[3], b, e;
+    const char *methods[3] = {"auto", "pairs", "fft"};
+    int ok = 1;
+    for (int s = 0; s < 3; s++) {
+      char *yaml = tl_fmt("grid: {axes: [%s]}\ninitial: {type: cell, number: 1, index: [%s]}\n"
+                          "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: %s,"
+                          " negligible: 0, kernel: {type: constant, beta0: 1}}\noutput: {end: 1}\n",
+                          axes, dims[i] == 3 ? "1, 1, 1" : "1, 1", methods[s]);
+      ok &= !rates_of(yaml, 5, &c[s], &d[s], &dl[s], &b, &e);
+      free(yaml);
+    }
+    CHECK(ok);
+    if (!ok) continue;
+    const size_t nc = c[0].model.grid.ncells;
+    const int same_pairs = !memcmp(d[0], d[1], nc * sizeof(double));
+    const int same_fft = !memcmp(d[0], d[2], nc * sizeof(double));
+    printf("auto, %d-D geometric, %zu cells: same as pairs %d, same as fft (split) %d\n", dims[i], nc, same_pairs, same_fft);
+    CHECK(want_split[i] ? same_fft && !same_pairs : same_pairs && !same_fft);
+    for (int s = 0; s < 3; s++) tl_rates_free(&c[s], d[s], dl[s]);
+  }
+}
+
 static void test_refusals(void) {
   EXPECT_INPUT("grid: {axes: [{name: v, type: linear, min: 0, max: 1, cells: 8}]}\n"
                "initial: {type: cell, number: 1, index: [1]}\n"
@@ -375,9 +460,11 @@ int main(void) {
   omp_set_num_threads(1);
   test_rates_equal();
   test_nonuniform_rates();
+  test_t1_geometric();
   test_t1_discrete();
   test_unreached_cells();
   test_auto();
+  test_auto_geometric();
   test_compartments_threads("sum", "fft");
   test_compartments_threads("brownian", "fft, rank_tolerance: 1.0e-10");
   test_compartments_threads("madec, liquid_axis: l", "fft");
