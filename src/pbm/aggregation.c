@@ -244,10 +244,10 @@ static int read_wet(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_error *er
   return rc;
 }
 
-/* method: pairs | fft | auto.  The FFT serves fixed pivot on equally spaced
- * pivots with a kernel of separable form, without wetness or carried
- * quantities; auto takes it where it serves and the grid is large enough
- * for it to pay. */
+/* method: pairs | fft | auto.  The FFT (the near/far split on non-uniform
+ * pivots) serves fixed pivot with a kernel of separable form, without
+ * wetness or carried quantities; auto takes it where it serves and the grid
+ * is large enough for it to pay. */
 static int choose_method(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_error *err) {
   static const char *const methods[] = {"pairs", "fft", "auto", NULL};
   int method = METHOD_PAIRS;
