@@ -47,6 +47,47 @@ static int random_case(int dim, int n, const char *method, const char *kernel, g
   return 0;
 }
 
+/* Cases c[0] (pairs) and c[1] (the fast scheme) with rates d, ledgers dl
+ * and birth/death totals: rates, lost volumes and totals equal to 1e-12 of
+ * the largest, number (births - deaths = sum of rates) and every axis's
+ * volume (placed + lost = 0) conserved to 1e-12, products lost or clamped
+ * on every axis.  Frees the cases; returns the largest rate difference
+ * over the largest rate. */
+static double compare_rates(gs_case *c, double **d, double **dl, const double *birth, const double *death,
+                            const char *label) {
+  const gs_model *m = &c[1].model;
+  const gs_grid *g = &m->grid;
+  const int dim = g->dim;
+  double scale = 0, diff = 0, sum = 0, lostdiff = 0, volerr = 0;
+  for (size_t k = 0; k < g->ncells; k++) {
+    scale = fmax(scale, fabs(d[0][k]));
+    diff = fmax(diff, fabs(d[1][k] - d[0][k]));
+    sum += d[1][k];
+  }
+  for (int q = 0; q < dim; q++) {
+    double vrate = 0, vscale = 0;
+    for (size_t k = 0; k < g->ncells; k++) {
+      vrate += d[1][k] * g->x[k * (size_t)dim + (size_t)q];
+      vscale += fabs(d[1][k]) * g->x[k * (size_t)dim + (size_t)q];
+    }
+    const double l0 = tl_lost(m, dl[0], 0, q), l1 = tl_lost(m, dl[1], 0, q);
+    lostdiff = fmax(lostdiff, fabs(l1 - l0) / vscale);
+    volerr = fmax(volerr, fabs(vrate + l1) / vscale);
+    CHECK(l1 > 0); /* products are clamped or lost: the ledger path is exercised */
+  }
+  const double nerr = fabs(sum - (birth[1] - death[1])) / death[1];
+  const double berr = fmax(fabs(birth[1] - birth[0]), fabs(death[1] - death[0])) / death[0];
+  printf("%s - pairs, largest rate %.3g, lost volume %.3g, totals %.3g; conservation: number %.3g, volume %.3g\n",
+         label, diff / scale, lostdiff, berr, nerr, volerr);
+  CHECK(diff <= 1e-12 * scale);
+  CHECK(lostdiff <= 1e-12);
+  CHECK(berr <= 1e-12);
+  CHECK(nerr <= 1e-12);
+  CHECK(volerr <= 1e-12);
+  for (int s = 0; s < 2; s++) tl_rates_free(&c[s], d[s], dl[s]);
+  return diff / scale;
+}
+
 static void test_rates_equal(void) {
   for (int dim = 1; dim <= 3; dim++)
     for (int kk = 0; kk < 3; kk++) {
@@ -67,36 +108,9 @@ static void test_rates_equal(void) {
       }
       CHECK(ok);
       if (!ok) continue;
-      const gs_model *m = &c[1].model;
-      const gs_grid *g = &m->grid;
-      double scale = 0, diff = 0, sum = 0, lostdiff = 0, volerr = 0;
-      for (size_t k = 0; k < g->ncells; k++) {
-        scale = fmax(scale, fabs(d[0][k]));
-        diff = fmax(diff, fabs(d[1][k] - d[0][k]));
-        sum += d[1][k];
-      }
-      for (int q = 0; q < dim; q++) {
-        double vrate = 0, vscale = 0;
-        for (size_t k = 0; k < g->ncells; k++) {
-          vrate += d[1][k] * g->x[k * (size_t)dim + (size_t)q];
-          vscale += fabs(d[1][k]) * g->x[k * (size_t)dim + (size_t)q];
-        }
-        const double l0 = tl_lost(m, dl[0], 0, q), l1 = tl_lost(m, dl[1], 0, q);
-        lostdiff = fmax(lostdiff, fabs(l1 - l0) / vscale);
-        volerr = fmax(volerr, fabs(vrate + l1) / vscale);
-        CHECK(l1 > 0); /* products leave the grid: the ledger path is exercised */
-      }
-      const double nerr = fabs(sum - (birth[1] - death[1])) / death[1];
-      const double berr = fmax(fabs(birth[1] - birth[0]), fabs(death[1] - death[0])) / death[0];
-      printf("%d-D %s kernel, %d cells per axis: FFT - pairs, largest rate %.3g, lost volume %.3g, "
-             "totals %.3g; FFT conservation: number %.3g, volume %.3g\n",
-             dim, kernels[kk], n, diff / scale, lostdiff, berr, nerr, volerr);
-      CHECK(diff <= 1e-12 * scale);
-      CHECK(lostdiff <= 1e-12);
-      CHECK(berr <= 1e-12);
-      CHECK(nerr <= 1e-12);
-      CHECK(volerr <= 1e-12);
-      for (int s = 0; s < 2; s++) tl_rates_free(&c[s], d[s], dl[s]);
+      char *label = tl_fmt("%d-D %s kernel, %d cells per axis: FFT", dim, kernels[kk], n);
+      compare_rates(c, d, dl, birth, death, label);
+      free(label);
     }
 }
 
@@ -307,36 +321,11 @@ static double nonuniform_case(int dim, int n, const char *kernel, const char *ex
   free(axes);
   CHECK(ok);
   if (!ok) return INFINITY;
-  const gs_model *m = &c[1].model;
-  const gs_grid *g = &m->grid;
-  double scale = 0, diff = 0, sum = 0, lostdiff = 0, volerr = 0;
-  for (size_t k = 0; k < g->ncells; k++) {
-    scale = fmax(scale, fabs(d[0][k]));
-    diff = fmax(diff, fabs(d[1][k] - d[0][k]));
-    sum += d[1][k];
-  }
-  for (int q = 0; q < dim; q++) {
-    double vrate = 0, vscale = 0;
-    for (size_t k = 0; k < g->ncells; k++) {
-      vrate += d[1][k] * g->x[k * (size_t)dim + (size_t)q];
-      vscale += fabs(d[1][k]) * g->x[k * (size_t)dim + (size_t)q];
-    }
-    const double l0 = tl_lost(m, dl[0], 0, q), l1 = tl_lost(m, dl[1], 0, q);
-    lostdiff = fmax(lostdiff, fabs(l1 - l0) / vscale);
-    volerr = fmax(volerr, fabs(vrate + l1) / vscale);
-    CHECK(l1 > 0); /* products are clamped or lost: the ledger path is exercised */
-  }
-  const double nerr = fabs(sum - (birth[1] - death[1])) / death[1];
-  const double berr = fmax(fabs(birth[1] - birth[0]), fabs(death[1] - death[0])) / death[0];
-  printf("%d-D non-uniform, %s kernel%s, %zu cells: split - pairs, largest rate %.3g, lost volume %.3g, "
-         "totals %.3g; conservation: number %.3g, volume %.3g\n",
-         dim, kernel, extra, g->ncells, diff / scale, lostdiff, berr, nerr, volerr);
-  CHECK(lostdiff <= 1e-12);
-  CHECK(berr <= 1e-12);
-  CHECK(nerr <= 1e-12);
-  CHECK(volerr <= 1e-12);
-  for (int s = 0; s < 2; s++) tl_rates_free(&c[s], d[s], dl[s]);
-  return diff / scale;
+  char *label = tl_fmt("%d-D non-uniform, %s kernel%s, %zu cells: split", dim, kernel, extra,
+                       c[1].model.grid.ncells);
+  const double diff = compare_rates(c, d, dl, birth, death, label);
+  free(label);
+  return diff;
 }
 
 static void test_nonuniform_rates(void) {
