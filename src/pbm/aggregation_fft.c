@@ -19,7 +19,12 @@
  * pivot (excess volume to the ledger) inside the last cell, lost beyond
  * the last edge (its volume to the ledger), so number and volume are
  * conserved up to the FFT's round-off (about 1e-16 of the largest birth
- * rate in every cell of the index sums of the occupied cells' box). */
+ * rate in every cell of the index sums of the occupied cells' box).
+ *
+ * Pivots not equally spaced on some axis take the same separable form into
+ * the near/far split of aggregation_split.c instead of the convolution;
+ * kernels with their own separable terms (kernel.h, `terms`) need no
+ * low-rank decomposition. */
 #include <fftw3.h>
 #include <math.h>
 #include <stdint.h>

@@ -1,5 +1,6 @@
 /* Fixed-pivot aggregation on uniform grids as FFT convolutions
- * (aggregation_fft.c), used by the aggregation mechanism (aggregation.c)
+ * (aggregation_fft.c), on non-uniform grids by the near/far split
+ * (aggregation_split.c), used by the aggregation mechanism (aggregation.c)
  * when `method` chooses it. */
 #ifndef GRANSIM_PBM_AGGREGATION_FFT_H
 #define GRANSIM_PBM_AGGREGATION_FFT_H
