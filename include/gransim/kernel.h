@@ -37,6 +37,18 @@ typedef struct gs_kernel_form {
   int exact;          /* 1: beta equals the form (nothing to reject) */
 } gs_kernel_form;
 
+/* A kernel that is exactly a short sum of separable terms over the cells,
+ *   beta(a, b) = coef[comp] sum_t c[t] phi_m1[t](a) phi_m2[t](b),
+ * for fast aggregation schemes (src/pbm/aggregation_fft.c). */
+#define GS_KERNEL_MAX_TERMS 16
+typedef struct gs_kernel_terms {
+  int nphi, nterm;
+  double *phi;        /* nphi x ncells (phi_m(c) at phi[m * ncells + c]); the caller frees it */
+  const double *coef; /* per compartment; owned by the kernel */
+  double c[GS_KERNEL_MAX_TERMS];
+  int m1[GS_KERNEL_MAX_TERMS], m2[GS_KERNEL_MAX_TERMS];
+} gs_kernel_terms;
+
 typedef struct gs_kernel_type {
   const char *name;
   const char *summary;
@@ -62,6 +74,10 @@ typedef struct gs_kernel_type {
   /* Optional, with at: the majorant of product form (see above), a true
    * upper bound of at() for every pair of states the grid's axes can hold. */
   void (*form)(const void *self, gs_kernel_form *out);
+  /* Optional: beta as separable terms (above) over the ncells cells of the
+   * grid: returns the number of terms written, 0 if the kernel has none for
+   * its parameters, -1 if out of memory. */
+  int (*terms)(const void *self, size_t ncells, gs_kernel_terms *out);
 } gs_kernel_type;
 
 typedef struct gs_kernel {

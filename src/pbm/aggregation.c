@@ -55,6 +55,14 @@ enum { METHOD_PAIRS = 0, METHOD_FFT = 1, METHOD_AUTO = 2 };
  * FFT's lead over the pairs grows with the grid (15x at 256 cells, 50x at
  * 1024, 700x at 4096 for one term); this keeps it about 6x or more. */
 #define LOWRANK_CELLS_PER_TERM 64
+/* method auto on non-uniform pivots (the near/far split, aggregation_split.c):
+ * the split while its tuples times terms stay within cells^2 / this.  The
+ * pairs skip empty cells and the split less so: on a dense state the split
+ * was 1.4-5x faster in 1-D (256-512 cells, ratio 1.19) and 2-7x in 2-D
+ * (256-1024 cells, ratio 1.6), but at the 3-D Madec case's own state (3 462
+ * of 17 576 cells occupied) 2.3x slower, so auto keeps the pairs in 3-D
+ * (bench/bench_aggfft.c geometric, docs/performance.md). */
+#define SPLIT_PAIRS_PER_TUPLE 8
 
 /* Per compartment, the choices made once per time value; a page each
  * (GS_APART), as threads evaluating neighbouring compartments at once write
@@ -236,10 +244,10 @@ static int read_wet(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_error *er
   return rc;
 }
 
-/* method: pairs | fft | auto.  The FFT serves fixed pivot on equally spaced
- * pivots with a kernel of separable form, without wetness or carried
- * quantities; auto takes it where it serves and the grid is large enough
- * for it to pay. */
+/* method: pairs | fft | auto.  The FFT (the near/far split on non-uniform
+ * pivots) serves fixed pivot with a kernel of separable form, without
+ * wetness or carried quantities; auto takes it where it serves and the grid
+ * is large enough for it to pay. */
 static int choose_method(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_error *err) {
   static const char *const methods[] = {"pairs", "fft", "auto", NULL};
   int method = METHOD_PAIRS;
@@ -259,8 +267,11 @@ static int choose_method(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_erro
   }
   if (why || (method == METHOD_AUTO && m->grid.ncells < FFT_MIN_CELLS)) return GS_OK;
   rc = gs_agg_fft_create(&m->grid, &A->kernel, tol, m->nslots, &A->fft, err);
-  if (!rc && method == METHOD_AUTO && gs_agg_fft_rank(A->fft, NULL) > (int)(m->grid.ncells / LOWRANK_CELLS_PER_TERM)) {
-    gs_agg_fft_free(A->fft); /* too many terms to pay: the pairs */
+  const double split = rc ? 0 : gs_agg_fft_split_work(A->fft), cells = (double)m->grid.ncells;
+  if (!rc && method == METHOD_AUTO &&
+      (gs_agg_fft_rank(A->fft, NULL) > (int)(m->grid.ncells / LOWRANK_CELLS_PER_TERM) ||
+       (split > 0 && (m->grid.dim == 3 || split > cells * cells / SPLIT_PAIRS_PER_TUPLE)))) {
+    gs_agg_fft_free(A->fft); /* too many terms or tuples to pay: the pairs */
     A->fft = NULL;
   }
   return rc;

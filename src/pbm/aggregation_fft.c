@@ -19,7 +19,12 @@
  * pivot (excess volume to the ledger) inside the last cell, lost beyond
  * the last edge (its volume to the ledger), so number and volume are
  * conserved up to the FFT's round-off (about 1e-16 of the largest birth
- * rate in every cell of the index sums of the occupied cells' box). */
+ * rate in every cell of the index sums of the occupied cells' box).
+ *
+ * Pivots not equally spaced on some axis take the same separable form into
+ * the near/far split of aggregation_split.c instead of the convolution;
+ * kernels with their own separable terms (kernel.h, `terms`) need no
+ * low-rank decomposition. */
 #include <fftw3.h>
 #include <math.h>
 #include <stdint.h>
@@ -30,6 +35,7 @@
 #include "kernel/lowrank.h"
 #include "kernel/size_measure.h"
 #include "pbm/aggregation_fft.h"
+#include "pbm/aggregation_split.h"
 
 enum { PLACED = 0, CLAMPED = 1, OUTSIDE = 2 };
 
@@ -49,9 +55,12 @@ typedef struct {
 
 typedef struct {
   double *real;         /* nreal: padded input, then the births */
-  fftw_complex *spec[2]; /* ncplx each: transforms of phi_m N */
+  fftw_complex **spec;  /* nspec, ncplx each: transforms of phi_m N */
+  int nspec;
   fftw_complex *acc;    /* ncplx: sum of the terms' products */
   double *mom;          /* the moments sum_c phi_m(c) N_c, one per phi */
+  double *x;            /* split: nphi x ncells, phi_m N */
+  const double **xp;    /* split: nphi pointers into x */
 } slot_t;
 
 /* The separable form of the kernel in a set of compartments: terms
@@ -73,6 +82,7 @@ struct gs_agg_fft {
   form_set *set;
   axis_map map[3];         /* 2 n[q] - 1 entries each */
   fftw_plan fwd, inv;
+  gs_agg_split *split;     /* pivots not equally spaced: the near/far split instead of the FFT */
   int nslots;
   slot_t *slot;
 };
@@ -96,10 +106,24 @@ static int exact_form(const gs_kernel *k) {
   return f.exact;
 }
 
-const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k, double rank_tolerance) {
+static int grid_uniform(const gs_grid *g) {
   for (int q = 0; q < g->dim; q++)
-    if (!axis_uniform(&g->axis[q])) return "needs equally spaced pivots on every axis (type: linear)";
+    if (!axis_uniform(&g->axis[q])) return 0;
+  return 1;
+}
+
+/* The kernel's separable terms over ncells cells (kernel.h): their count,
+ * 0 if it has none, -1 if out of memory. */
+static int kernel_terms(const gs_kernel *k, size_t ncells, gs_kernel_terms *t) {
+  return k->type->terms ? k->type->terms(k->self, ncells, t) : 0;
+}
+
+const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k, double rank_tolerance) {
   if (exact_form(k)) return NULL;
+  gs_kernel_terms kt;
+  const int nt = kernel_terms(k, g->ncells, &kt);
+  if (nt > 0) free(kt.phi);
+  if (nt != 0) return NULL; /* out of memory (< 0) shows at create */
   if (!(rank_tolerance > 0))
     return "needs a kernel of separable form (constant, sum or product) or rank_tolerance for a low-rank form";
   if (g->ncells > GS_LOWRANK_MAX_CELLS)
@@ -118,15 +142,25 @@ int gs_agg_fft_rank(const gs_agg_fft *F, double *rel_err) {
   return F->lowrank ? rank : 0;
 }
 
+double gs_agg_fft_split_work(const gs_agg_fft *F) {
+  if (!F->split) return 0;
+  int terms = 0;
+  for (int s = 0; s < F->nset; s++) terms = F->set[s].nterm > terms ? F->set[s].nterm : terms;
+  return gs_agg_split_tuples(F->split) * terms;
+}
+
 void gs_agg_fft_free(gs_agg_fft *F) {
   if (!F) return;
   for (int s = 0; F->slot && s < F->nslots; s++) {
     fftw_free(F->slot[s].real);
-    fftw_free(F->slot[s].spec[0]);
-    fftw_free(F->slot[s].spec[1]);
+    for (int m = 0; F->slot[s].spec && m < F->slot[s].nspec; m++) fftw_free(F->slot[s].spec[m]);
+    free(F->slot[s].spec);
     fftw_free(F->slot[s].acc);
     free(F->slot[s].mom);
+    free(F->slot[s].x);
+    free(F->slot[s].xp);
   }
+  gs_agg_split_free(F->split);
   free(F->slot);
   if (F->fwd) fftw_destroy_plan(F->fwd);
   if (F->inv) fftw_destroy_plan(F->inv);
@@ -210,6 +244,18 @@ static int build_exact(gs_agg_fft *F, const gs_grid *g, const gs_kernel *k, gs_e
   return GS_OK;
 }
 
+/* The kernel's own separable terms (taken over) */
+static int build_terms(gs_agg_fft *F, gs_kernel_terms *kt, gs_error *err) {
+  form_set *S = &F->set[0];
+  F->coef = kt->coef;
+  S->nphi = kt->nphi;
+  S->nterm = kt->nterm;
+  S->phi = kt->phi;
+  if (!(S->t = gs_malloc((size_t)kt->nterm * sizeof(term), err))) return GS_ENOMEM;
+  for (int t = 0; t < kt->nterm; t++) S->t[t] = (term){kt->c[t], kt->m1[t], kt->m2[t]};
+  return GS_OK;
+}
+
 /* The truncated eigendecomposition of the kernel matrix (kernel/lowrank.c)
  * per set of compartments: terms lambda_r v_r(a) v_r(b), beta0 inside. */
 static int build_lowrank(gs_agg_fft *F, const gs_grid *g, const gs_kernel *k, double tol,
@@ -257,25 +303,43 @@ int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, double rank_toleranc
       F->ncplx *= q == 2 ? F->M[q] / 2 + 1 : F->M[q];
     }
   }
-  F->lowrank = !exact_form(k);
+  gs_kernel_terms kt;
+  const int nt = kernel_terms(k, g->ncells, &kt);
+  F->lowrank = !exact_form(k) && nt == 0;
   F->nset = F->lowrank && k->type->per_compartment && k->type->per_compartment(k->self) ? (int)g->ncomp : 1;
   int rc = (F->set = gs_calloc((size_t)F->nset, sizeof(form_set), err)) ? GS_OK : GS_ENOMEM;
-  if (!rc) rc = F->lowrank ? build_lowrank(F, g, k, rank_tolerance, err) : build_exact(F, g, k, err);
-  for (int q = 0; !rc && q < 3; q++) rc = build_map(F, g, q, err);
+  if (nt < 0) rc = gs_error_set(err, GS_ENOMEM, "out of memory for the kernel's separable terms");
+  else if (!rc) rc = F->lowrank ? build_lowrank(F, g, k, rank_tolerance, err)
+                     : exact_form(k) ? build_exact(F, g, k, err)
+                                     : build_terms(F, &kt, err);
+  else if (nt > 0) free(kt.phi);
+  const int split = !grid_uniform(g);
   int maxphi = 0;
   for (int s = 0; !rc && s < F->nset; s++) maxphi = F->set[s].nphi > maxphi ? F->set[s].nphi : maxphi;
+  if (!rc && split) rc = gs_agg_split_create(g, nslots, maxphi, &F->split, err);
+  for (int q = 0; !rc && !split && q < 3; q++) rc = build_map(F, g, q, err);
   F->nslots = nslots > 0 ? nslots : 1;
   if (!rc && !(F->slot = gs_calloc((size_t)F->nslots, sizeof(slot_t), err))) rc = GS_ENOMEM;
   for (int s = 0; !rc && s < F->nslots; s++) {
     slot_t *S = &F->slot[s];
-    S->real = fftw_malloc(F->nreal * sizeof(double));
-    for (int m = 0; m < 2; m++) S->spec[m] = fftw_malloc(F->ncplx * sizeof(fftw_complex));
-    S->acc = fftw_malloc(F->ncplx * sizeof(fftw_complex));
     S->mom = malloc((size_t)(maxphi > 0 ? maxphi : 1) * sizeof(double));
-    if (!S->mom || !S->real || !S->spec[0] || !S->spec[1] || !S->acc)
+    if (split) {
+      S->x = malloc((size_t)maxphi * F->ncells * sizeof(double));
+      S->xp = malloc((size_t)maxphi * sizeof(double *));
+      if (!S->mom || !S->x || !S->xp) rc = gs_error_set(err, GS_ENOMEM, "out of memory for aggregation's scratch");
+      continue;
+    }
+    S->real = fftw_malloc(F->nreal * sizeof(double));
+    /* the lowrank terms take one transform at a time, the others one per phi */
+    S->nspec = F->lowrank || maxphi < 2 ? 2 : maxphi;
+    S->spec = calloc((size_t)S->nspec, sizeof(fftw_complex *));
+    for (int m = 0; S->spec && m < S->nspec; m++)
+      if (!(S->spec[m] = fftw_malloc(F->ncplx * sizeof(fftw_complex)))) rc = GS_ENOMEM;
+    S->acc = fftw_malloc(F->ncplx * sizeof(fftw_complex));
+    if (rc || !S->mom || !S->real || !S->spec || !S->acc)
       rc = gs_error_set(err, GS_ENOMEM, "out of memory for the FFT arrays of aggregation");
   }
-  if (!rc) {
+  if (!rc && !split) {
     /* FFTW_ESTIMATE leaves the arrays alone; every slot's arrays come from
      * fftw_malloc (same alignment), so the plans serve them all through the
      * new-array execute functions, which are thread safe */
@@ -350,6 +414,69 @@ static double transform(const gs_agg_fft *F, slot_t *S, const double *phi, const
   return mom;
 }
 
+/* Deaths of compartment comp's numbers N from the moments of the form set
+ * fs (mom, filled by the caller); the box of the occupied cells per padded
+ * axis into klo, khi (klo[0] = SIZE_MAX: no particles). */
+static double deaths(const gs_agg_fft *F, const form_set *fs, double coef, const double *mom,
+                     const double *N, double *dN, size_t *klo, size_t *khi) {
+  double removed = 0;
+  for (int q = 0; q < 3; q++) {
+    klo[q] = SIZE_MAX;
+    khi[q] = 0;
+  }
+  for (size_t c = 0; c < F->ncells; c++) {
+    if (N[c] == 0.0) continue;
+    const size_t idx[3] = {c / (F->n[1] * F->n[2]), c / F->n[2] % F->n[1], c % F->n[2]};
+    for (int q = 0; q < 3; q++) {
+      if (2 * idx[q] < klo[q]) klo[q] = 2 * idx[q];
+      if (2 * idx[q] > khi[q]) khi[q] = 2 * idx[q];
+    }
+    double r = 0;
+    for (int t = 0; t < fs->nterm; t++) r += fs->t[t].c * fs->phi[(size_t)fs->t[t].m1 * F->ncells + c] * mom[fs->t[t].m2];
+    r *= coef * N[c];
+    removed += r;
+    if (dN) dN[c] -= r;
+  }
+  return removed;
+}
+
+/* Non-uniform pivots: the births by the near/far split
+ * (aggregation_split.c), terms (m1, m2) and (m2, m1) merged (the placement
+ * of a pair does not depend on its order), the deaths from the moments. */
+static void split_rates(gs_agg_fft *F, const form_set *fs, double coef, const double *N, int slot,
+                        double *dN, double *lost, double *born, double *dead) {
+  slot_t *S = &F->slot[slot > 0 ? slot : 0];
+  for (int m = 0; m < fs->nphi; m++) {
+    const double *phi = fs->phi + (size_t)m * F->ncells;
+    double *x = S->x + (size_t)m * F->ncells, mom = 0;
+    for (size_t c = 0; c < F->ncells; c++) {
+      x[c] = phi[c] * N[c];
+      mom += x[c];
+    }
+    S->mom[m] = mom;
+    S->xp[m] = x;
+  }
+  size_t klo[3], khi[3];
+  *dead += deaths(F, fs, coef, S->mom, N, dN, klo, khi);
+  int m1[GS_SPLIT_MAX_TERMS], m2[GS_SPLIT_MAX_TERMS], n = 0;
+  double sc[GS_SPLIT_MAX_TERMS];
+  for (int t = 0; t < fs->nterm; t++) {
+    const term *T = &fs->t[t];
+    int k = 0;
+    while (k < n && !((m1[k] == T->m1 && m2[k] == T->m2) || (m1[k] == T->m2 && m2[k] == T->m1))) k++;
+    if (k == n) {
+      m1[n] = T->m1;
+      m2[n] = T->m2;
+      sc[n++] = 0;
+    }
+    sc[k] += 0.5 * coef * T->c;
+    if (n == GS_SPLIT_MAX_TERMS || t == fs->nterm - 1) { /* a batch */
+      gs_agg_split_births(F->split, slot, fs->nphi, S->xp, n, m1, m2, sc, dN, lost, born);
+      n = 0;
+    }
+  }
+}
+
 void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, double *dN,
                       double *lost, double *born, double *dead) {
   slot_t *S = &F->slot[slot > 0 ? slot : 0];
@@ -358,6 +485,10 @@ void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, dou
   /* coef/2 sum_t c_t conv(phi_m1 N, phi_m2 N); FFTW's inverse is unscaled */
   const double scale = 0.5 * coef / (double)F->nreal;
   double *mom = S->mom;
+  if (F->split) {
+    split_rates(F, fs, coef, N, slot, dN, lost, born, dead);
+    return;
+  }
   if (!F->lowrank) {
     for (int m = 0; m < fs->nphi; m++) mom[m] = transform(F, S, fs->phi + (size_t)m * F->ncells, N, S->spec[m]);
     for (size_t i = 0; i < F->ncplx; i++) {
@@ -383,21 +514,7 @@ void gs_agg_fft_rates(gs_agg_fft *F, size_t comp, const double *N, int slot, dou
     }
   }
   fftw_execute_dft_c2r(F->inv, S->acc, S->real);
-  double removed = 0;
-  size_t klo[3] = {SIZE_MAX, SIZE_MAX, SIZE_MAX}, khi[3] = {0, 0, 0};
-  for (size_t c = 0; c < F->ncells; c++) {
-    if (N[c] == 0.0) continue;
-    const size_t idx[3] = {c / (F->n[1] * F->n[2]), c / F->n[2] % F->n[1], c % F->n[2]};
-    for (int q = 0; q < 3; q++) {
-      if (2 * idx[q] < klo[q]) klo[q] = 2 * idx[q];
-      if (2 * idx[q] > khi[q]) khi[q] = 2 * idx[q];
-    }
-    double r = 0;
-    for (int t = 0; t < fs->nterm; t++) r += fs->t[t].c * fs->phi[(size_t)fs->t[t].m1 * F->ncells + c] * mom[fs->t[t].m2];
-    r *= coef * N[c];
-    removed += r;
-    if (dN) dN[c] -= r;
-  }
-  *dead += removed;
+  size_t klo[3], khi[3];
+  *dead += deaths(F, fs, coef, mom, N, dN, klo, khi);
   if (klo[0] != SIZE_MAX) place(F, S->real, klo, khi, dN, lost, born); /* else no particles */
 }

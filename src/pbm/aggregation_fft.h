@@ -1,5 +1,6 @@
 /* Fixed-pivot aggregation on uniform grids as FFT convolutions
- * (aggregation_fft.c), used by the aggregation mechanism (aggregation.c)
+ * (aggregation_fft.c), on non-uniform grids by the near/far split
+ * (aggregation_split.c), used by the aggregation mechanism (aggregation.c)
  * when `method` chooses it. */
 #ifndef GRANSIM_PBM_AGGREGATION_FFT_H
 #define GRANSIM_PBM_AGGREGATION_FFT_H
@@ -25,6 +26,10 @@ int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, double rank_toleranc
  * relative Frobenius error of its truncation. */
 int gs_agg_fft_rank(const gs_agg_fft *F, double *rel_err);
 void gs_agg_fft_free(gs_agg_fft *F);
+
+/* Pivots not equally spaced: the near/far split's work per evaluation on a
+ * full grid (entry tuples times terms, aggregation_split.h); 0 on the FFT. */
+double gs_agg_fft_split_work(const gs_agg_fft *F);
 
 /* Rates of compartment comp with numbers N, in slot `slot`'s scratch:
  * deaths and fixed-pivot births added to dN (NULL: totals only), the volume
