@@ -308,8 +308,10 @@ static int write_cycles(const char *out, const cycle_row *rows, size_t m, gs_err
 }
 
 /* A cycle's collision_kernel.csv: its nc x nc values, and the nc + 1 edges,
- * read as the PBM's tabulated kernel reads it (comments, blank lines, numbers
- * that are not finite and a table of other classes refused with the line). */
+ * read as the PBM's tabulated kernel reads it (comments and blank lines
+ * skipped; a value that is not a finite number >= 0, a missing row or an
+ * asymmetric table refused naming the line), and refused when its classes
+ * are not the nc the case gives now. */
 static int read_kernel(const char *dir, size_t nc, double *edges, double *C, gs_error *err) {
   char p[4600];
   snprintf(p, sizeof p, "%s/collision_kernel.csv", dir);
@@ -319,10 +321,6 @@ static int read_kernel(const char *dir, size_t nc, double *edges, double *C, gs_
   if (tab.n != nc)
     rc = gs_error_set(err, GS_EINPUT, "%s: a table of %zu classes, but the grid and coupling.classes give %zu: the "
                       "case changed since this cycle's DEM stage; rerun without --resume", p, tab.n, nc);
-  for (size_t i = 0; !rc && i < nc * nc; i++)
-    if (!isfinite(tab.c[i]) || tab.c[i] < 0)
-      rc = gs_error_set(err, GS_ENUMERIC, "%s: C_%zu%zu = %g, not a finite frequency >= 0", p, i / nc + 1,
-                        i % nc + 1, tab.c[i]);
   if (!rc) {
     memcpy(edges, tab.edges, (nc + 1) * sizeof *edges);
     memcpy(C, tab.c, nc * nc * sizeof *C);
