@@ -51,18 +51,24 @@ echo "cli_bowl: ok"
 
 # The two-way example (examples/bowl-two-way.yaml) in the same kind of quick variant (150 DEM
 # particles, since a two-way DEM fills its classes by the population's numbers, nearly all
-# primaries at first; cycles every 30 s): three cycles; the conservation identities as above; the
+# primaries at first; cycles every 30 s; the impeller at rest for the first 10 ms): three cycles, each
+# DEM found steady only after the impeller started; the conservation identities as above; the
 # DEM's restitution the volume-weighted 0.2 x 0.2 + 0.275 x 0.8 = 0.26 of the API:excipient mix
 # (constant: aggregation and liquid move no solid).
 sed -e 's/      count: 280/      count: 150/' \
     -e 's/steady: {window: 4, tolerance: 0.35, sample_every: 3.0e-3, max_time: 0.06}/steady: {window: 3, tolerance: 0.5, sample_every: 1.0e-3, max_time: 0.03}/' \
     -e 's/    end: 250/    end: 50/' -e 's/output: {end: 500, count: 51}/output: {end: 80, count: 9}/' \
     -e 's/trigger: {mean_volume_change: 0.5}/trigger: {mean_volume_change: 0.5, interval: 30}/' \
+    -e 's/rpm: 240, start: 0.02}/rpm: 240, start: 0.01}/' \
     "$SRC/examples/bowl-two-way.yaml" >"$WORK/bowl2.yaml"
-[ "$(grep -c 'count: 150\|max_time: 0.03\|    end: 50\|interval: 30' "$WORK/bowl2.yaml")" = 4 ] ||
+[ "$(grep -c 'count: 150\|max_time: 0.03\|    end: 50\|interval: 30\|start: 0.01}' "$WORK/bowl2.yaml")" = 5 ] ||
   fail "the two-way quick variant's edits did not apply: examples/bowl-two-way.yaml changed"
 run_rc 0 "$BIN" couple "$WORK/bowl2.yaml" --out "$WORK/out2" --quiet
 [ "$(awk -F, 'NR > 1' "$WORK/out2/cycles.csv" | wc -l)" = 3 ] || fail "the two-way quick variant: not 3 cycles"
+# each cycle's bed settled with the impeller at rest until 0.01 s: the detector fired after it
+awk -F, 'NR > 1 && !($12 > 0.01) { bad = 1 } END { exit bad }' "$WORK/out2/cycles.csv" ||
+  fail "a two-way DEM stage was found steady before the impeller started: $(cat "$WORK/out2/cycles.csv")"
+grep -q 'rpm: "240", start: "0.01"' "$WORK/out2/cycle-1/case.yaml" || fail "the cycle's DEM case lacks the impeller's start"
 awk -F, 'NR > 1 && ($13 < 0.26 * (1 - 1e-9) || $13 > 0.26 * (1 + 1e-9)) { bad = 1 } END { exit bad }' \
   "$WORK/out2/cycles.csv" || fail "the two-way DEM's restitution is not 0.26: $(cat "$WORK/out2/cycles.csv")"
 awk -F, '

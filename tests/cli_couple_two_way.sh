@@ -162,11 +162,23 @@ done
 cp -r "$WORK/k2" "$WORK/k3"
 sed -i '2s/^[^,]*,/nan,/' "$WORK/k3/cycle-2/collision_kernel.csv"
 run_rc 1 "$BIN" couple "$WORK/tw.yaml" --out "$WORK/k3" --resume
-stderr_has "cycle 2 (process time 4 s): $WORK/k3/cycle-2/collision_kernel.csv: C_11 = nan, not a finite frequency >= 0"
+stderr_has "cycle 2 (process time 4 s): $WORK/k3/cycle-2/collision_kernel.csv:2: 'nan' is not a number"
 [ -d "$WORK/k3/cycle-1" ] && [ -d "$WORK/k3/cycle-2" ] && [ -e "$WORK/k3/.result.journal" ] || fail "cycles not kept"
 head -n 1 "$WORK/k2/cycle-2/collision_kernel.csv" > "$WORK/k3/cycle-2/collision_kernel.csv"
 run_rc 1 "$BIN" couple "$WORK/tw.yaml" --out "$WORK/k3" --resume
-stderr_has "collision_kernel.csv: not a table of 3 classes"
+stderr_has "cycle 2 (process time 4 s): $WORK/k3/cycle-2/collision_kernel.csv: 0 rows, expected 3"
+# Comment lines and blank lines in a cycle's table are read as the PBM's table kernel reads them.
+rm -rf "$WORK/k3" && cp -r "$WORK/k2" "$WORK/k3"
+for c in 1 2; do sed -i '1a # a note\n' "$WORK/k3/cycle-$c/collision_kernel.csv"; done
+[ "$(grep -c '^# a note' "$WORK/k3/cycle-2/collision_kernel.csv")" = 1 ] || fail "no comment line added"
+run_rc 0 "$BIN" couple "$WORK/tw.yaml" --out "$WORK/k3" --threads 2 --resume
+same "$WORK/k3" "killed in cycle 2's PBM stretch, comment lines in the tables"
+# A case whose classes changed since the cycles ran: the tables of other classes are refused on --resume.
+rm -rf "$WORK/k3" && cp -r "$WORK/k2" "$WORK/k3"
+sed -e 's/count: 3, material: granule/count: 2, material: granule/' "$WORK/tw.yaml" > "$WORK/four.yaml"
+run_rc 1 "$BIN" couple "$WORK/four.yaml" --out "$WORK/k3" --resume
+stderr_has "cycle 2 (process time 4 s): $WORK/k3/cycle-2/collision_kernel.csv: a table of 3 classes, but the grid and coupling.classes give 2"
+[ -d "$WORK/k3/cycle-1" ] && [ -d "$WORK/k3/cycle-2" ] || fail "cycles not kept"
 run_rc 0 "$BIN" couple "$WORK/tw.yaml" --out "$WORK/k2" --threads 2 --resume
 stderr_has "resume: from cycle 2 (t = 4 s), its DEM stage complete, the PBM stretch resumed"
 same "$WORK/k2" "killed in cycle 2's PBM stretch"
@@ -274,6 +286,27 @@ bad notsteady 's/max_time: 0.07/max_time: 0.02/' \
   "cycle 1 (process time 0 s): the DEM did not reach a steady state by t = 0.02 s (coupling.steady.max_time): over the last 3 samples"
 stderr_has "collision rate"
 [ -d "$WORK/bad-notsteady/cycle-1.partial" ] || fail "the failed DEM stage's files are not kept"
+# a trigger that cannot fire within the process time: refused before any DEM stage
+bad longint 's/trigger: {interval: 4}/trigger: {interval: 10}/' \
+  "coupling.trigger.interval = '10': the trigger can never fire: the interval 10 s is not shorter than the process time (10 s"
+[ ! -e "$WORK/bad-longint/cycle-1.partial" ] && [ ! -e "$WORK/bad-longint/cycle-1" ] || fail "a DEM stage ran"
+run_rc 1 "$BIN" check "$WORK/longint.yaml"
+stderr_has "the trigger can never fire"
+# a trigger that never fired: the one cycle's results complete, then an error naming the trigger
+sed -e 's/trigger: {interval: 4}/trigger: {mean_volume_change: 50, interval: 20}/' -e 's/count: 1001, checkpoint: 0/count: 11/' \
+  "$WORK/tw.yaml" > "$WORK/never.yaml"
+run_rc 1 "$BIN" couple "$WORK/never.yaml" --out "$WORK/never" --threads 2
+# the value named is the summary's relative change of the mean volume from the first to the last output time
+change=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "mean_solid [m^3]") c = i; next }
+  NR == 2 { m0 = $c } { m = $c } END { d = m / m0 - 1; printf "%.4g", d < 0 ? -d : d }' "$WORK/never/summary.csv")
+stderr_has "coupling.trigger never fired: from t = 0 s to the end, t = 10 s, the mean granule volume changed by $change "
+stderr_has "(relative; trigger.mean_volume_change 50 and interval 20 s), so one DEM stage drove the whole process"
+[ "$(awk -F, 'NR > 1' "$WORK/never/summary.csv" | wc -l)" = 11 ] || fail "the never-fired run's summary.csv is not complete"
+[ -s "$WORK/never/result.h5" ] && [ ! -e "$WORK/never/.result.journal" ] || fail "the never-fired run's result.h5 is not complete"
+awk -F, 'NR > 1 { printf "%s %s %s %s %s;", $1, $2, $3, $4, $6 }' "$WORK/never/cycles.csv" > "$WORK/rows"
+[ "$(cat "$WORK/rows")" = "1 0 10 start end;" ] || fail "never-fired cycles.csv rows: $(cat "$WORK/rows")"
+run_rc 1 "$BIN" couple "$WORK/never.yaml" --out "$WORK/never" --resume
+stderr_has "coupling.trigger never fired: from t = 0 s to the end, t = 10 s, the mean granule volume did not change enough"
 bad norest 's/trigger: {interval: 4}/trigger: {interval: 4}\n  restitution: {apii: 0.3}/' \
   "'apii' is not an axis of the grid (expected one of: solid)"
 bad onewayrest 's/mode: two_way/mode: one_way/; s/trigger: {interval: 4}/restitution: {solid: 0.3}/' \

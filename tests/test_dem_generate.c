@@ -9,7 +9,9 @@
  * triangles; a DEM run with the impeller turning in the bowl loses no
  * particle while the blades push the bed; and the LIGGGHTS deck of the same
  * case names the written files (refused before they exist), with the
- * impeller's rotation. */
+ * impeller's rotation.  With `start` the impeller stands still until then
+ * (a bed settles with it at rest) and turns by omega (t - start) after it,
+ * and the steady-state detector sees only samples after the start. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -126,7 +128,98 @@ static void impeller(void) {
   CHECK_REL(rmax, hypot(rh + L, ey), 1e-12);
   CHECK(gm.rotating && gm.axis[2] == 1);
   CHECK_REL(gm.omega, 300 * 2 * M_PI / 60, 1e-15);
+  CHECK(gm.start == 0);
   gs_dem_tris_free(&tr);
+  CHECK(!gen("{type: impeller, blade_length: 0.035, blade_height: 0.012, hub_diameter: 0.02, clearance: 0.003, "
+             "rpm: 300, start: 0.25}", &tr, &gm, &err));
+  CHECK(gm.rotating && gm.start == 0.25);
+  gs_dem_tris_free(&tr);
+}
+
+/* The first time the case's detector fired (-1: never). */
+static int first_steady(const gs_dem_sample *smp, void *user, int *open_window, int *stop, gs_error *err) {
+  (void)open_window;
+  (void)stop;
+  (void)err;
+  double *t = user;
+  if (smp->steady && *t < 0) *t = smp->t;
+  return GS_OK;
+}
+
+/* RUN's bed with the impeller at 200 rpm from start = 0.1 s, run to
+ * duration: the impeller's first vertex at the end against where the STL
+ * (t = 0) has it, turned by omega (duration - start); the detector (window of
+ * 3 samples of 0.005 s, a tolerance any positive rate meets) fires at the
+ * third sample after the start, not while the particles fall at rest. */
+static void start_at_rest(double duration) {
+  gs_error err = {0};
+  char dir[] = "/tmp/gransim_generate_XXXXXX", yaml[2048], path[4200];
+  CHECK(mkdtemp(dir) != NULL);
+  snprintf(yaml, sizeof yaml,
+           "dem: {time_step: 1.0e-5, duration: %g, gravity: [0, 0, -9.81], seed: 3,\n"
+           "      box: {lo: [-0.07, -0.07, -0.02], hi: [0.07, 0.07, 0.12]}}\n"
+           "materials:\n"
+           "  - {name: granule, E: 5.0e6, nu: 0.3, e: 0.5, mu_s: 0.5, mu_r: 0.1, density: 1668}\n"
+           "classes:\n"
+           "  - {name: small, radius: 2.5e-3, material: granule}\n"
+           "walls:\n"
+           "  - {name: bowl, material: granule, generate: {type: bowl, diameter: 0.1, height: 0.08}}\n"
+           "  - name: impeller\n"
+           "    material: granule\n"
+           "    generate: {type: impeller, blades: 3, blade_length: 0.03, blade_height: 0.012, "
+           "hub_diameter: 0.02, clearance: 0.006, rpm: 200, start: 0.1}\n"
+           "fill:\n"
+           "  - region: {cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.045, inner_radius: 0.012, "
+           "from: 0.02, to: 0.05}}\n"
+           "    count: 100\n"
+           "statistics: {sample_every: 0.005, start: steady, steady: {window: 3, tolerance: 100}}\n"
+           "output: {every: 0.05}\n",
+           duration);
+  gs_cfg *cfg = gs_cfg_load_string(yaml, "start.yaml", &err);
+  gs_dem_case *c = cfg ? gs_dem_case_from_cfg(cfg, &err) : NULL;
+  if (!c) {
+    fprintf(stderr, "%s\n", err.msg);
+    CHECK(0);
+    return;
+  }
+  double t_steady = -1;
+  gs_dem_observer ob = {.sample = first_steady, .user = &t_steady};
+  gs_dem_case_set_observer(c, &ob);
+  int rc = gs_dem_case_run(c, dir, 0, &err);
+  if (rc) fprintf(stderr, "%s\n", err.msg);
+  CHECK(rc == 0);
+  gs_dem *d = gs_dem_case_sim(c);
+  snprintf(path, sizeof path, "%s/geometry/impeller.stl", dir);
+  gs_dem_mesh *m = gs_dem_mesh_read_stl(path, 1, &err);
+  CHECK(m != NULL);
+  const double omega = 200 * 2 * M_PI / 60, th = omega * fmax(0, duration - 0.1);
+  if (m) {
+    double *now = malloc(9 * m->ntri * sizeof *now);
+    CHECK(now != NULL);
+    if (now) {
+      gs_dem_wall_triangles(d, 1, now);
+      /* the STL's outermost vertex (a blade's tip) turned by th about z */
+      size_t k = 0;
+      for (size_t j = 1; j < 3 * m->ntri; j++)
+        if (hypot(m->v[3 * j], m->v[3 * j + 1]) > hypot(m->v[3 * k], m->v[3 * k + 1])) k = j;
+      const double x = m->v[3 * k], y = m->v[3 * k + 1];
+      CHECK(hypot(x, y) > 0.04);
+      CHECK_ABS(now[3 * k], x * cos(th) - y * sin(th), 1e-12);
+      CHECK_ABS(now[3 * k + 1], x * sin(th) + y * cos(th), 1e-12);
+      CHECK_ABS(now[3 * k + 2], m->v[3 * k + 2], 1e-12);
+    }
+    free(now);
+    gs_dem_mesh_free(m);
+  }
+  if (duration > 0.1) {
+    CHECK_ABS(t_steady, 0.115, 1e-9);
+  } else {
+    CHECK(t_steady < 0);
+  }
+  gs_dem_case_free(c);
+  char cmd[4300];
+  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+  CHECK(system(cmd) == 0);
 }
 
 static int refused(const char *yaml, const char *want) {
@@ -155,6 +248,10 @@ static void bad_keys(void) {
                 "hub_height: 0.001}", "hub_height"));
   CHECK(refused("{type: impeller, blade_length: 0.03, blade_height: 0.01, hub_diameter: 0.03, clearance: 0, "
                 "pitch: 90}", "pitch"));
+  CHECK(refused("{type: impeller, blade_length: 0.03, blade_height: 0.01, hub_diameter: 0.03, clearance: 0, "
+                "start: 0.1}", "a start time needs an impeller that turns (rpm)"));
+  CHECK(refused("{type: impeller, blade_length: 0.03, blade_height: 0.01, hub_diameter: 0.03, clearance: 0, "
+                "rpm: 10, start: -1}", "start"));
 }
 
 /* A lid-less bowl with the impeller at 200 rpm under a bed of 300 particles. */
@@ -272,5 +369,7 @@ int main(void) {
   impeller();
   bad_keys();
   run();
+  start_at_rest(0.08);
+  start_at_rest(0.15);
   TEST_EXIT();
 }

@@ -319,6 +319,8 @@ int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
   double lo = k.cl.edges[0], hi = k.cl.edges[k.cl.n];
   if (!rc) rc = pbm_case(&k, kt, it, &c, err);
   if (!rc)
+    rc = gs_couple_check_trigger(gs_cfg_get(gs_cfg_root(c.cfg), "coupling"), &k.s, c.t0, c.times[c.ntimes - 1], err);
+  if (!rc)
     snprintf(desc, n, "%s: %zu DEM classes from the grid, diameters [%.4g, %.4g] m (%zu PBM cells outside: "
              "nearest class); PBM %zu cells x %zu compartments, %zu mechanisms; DEM: %s",
              two ? "two_way" : "one_way", nclass, lo, hi, outside, c.model.grid.ncells, c.model.grid.ncomp, c.model.nmech, dd);

@@ -96,5 +96,7 @@ int gs_couple_write_placeholders(const couple *k, const char *kernel, const char
 /* twoway.c: coupling.trigger, and the bi-directional loop into opt->out_dir. */
 struct gs_couple_options;
 int gs_couple_read_trigger(gs_cfg_node *coupling, gs_couple_settings *s, gs_error *err);
+/* Refuses a trigger that cannot fire within the process time [t0, t1] (cp: the coupling section). */
+int gs_couple_check_trigger(gs_cfg_node *cp, const gs_couple_settings *s, double t0, double t1, gs_error *err);
 int gs_couple_two_way(couple *k, const char *path, const struct gs_couple_options *opt, gs_error *err);
 #endif

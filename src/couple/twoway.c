@@ -27,6 +27,7 @@
 #include "gransim/couple.h"
 #include "gransim/output.h"
 #include "gransim/run.h"
+#include "kernel/class_table.h"
 
 enum { TRIG_START, TRIG_VOLUME, TRIG_INTERVAL, TRIG_END };
 static const char *const trig_names[] = {"start", "mean_volume_change", "interval", "end"};
@@ -48,6 +49,32 @@ int gs_couple_read_trigger(gs_cfg_node *cp, gs_couple_settings *s, gs_error *err
   if (!rc && gs_cfg_get(tr, "interval"))
     rc = gs_cfg_double_range(tr, "interval", 1, 0, 0, 1, HUGE_VAL, 0, &s->trig_interval, err);
   return rc ? rc : gs_cfg_check_unused(tr, err);
+}
+
+/* A trigger of interval alone that cannot fire within the process time
+ * would make the run one DEM stage: refused before any DEM runs. */
+int gs_couple_check_trigger(gs_cfg_node *cp, const gs_couple_settings *s, double t0, double t1, gs_error *err) {
+  if (!s->two_way || s->trig_dv > 0 || !(s->trig_interval >= (t1 - t0) * (1 - 1e-9))) return GS_OK;
+  return gs_cfg_fail(gs_cfg_get(gs_cfg_get(cp, "trigger"), "interval"), err,
+                     "the trigger can never fire: the interval %g s is not shorter than the process time "
+                     "(%g s from output.start %g s), so one DEM stage would drive the whole run; shorten it, add "
+                     "mean_volume_change, or use mode: one_way", s->trig_interval, t1 - t0, t0);
+}
+
+/* A run whose trigger never fired was one-way coupled: an error after its
+ * results are complete (change: the mean granule volume's relative change
+ * over the whole run, NAN when not known, as on --resume). */
+static int never_fired(const couple *k, const char *out, double t0, double t1, double change, gs_error *err) {
+  char interval[128] = "", value[160] = "";
+  if (k->s.trig_interval > 0)
+    snprintf(interval, sizeof interval, " and interval %g s", k->s.trig_interval);
+  if (!isnan(change)) snprintf(value, sizeof value, " changed by %.4g", change);
+  return gs_error_set(err, GS_ENUMERIC,
+                      "%s: coupling.trigger never fired: from t = %g s to the end, t = %g s, the mean granule volume%s "
+                      "(relative; trigger.mean_volume_change %g%s), so one DEM stage drove the whole process, which "
+                      "is one-way coupling; lower mean_volume_change, add trigger.interval, or use mode: one_way "
+                      "(the results of that one cycle are complete in %s)",
+                      k->path, t0, t1, isnan(change) ? " did not change enough" : value, k->s.trig_dv, interval, out);
 }
 
 /* ---- the population ------------------------------------------------------- */
@@ -119,32 +146,27 @@ static int scale_kernel(const char *dir, size_t nc, double l, gs_error *err) {
   snprintf(p, sizeof p, "%s/collision_kernel.csv", dir);
   snprintf(raw, sizeof raw, "%s/collision_kernel_dem.csv", dir);
   if (rename(p, raw)) return gs_error_set(err, GS_EIO, "%s: cannot rename to %s: %s", p, raw, strerror(errno));
-  FILE *in = fopen(raw, "r"), *out = in ? fopen(p, "w") : NULL;
-  const double f = 1 / (l * l * l);
-  size_t rows = 0;
-  int ok = in && out;
-  while (ok && fgets(line, sizeof line, in)) {
-    if (!strncmp(line, "edges", 5) || line[0] == '#' || rows >= nc) {
-      fputs(line, out);
-      continue;
-    }
-    char *q = line, *end;
-    for (size_t j = 0; j < nc && ok; j++, q = end + (*end == ',')) {
-      const double v = strtod(q, &end);
-      ok = end != q;
-      fprintf(out, "%s%.9g", j ? ", " : "", v * f);
-    }
+  gs_class_table tab = {0};
+  int rc = gs_class_table_read(raw, 0, &tab, err);
+  if (!rc && tab.n != nc)
+    rc = gs_error_set(err, GS_EINPUT, "%s: a table of %zu classes, expected %zu", raw, tab.n, nc);
+  FILE *out = rc ? NULL : fopen(p, "w");
+  if (!rc && !out) rc = gs_error_set(err, GS_EIO, "%s: cannot write: %s", p, strerror(errno));
+  if (out) {
+    const double f = 1 / (l * l * l);
+    fputs("edges", out);
+    for (size_t j = 0; j <= nc; j++) fprintf(out, ", %.17g", tab.edges[j]);
+    for (size_t i = 0; i < nc * nc; i++) fprintf(out, "%s%.9g", i % nc ? ", " : "\n", tab.c[i] * f);
     fputc('\n', out);
-    rows++;
+    if (fclose(out)) rc = gs_error_set(err, GS_EIO, "%s: cannot write: %s", p, strerror(errno));
   }
-  if (in) fclose(in);
-  if (out && fclose(out)) ok = 0;
-  if (!ok || rows != nc)
-    return gs_error_set(err, GS_EIO, "%s: cannot scale the DEM's table of %zu classes into %s", raw, nc, p);
+  gs_class_table_free(&tab);
+  if (rc) return gs_error_prefix(err, "system scaling: ");
+  int ok = 1;
   /* the DEM's table keeps its units sidecar too */
   snprintf(p, sizeof p, "%s/collision_kernel.json", dir);
   snprintf(raw, sizeof raw, "%s/collision_kernel_dem.json", dir);
-  in = fopen(p, "r");
+  FILE *in = fopen(p, "r");
   out = in ? fopen(raw, "w") : NULL;
   size_t got;
   while (out && (got = fread(line, 1, sizeof line, in)) > 0) ok = fwrite(line, 1, got, out) == got && ok;
@@ -283,30 +305,26 @@ static int write_cycles(const char *out, const cycle_row *rows, size_t m, gs_err
   return gs_csv_close(&t, "gransim couple", units, err);
 }
 
-/* A cycle's collision_kernel.csv: its nc x nc values, and the nc + 1 edges. */
+/* A cycle's collision_kernel.csv: its nc x nc values, and the nc + 1 edges,
+ * read as the PBM's tabulated kernel reads it (comments and blank lines
+ * skipped; a value that is not a finite number >= 0, a missing row or an
+ * asymmetric table refused naming the line), and refused when its classes
+ * are not the nc the case gives now. */
 static int read_kernel(const char *dir, size_t nc, double *edges, double *C, gs_error *err) {
-  char p[4600], line[16384];
+  char p[4600];
   snprintf(p, sizeof p, "%s/collision_kernel.csv", dir);
-  FILE *fp = fopen(p, "r");
-  size_t r = 0, got = 0;
-  while (fp && fgets(line, sizeof line, fp) && r <= nc) {
-    char *q = line + (strncmp(line, "edges", 5) ? 0 : 6);
-    double *to = r == 0 ? edges : C + (r - 1) * nc;
-    size_t want = r == 0 ? nc + 1 : nc, j = 0;
-    for (char *end; j < want; j++, q = end + (*end == ',')) {
-      to[j] = strtod(q, &end);
-      if (end == q) break;
-    }
-    got += j == want;
-    r++;
+  gs_class_table tab = {0};
+  int rc = gs_class_table_read(p, 0, &tab, err);
+  if (rc) return rc;
+  if (tab.n != nc)
+    rc = gs_error_set(err, GS_EINPUT, "%s: a table of %zu classes, but the grid and coupling.classes give %zu: the "
+                      "case changed since this cycle's DEM stage; rerun without --resume", p, tab.n, nc);
+  if (!rc) {
+    memcpy(edges, tab.edges, (nc + 1) * sizeof *edges);
+    memcpy(C, tab.c, nc * nc * sizeof *C);
   }
-  if (fp) fclose(fp);
-  if (got != nc + 1) return gs_error_set(err, GS_EINPUT, "%s: not a table of %zu classes", p, nc);
-  for (size_t i = 0; i < nc * nc; i++)
-    if (!isfinite(C[i]) || C[i] < 0)
-      return gs_error_set(err, GS_ENUMERIC, "%s: C_%zu%zu = %g, not a finite frequency >= 0", p, i / nc + 1,
-                          i % nc + 1, C[i]);
-  return GS_OK;
+  gs_class_table_free(&tab);
+  return rc;
 }
 
 /* result.h5's /coupling/cycles: the cycle table's columns (trigger and
@@ -440,6 +458,7 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
       size_t m = rows ? collect_cycles(out, N, n, t_last, TRIG_END, rows) : 0;
       rc = rows ? write_cycles(out, rows, m, err) : gs_error_set(err, GS_ENOMEM, "out of memory for the cycle table");
       if (!rc) rc = write_cycles_h5(out, k, rows, m, err);
+      if (!rc && N == 1) rc = never_fired(k, out, t_first, t_last, NAN, err);
       free(rows);
       free(Y);
       return rc;
@@ -539,6 +558,7 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
       if (!rc && opt->progress)
         fprintf(stderr, "gransim couple: %ld cycles to t = %g s; results in %s, cycles in %s/cycles.csv\n", N,
                 rep.t_end, out, out);
+      if (!rc && N == 1) rc = never_fired(k, out, t_first, rep.t_end, tr.change, err);
       break;
     }
     if (opt->progress)

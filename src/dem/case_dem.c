@@ -229,6 +229,7 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
     memcpy(origin, gm.origin, sizeof origin);
     memcpy(axis, gm.axis, sizeof axis);
     omega = gm.omega;
+    spin_start = gm.start;
   }
   if (rot) {
     if ((rc = gs_cfg_require_kind(rot, GS_CFG_MAP, err)) || (rc = vec3(rot, "origin", 1, NULL, origin, err)) ||

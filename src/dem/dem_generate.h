@@ -31,6 +31,7 @@ int gs_dem_tris_revolve(gs_dem_tris *t, const double *r, const double *z, size_t
 typedef struct {
   int rotating;
   double origin[3], axis[3], omega; /* omega in rad/s about the unit axis */
+  double start;                     /* [s]: at rest until then (a bed settles first) */
 } gs_dem_gen_motion;
 
 typedef struct {

@@ -7,7 +7,8 @@
  * blades are separate closed boxes and cylinders that overlap, each with
  * outward normals; a blade's inner end lies inside the hub, so no particle
  * can reach the faces hidden there.  With `rpm` the impeller turns about z
- * through the origin (counter-clockwise seen from above for rpm > 0). */
+ * through the origin (counter-clockwise seen from above for rpm > 0), from
+ * `start` on: a granulator's bed settles with the impeller at rest. */
 #include <math.h>
 #include <string.h>
 
@@ -40,7 +41,7 @@ static int blade(gs_dem_tris *out, double x0, double x1, double hy, double hz, d
 
 static int build(gs_cfg_node *n, gs_dem_tris *out, gs_dem_gen_motion *motion, gs_error *err) {
   long nb, seg;
-  double L, b, th, pitch, dh, hh, c, rpm, origin[3];
+  double L, b, th, pitch, dh, hh, c, rpm, start, origin[3];
   const double zero[3] = {0, 0, 0};
   int rc = gs_cfg_long_range(n, "blades", 0, 3, 1, 64, &nb, err);
   if (!rc) rc = gs_cfg_double_range(n, "blade_length", 1, 0, 0, 1, HUGE_VAL, 0, &L, err);
@@ -50,6 +51,9 @@ static int build(gs_cfg_node *n, gs_dem_tris *out, gs_dem_gen_motion *motion, gs
   if (!rc) rc = gs_cfg_double_range(n, "hub_diameter", 1, 0, 0, 1, HUGE_VAL, 0, &dh, err);
   if (!rc) rc = gs_cfg_double_range(n, "clearance", 1, 0, 0, 0, HUGE_VAL, 0, &c, err);
   if (!rc) rc = gs_cfg_double_opt(n, "rpm", 0, &rpm, err);
+  if (!rc) rc = gs_cfg_double_range(n, "start", 0, 0, 0, 0, HUGE_VAL, 0, &start, err);
+  if (!rc && rpm == 0 && gs_cfg_get(n, "start"))
+    rc = gs_cfg_fail(gs_cfg_get(n, "start"), err, "a start time needs an impeller that turns (rpm)");
   if (!rc) rc = gs_cfg_long_range(n, "segments", 0, 24, 6, 1024, &seg, err);
   if (!rc) rc = gs_dem_case_vec3(n, "origin", 0, zero, origin, err);
   if (rc) return rc;
@@ -77,6 +81,7 @@ static int build(gs_cfg_node *n, gs_dem_tris *out, gs_dem_gen_motion *motion, gs
     motion->axis[0] = motion->axis[1] = 0;
     motion->axis[2] = 1;
     motion->omega = rpm * 2 * M_PI / 60;
+    motion->start = start;
   }
   return GS_OK;
 }

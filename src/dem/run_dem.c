@@ -139,7 +139,10 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   const long start_k = (long)round(c->stats_start / dt);
   long step = 0, frame = 0;
   int steady = 0, stats_on = !c->start_steady && start_k == 0, stop = 0;
-  double t_steady = -1, t0wall = wall_seconds();
+  double t_steady = -1, t0wall = wall_seconds(), t_agitate = 0;
+  long k_agitate = 0; /* the first sample the steady-state detector sees */
+  for (size_t w = 0; w < c->nwall_src; w++)
+    if (c->wall_src[w].rotating) t_agitate = fmax(t_agitate, c->wall_src[w].spin_start);
   uint64_t prev_events = 0, out_events = 0, out_imp[GS_DEM_MAX_WALLS] = {0};
   /* the engine's counters restart with the statistics window; the time series
    * keeps running totals across that reset */
@@ -199,7 +202,11 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
         prev_events = ev;
       }
       int open_window = 0;
-      if (!rc && !steady && gs_dem_is_steady(ser_m, ser_c, ns, c->steady_window, c->steady_tol)) {
+      /* a bed at rest before its walls turn is not the steady state sought:
+       * the detector's window holds samples from the last rotation start on */
+      if (gs_dem_time(d) <= t_agitate * (1 + 1e-12)) k_agitate = ns;
+      if (!rc && !steady &&
+          gs_dem_is_steady(ser_m + k_agitate, ser_c + k_agitate, ns - k_agitate, c->steady_window, c->steady_tol)) {
         steady = 1;
         t_steady = gs_dem_time(d);
         if (progress) fprintf(stderr, "gransim dem: steady state at t = %.6g s\n", t_steady);
