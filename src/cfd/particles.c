@@ -156,7 +156,8 @@ static int reserve(gs_cfd *g, size_t n, long max_id, gs_error *err) {
   return GS_OK;
 }
 
-/* Where a particle may be: inside the box, of a size the cells suit. */
+/* Where a particle may be: inside the box, within a cell's reach per gas
+ * step, of a size the cells suit. */
 static int check_particle(const gs_cfd *g, const gs_dem_view *v, size_t i, gs_error *err) {
   const double x[3] = {v->x[i], v->y[i], v->z[i]}, d = 2 * v->r[i];
   for (int a = 0; a < 3; a++)
@@ -165,6 +166,17 @@ static int check_particle(const gs_cfd *g, const gs_dem_view *v, size_t i, gs_er
                           "gas step %ld (t = %g s): particle %ld left the gas domain at (%g, %g, %g) m "
                           "(gas.box %c from %g to %g m)",
                           g->steps, g->t, v->id[i], x[0], x[1], x[2], "xyz"[a], g->prm.lo[a], g->prm.hi[a]);
+  /* the particle CFL: a particle crossing more than one cell per gas step
+   * would skip the cells its volume and drag are deposited in */
+  const double vel[3] = {v->vx[i], v->vy[i], v->vz[i]};
+  for (int a = 0; a < 3; a++) {
+    const double cfl = fabs(vel[a]) * g->prm.dt / g->h[a];
+    if (!(cfl <= 1))
+      return gs_error_set(err, GS_ENUMERIC,
+                          "gas step %ld (t = %g s): particle %ld crosses %.4g cells per gas step along %c "
+                          "(v = %g m/s, cells %g m): above the limit 1; reduce gas.time_step or use larger cells",
+                          g->steps, g->t, v->id[i], cfl, "xyz"[a], vel[a], g->h[a]);
+  }
   for (int a = 0; a < 3; a++) {
     if (g->h[a] < MIN_CELL_DIAMETERS * d)
       return gs_error_set(err, GS_EINPUT,
