@@ -29,7 +29,6 @@ static const char bed_case[] =
     "  box: {lo: [-0.005, -0.005, -0.005], hi: [0.045, 0.015, 0.205]}\n"
     "  skin: 4.0e-4\n"
     "  seed: 3\n"
-    "  threads_from: 1000\n"
     "materials:\n"
     "  - {name: powder, E: 1.0e6, nu: 0.25, e: 0.5, mu_s: 0.5, mu_r: 0.05, density: 1030}\n"
     "  - {name: steel, E: 1.0e6, nu: 0.25, e: 0.5, mu_s: 0.5, mu_r: 0.05}\n"
