@@ -104,6 +104,7 @@ static int rig_make(rig *r, int n, double d, const int cells[3], double dt_gas, 
   if (override) {
     gp.tol = override->tol;
     gp.max_iter = override->max_iter;
+    if (override->mu > 0) gp.mu = override->mu;
   }
   if (!(r->gas = gs_cfd_create(&gp, err))) return err->code;
   return gs_cfd_attach(r->gas, r->dem, err);
@@ -233,6 +234,11 @@ static void test_refusals(void) {
   /* a pressure solve held to an impossible tolerance in one iteration */
   gs_cfd_params ov = {.tol = 1e-30, .max_iter = 1};
   expect_fail("pressure solve", 9, 2e-3, ok, 5e-4, 0.5, 2.5e-5, &ov, 40, "did not converge", "residual");
+  /* a gas 5e5 times as viscous as air: the 2 mm spheres follow it within
+   * m/beta of about 5e-5 s, a tenth of the gas step the drag is held over */
+  gs_cfd_params thick = {.mu = 10};
+  expect_fail("drag response", 9, 2e-3, ok, 5e-4, 0.5, 2.5e-5, &thick, 40, "above the drag response time",
+              "of particle 0");
 }
 
 /* 20 spheres of 2 mm at the centre of a 4 mm cell are more than it holds. */
@@ -253,19 +259,30 @@ static void test_overfill(void) {
   rig_free(&r);
 }
 
-/* A particle thrown out of the gas box stops the run, named. */
-static void test_leaving(void) {
+/* One fast particle (id 9) added to the small bed stops the run with a
+ * message holding the words expected. */
+static void expect_fast(const char *what, const double x[3], const double v[3], const char *w1, const char *w2) {
   rig r;
   gs_error err = {0};
   const int cells[3] = {3, 3, 12};
   CHECK(rig_make(&r, 9, 2e-3, cells, 5e-4, 0.5, 2.5e-5, NULL, &err) == GS_OK);
-  const double x[3] = {0.006, 0.006, 0.04}, v[3] = {0, 0, 30};
   gs_dem_add_particle(r.dem, 0, 1e-3, x, v, NULL, &err);
   int rc = gs_dem_run(r.dem, 400, &err);
-  fprintf(stderr, "leaving: %s\n", err.msg);
+  fprintf(stderr, "%s: %s\n", what, err.msg);
   CHECK(rc != GS_OK);
-  CHECK(strstr(err.msg, "particle 9 left the gas domain") != NULL);
+  CHECK(strstr(err.msg, w1) != NULL);
+  CHECK(strstr(err.msg, w2) != NULL);
   rig_free(&r);
+}
+
+/* A particle thrown out of the gas box (1 mm under its top at 5 m/s: gone
+ * by the second gas step), and one crossing more than a cell per gas step
+ * (10 m/s over 0.5 ms on 4 mm cells: 1.25 cells), stop the run, named. */
+static void test_leaving(void) {
+  const double x0[3] = {0.006, 0.006, 0.047}, v0[3] = {0, 0, 5};
+  expect_fast("leaving", x0, v0, "particle 9 left the gas domain", "gas step 1 ");
+  const double x1[3] = {0.001, 0.006, 0.03}, v1[3] = {10, 0, 0};
+  expect_fast("particle CFL", x1, v1, "particle 9 crosses 1.25 cells per gas step along x", "gas step 0");
 }
 
 /* Laminar flow through an empty square duct of side W (the walls no-slip):

@@ -158,6 +158,9 @@ int gs_dem_touches_wall(gs_dem *d, const double x[3], double r);
  * step takes well under a millisecond and the threads' synchronisation costs
  * more than it saves, much more on a machine shared with other work. */
 void gs_dem_set_parallel_min(gs_dem *d, size_t n);
+/* The fewest particles for threads (above); a coupled model's per-particle
+ * loops follow it. */
+size_t gs_dem_parallel_min(const gs_dem *d);
 /* Advance nsteps time steps.  Fails on non-finite positions. */
 int gs_dem_run(gs_dem *d, long nsteps, gs_error *err);
 /* Remove every particle whose centre satisfies pred (applied at list rebuilds,

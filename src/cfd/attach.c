@@ -56,6 +56,7 @@ int gs_cfd_attach(gs_cfd *g, gs_dem *d, gs_error *err) {
                         100 * gs_dem_dt(d) / tr, tr, 100 * MAX_RAYLEIGH_FRACTION);
   g->dem = d;
   g->dem_steps_per_gas = k;
+  g->par_min = gs_dem_parallel_min(d);
   g->dem_count = 0;
   g->started = 0;
   g->failed = 0;

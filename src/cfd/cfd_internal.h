@@ -47,6 +47,9 @@ struct gs_cfd {
   /* coupling to a DEM */
   gs_dem *dem;
   long dem_steps_per_gas, dem_count;
+  /* fewest particles for which the per-particle loops use threads: the
+   * DEM's dem.threads_from once attached (one setting for both phases) */
+  size_t par_min;
   int started;
   int failed;
   gs_error fail;

@@ -30,6 +30,9 @@ gs_cfd *gs_cfd_create(const gs_cfd_params *p, gs_error *err) {
   gs_cfd *g = gs_calloc(1, sizeof *g, err);
   if (!g) return NULL;
   g->prm = *p;
+  /* per-particle loops on threads from 1024 particles until attached to a DEM,
+   * whose dem.threads_from then decides */
+  g->par_min = 1024;
   if (!(g->prm.tol > 0)) g->prm.tol = 1e-10;
   if (g->prm.max_iter <= 0) g->prm.max_iter = 500;
   g->ncell = 1;

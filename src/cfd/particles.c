@@ -15,9 +15,6 @@
  * resolves the bed at all. */
 #define MIN_CELL_DIAMETERS 2.0
 #define MAX_CELL_DIAMETERS 50.0
-/* fewest particles for which the per-particle loops use threads: below,
- * starting them costs more than the loops */
-#define PAR_MIN 1024
 
 /* Linear weights of coordinate s (in lattice units, nodes at integers) on
  * the nodes first..last, clamped to the end nodes. */
@@ -156,7 +153,8 @@ static int reserve(gs_cfd *g, size_t n, long max_id, gs_error *err) {
   return GS_OK;
 }
 
-/* Where a particle may be: inside the box, of a size the cells suit. */
+/* Where a particle may be: inside the box, within a cell's reach per gas
+ * step, of a size the cells suit. */
 static int check_particle(const gs_cfd *g, const gs_dem_view *v, size_t i, gs_error *err) {
   const double x[3] = {v->x[i], v->y[i], v->z[i]}, d = 2 * v->r[i];
   for (int a = 0; a < 3; a++)
@@ -165,15 +163,26 @@ static int check_particle(const gs_cfd *g, const gs_dem_view *v, size_t i, gs_er
                           "gas step %ld (t = %g s): particle %ld left the gas domain at (%g, %g, %g) m "
                           "(gas.box %c from %g to %g m)",
                           g->steps, g->t, v->id[i], x[0], x[1], x[2], "xyz"[a], g->prm.lo[a], g->prm.hi[a]);
+  /* the particle CFL: a particle crossing more than one cell per gas step
+   * would skip the cells its volume and drag are deposited in */
+  const double vel[3] = {v->vx[i], v->vy[i], v->vz[i]};
+  for (int a = 0; a < 3; a++) {
+    const double cfl = fabs(vel[a]) * g->prm.dt / g->h[a];
+    if (!(cfl <= 1))
+      return gs_error_set(err, GS_ENUMERIC,
+                          "gas step %ld (t = %g s): particle %ld crosses %.4g cells per gas step along %c "
+                          "(v = %g m/s, cells %g m): above the limit 1; reduce gas.time_step or use larger cells",
+                          g->steps, g->t, v->id[i], cfl, "xyz"[a], vel[a], g->h[a]);
+  }
   for (int a = 0; a < 3; a++) {
     if (g->h[a] < MIN_CELL_DIAMETERS * d)
       return gs_error_set(err, GS_EINPUT,
-                          "gas step %ld (t = %g s): gas cells are %g m along %c, %.3g diameters of particle "
+                          "gas step %ld (t = %g s): gas cells are %g m along %c, %.4g diameters of particle "
                           "%ld (d = %g m); the drag closure needs at least %g: use fewer gas.cells",
                           g->steps, g->t, g->h[a], "xyz"[a], g->h[a] / d, v->id[i], d, MIN_CELL_DIAMETERS);
     if (g->h[a] > MAX_CELL_DIAMETERS * d && g->prm.coupling == GS_CFD_TWO_WAY)
       return gs_error_set(err, GS_EINPUT,
-                          "gas step %ld (t = %g s): gas cells are %g m along %c, %.3g diameters of particle "
+                          "gas step %ld (t = %g s): gas cells are %g m along %c, %.4g diameters of particle "
                           "%ld (d = %g m); more than %g do not resolve the bed: use more gas.cells",
                           g->steps, g->t, g->h[a], "xyz"[a], g->h[a] / d, v->id[i], d, MAX_CELL_DIAMETERS);
   }
@@ -199,7 +208,7 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
   /* the stencils, each particle's own, on threads; the deposits that sum
    * over particles stay in view order on one thread, so every result is
    * the same on any number of threads (bit for bit, tests/test_cfd.c) */
-#pragma omp parallel for schedule(static) if (n >= PAR_MIN)
+#pragma omp parallel for schedule(static) if (n >= g->par_min)
   for (size_t i = 0; i < n; i++) {
     const double x[3] = {v->x[i], v->y[i], v->z[i]};
     divide_volume(g, x, v->r[i], &g->st_cell[i]);
@@ -225,7 +234,7 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
     memset(g->k[a], 0, g->nface[a] * sizeof(double));
     memset(g->kv[a], 0, g->nface[a] * sizeof(double));
   }
-#pragma omp parallel for schedule(static) if (n >= PAR_MIN)
+#pragma omp parallel for schedule(static) if (n >= g->par_min)
   for (size_t i = 0; i < n; i++) {
     const double vel[3] = {v->vx[i], v->vy[i], v->vz[i]};
     g->epsp[i] = interp(&g->st_cell[i], g->eps);
@@ -285,7 +294,7 @@ int gs_cfd_step(gs_cfd *g, const gs_dem_view *v, gs_error *err) {
           grad[a][f] = gr;
         }
   }
-#pragma omp parallel for schedule(static) if (n >= PAR_MIN)
+#pragma omp parallel for schedule(static) if (n >= g->par_min)
   for (size_t i = 0; i < n; i++) {
     const double vel[3] = {v->vx[i], v->vy[i], v->vz[i]};
     const double vp = 4.0 / 3.0 * M_PI * v->r[i] * v->r[i] * v->r[i];

@@ -46,6 +46,7 @@ gs_dem *gs_dem_alloc(const gs_dem_params *p, gs_error *err) {
 }
 
 void gs_dem_set_parallel_min(gs_dem *d, size_t n) { d->par_min = n; }
+size_t gs_dem_parallel_min(const gs_dem *d) { return d->par_min; }
 
 void gs_dem_free(gs_dem *d) {
   if (!d) return;
