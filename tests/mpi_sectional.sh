@@ -9,7 +9,8 @@
 # writes while it waits, the whole result.h5 and summary.csv are checked
 # identical to the serial run's); a 2-D case with the
 # adaptive Euler of Sampat et al. (2018) the same; only rank 0 prints; cvode and more ranks than
-# compartments are refused with a message, and so is an exchange network; an Euler step that goes negative on
+# compartments are refused with a message, and so is an exchange network; a fluid bed (three
+# compartments, each its own bed) equals one process's on 2 ranks, moves included; an Euler step that goes negative on
 # rank 1 only stops every rank with status 1 and rank 1's message, without
 # hanging; so does a non-finite rate on rank 1 only under rk, and a result
 # file that cannot grow (rank 0's writes fail mid-run); a 2-rank run killed
@@ -72,6 +73,44 @@ run_rc 1 "${MPI[@]}" -np 2 "$BIN" run "$WORK/net.yaml" --out "$WORK/net2" --quie
 stderr_has "exchange network couples every compartment"
 no_result_files "$WORK/net2"
 run_rc 0 "$BIN" run "$WORK/net.yaml" --out "$WORK/net1" --quiet
+# a fluid bed's balances (each compartment's own bed: scalar state that the
+# ranks' blocks carry) on 2 ranks, and with compartments moved between the
+# ranks at every decision, equal one process's bit for bit
+cat >"$WORK/bed.yaml" <<'EOF'
+grid:
+  compartments: 3
+  axes:
+    - {name: solid,  type: geometric, min: 1.0e-12, ratio: 2, cells: 12}
+    - {name: liquid, type: geometric, min: 1.0e-14, ratio: 2, cells: 20, zero_first: true}
+initial:
+  - {type: point, number: 4.19e8, at: [1.767e-12, 8.59e-14], compartment: 1}
+  - {type: point, number: 2.0e8, at: [1.767e-12, 8.59e-14], compartment: 2}
+  - {type: point, number: 1.0e8, at: [3.534e-12, 3.0e-13], compartment: 3}
+mechanisms:
+  - type: aggregation
+    kernel: {type: madec, beta0: 5.0e-4, alpha: 1, delta: 1, liquid_content: percent}
+  - {type: liquid_addition, rate: [9.0e-7, 0, 4.0e-7], start: 0, end: 40}
+  - type: fluid_bed
+    solid_density: 2700
+    air_mass: 0.0107
+    air_density: 1.18
+    correction: 0.002
+    heat_loss: 200
+    spray_temperature: 293.15
+    air:
+      - {start: 0,  end: 40, temperature: 333, humidity: 0.00505, air_flow: 0.067}
+      - {start: 40, end: 60, temperature: 343, humidity: 0.00505, air_flow: 0.09}
+solver: {method: rk, rtol: 1.0e-6}
+output: {end: 60, count: 4}
+EOF
+run_rc 0 "$BIN" run "$WORK/bed.yaml" --out "$WORK/bed1" --quiet --threads 1
+run_rc 0 "${MPI[@]}" -np 2 "$BIN" run "$WORK/bed.yaml" --out "$WORK/bed2" --quiet --threads 1
+run_rc 0 "${MPI[@]}" -np 2 -x GRANSIM_TEST_MOVE_COMPARTMENTS=1 "$BIN" run "$WORK/bed.yaml" --out "$WORK/bed2m" --quiet --threads 1
+for d in bed2 bed2m; do
+  cmp -s "$WORK/bed1/summary.csv" "$WORK/$d/summary.csv" || fail "fluid bed on 2 ranks ($d): summary.csv differs from one process's"
+  same_results "$WORK/bed1" "$WORK/$d"
+done
+grep -q "bed_temperature" "$WORK/bed1/summary.csv" || fail "no bed temperature in the fluid bed's summary"
 mkdir -p "$WORK/data"
 cp "$SRC/examples/data/"*.csv "$WORK/data/"
 ex="$WORK/corimix-shared.yaml"

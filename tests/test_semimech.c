@@ -11,6 +11,10 @@
  *    trends of Fig. 4.2 (K rises with liquid, falls with gas and with solid),
  *    the impeller rule equals the velocity it gives, a DEM collision table
  *    multiplies K by C_ab;
+ *  - u0 from the fragment of `gransim compartments` (velocity: {fragment}):
+ *    the same kernel as the fragment's speeds written inline, and moving one
+ *    zone's speed across the Stokes threshold u* = St* 3 pi mu d~^2 / (8 m~)
+ *    of a pair switches that pair's K from B0 A to 0 in that zone alone;
  *  - input errors name the key;
  *  - the induction behaviour of a porous feed (HP, eps0 = 0.74) against the
  *    steady growth of a dense one (LP, eps0 = 0.263) with spray and
@@ -241,6 +245,88 @@ static void collision_table(void) {
   remove("/tmp/semimech_test_collisions.csv");
 }
 
+/* A fragment as `gransim compartments` writes it, with speeds u[0..1]. */
+static void write_fragment(const char *path, double u0, double u1) {
+  FILE *fp = fopen(path, "w");
+  CHECK(fp != NULL);
+  if (!fp) return;
+  fprintf(fp, "compartments: 2\nrates:\n  - [0, 1.5]\n  - [2.5, 0]\nvelocity: [%.17g, %.17g]\n"
+              "holdup: [10, 12]\n", u0, u1);
+  fclose(fp);
+}
+
+/* The kernel's u0 per compartment from the fragment: K equals that of the
+ * same speeds written inline bit for bit, and a zone's speed moved across a
+ * pair's Stokes threshold u* (eq. 4.8, St = St*) switches that pair's K in
+ * that zone from B0 A_a A_b to 0, leaving the other zone's as it was. */
+static void fragment_velocity(void) {
+  const char *frag = "/tmp/semimech_test_fragment.yaml";
+  const size_t n = 8;
+  kfix a, f;
+  gs_error err;
+  write_fragment(frag, 0.5, 1.0);
+  int rc = kernel_on_grid(BASE "velocity: [0.5, 1.0]\n", n, &a, &err) ||
+           kernel_on_grid(BASE "velocity: {fragment: semimech_test_fragment.yaml}\n", n, &f, &err);
+  CHECK(rc == 0);
+  if (rc) fprintf(stderr, "%s\n", err.msg);
+  size_t differ = 0;
+  for (size_t comp = 0; !rc && comp < 2; comp++)
+    for (size_t c = 0; c < a.g.ncells; c += 3)
+      for (size_t d = 0; d < a.g.ncells; d++) {
+        double ka, kf;
+        a.k.type->row(a.k.self, comp, c, d, d + 1, &ka);
+        f.k.type->row(f.k.self, comp, c, d, d + 1, &kf);
+        differ += ka != kf;
+      }
+  CHECK(differ == 0);
+  kfix_free(&f);
+  /* a wet pair of different cells and its threshold, from the formula */
+  gs_semimech_params p = params();
+  p.viscosity = 0.05;
+  p.phi = gs_semimech_phi(60 * PI / 180);
+  p.pore_ratio = 0.3 / 0.7;
+  p.surface_fraction = 0.02;
+  size_t ca = 0, cb = 0;
+  double ustar = 0;
+  gs_semimech_particle pa = {0}, pb = {0};
+  for (size_t c = 0; !rc && c < a.g.ncells && !(ustar > 0); c++)
+    for (size_t d = c + 1; d < a.g.ncells && !(ustar > 0); d++) {
+      const double *xa = a.g.x + 3 * c, *xb = a.g.x + 3 * d;
+      pa = gs_semimech_particle_of(&p, xa[0], xa[1], xa[2]);
+      pb = gs_semimech_particle_of(&p, xb[0], xb[1], xb[2]);
+      const double m = 2 * pa.m * pb.m / (pa.m + pb.m), dd = 2 * pa.d * pb.d / (pa.d + pb.d);
+      const double lambda = 0.5 * (pa.h0 + pb.h0), ha = fmin(p.asperity_fraction * dd, p.asperity_max);
+      if (pa.wet > 0 && pb.wet > 0 && lambda > 1.01 * ha && pa.d != pb.d) {
+        ustar = 2 * log(lambda / ha) * 3 * PI * p.viscosity * dd * dd / (8 * m);
+        ca = c;
+        cb = d;
+      }
+    }
+  const double area = pa.wet * pb.wet;
+  fprintf(stderr, "pair threshold u* = %.6g m/s, A = %.6g\n", ustar, area);
+  CHECK(ustar > 0 && area > 0);
+  for (int side = 0; !rc && side < 2; side++) {
+    const double u = ustar * (side ? 1 + 1e-9 : 1 - 1e-9);
+    write_fragment(frag, u, 1e-6);
+    int rc2 = kernel_on_grid(BASE "velocity: {fragment: semimech_test_fragment.yaml}\n", n, &f, &err);
+    CHECK(rc2 == 0);
+    if (rc2) {
+      fprintf(stderr, "%s\n", err.msg);
+      kfix_free(&f);
+      continue;
+    }
+    double k0, k1;
+    f.k.type->row(f.k.self, 0, ca, cb, cb + 1, &k0);
+    f.k.type->row(f.k.self, 1, ca, cb, cb + 1, &k1);
+    near(k1, 3.0 * area, 1e-12, "zone 2 (slow) K = B0 A");
+    if (side) CHECK(k0 == 0);
+    else near(k0, 2.0 * area, 1e-12, "zone 1 below u*: K = B0 A");
+    kfix_free(&f);
+  }
+  kfix_free(&a);
+  remove(frag);
+}
+
 static void expect_error(const char *yaml, const char *part) {
   kfix f;
   gs_error err;
@@ -267,6 +353,17 @@ static void input_errors(void) {
   expect_error(BASE "velocity: 1\nspeed: 3\n", "speed");
   expect_error(BASE "velocity: 1\ncollisions_measure: diameter\n", "without 'collisions'");
   expect_error(BASE "velocity: 1\ngas_axis: liquid\n", "needs a solid axis");
+  expect_error(BASE "velocity: {file: x.yaml}\n", "{fragment: FILE}");
+  expect_error(BASE "velocity: {fragment: no_such_fragment.yaml}\n", "no_such_fragment.yaml");
+  write_fragment("/tmp/semimech_test_fragment.yaml", 0.5, -1);
+  expect_error(BASE "velocity: {fragment: semimech_test_fragment.yaml}\n", "the fragment's velocity");
+  FILE *fp = fopen("/tmp/semimech_test_fragment.yaml", "w");
+  if (fp) {
+    fputs("compartments: 3\nvelocity: [1, 1, 1]\n", fp);
+    fclose(fp);
+  }
+  expect_error(BASE "velocity: {fragment: semimech_test_fragment.yaml}\n", "grid.compartments: 3");
+  remove("/tmp/semimech_test_fragment.yaml");
 }
 
 /* Mean solid volume (in primary particles) at time `end` of a batch with
@@ -322,6 +419,7 @@ int main(void) {
   trends();
   impeller();
   collision_table();
+  fragment_velocity();
   input_errors();
   induction();
   TEST_EXIT();

@@ -110,6 +110,12 @@ int gs_cfg_doubles_req(gs_cfg_node *map, const char *key, int allow_scalar, doub
 int gs_cfg_per_comp(gs_cfg_node *map, const char *key, int required, double def, double lo,
                     int lo_strict, size_t n, double *out, gs_error *err);
 
+/* Open the case fragment `gransim compartments` writes, named by the scalar
+ * node fn (relative to dir, the case file's folder), and check that its
+ * `compartments` equals ncomp.  NULL with err naming fn's file, line and the
+ * fragment on failure; the caller frees the document. */
+gs_cfg *gs_cfg_fragment_load(gs_cfg_node *fn, const char *dir, size_t ncomp, gs_error *err);
+
 /* Parse a scalar node as a number (helper for sequences). */
 int gs_cfg_node_double(const gs_cfg_node *n, double *out, gs_error *err);
 

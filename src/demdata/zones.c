@@ -352,7 +352,7 @@ int gs_zones_write(const gs_zones *z, const gs_zone_frames *fr, const char *path
           z->max_rate_dt);
   fprintf(fp, "# Use: grid.compartments = compartments; the exchange mechanism reads this file\n"
               "# (mechanisms: [{type: exchange, file: THIS.yaml}]); velocity is each zone's u0 for\n"
-              "# the semi_mechanistic kernel (kernel.velocity).\n");
+              "# the semi_mechanistic kernel (kernel: {velocity: {fragment: THIS.yaml}}).\n");
   fprintf(fp, "compartments: %zu\n", k);
   fprintf(fp, "rates:            # K_ij [1/s], row = from, column = to\n");
   for (size_t i = 0; i < k; i++) {

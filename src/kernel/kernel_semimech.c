@@ -122,13 +122,31 @@ static int read_axis(gs_cfg_node *node, const gs_grid *g, const char *key, const
                          def, key);
 }
 
-/* u0: `velocity` (per compartment), or the impeller's tip speed times a fraction. */
-static int read_velocity(gs_cfg_node *node, size_t ncomp, double *u0, gs_error *err) {
+/* Each compartment's u0 from the fragment `gransim compartments` wrote (its
+ * `velocity`, the zones' mean DEM speeds), so that the zones the exchange
+ * mechanism reads and the speeds the Stokes criterion uses come from one file. */
+static int read_fragment_velocity(gs_cfg_node *v, const char *dir, size_t ncomp, double *u0, gs_error *err) {
+  gs_cfg_node *fn = gs_cfg_get(v, "fragment");
+  if (!fn) return gs_cfg_fail(v, err, "expected a number, a list of one per compartment [m/s] or "
+                                      "{fragment: FILE} (a fragment of gransim compartments)");
+  int rc = gs_cfg_check_unused(v, err);
+  gs_cfg *cfg = rc ? NULL : gs_cfg_fragment_load(fn, dir, ncomp, err);
+  if (!cfg) return rc ? rc : GS_EINPUT;
+  rc = gs_cfg_per_comp(gs_cfg_root(cfg), "velocity", 1, 0, 0, 1, ncomp, u0, err);
+  gs_cfg_free(cfg);
+  if (rc) gs_error_prefix(err, "%s:%d: %s (the fragment's velocity): ", gs_cfg_file(fn), gs_cfg_line(fn), gs_cfg_path(fn));
+  return rc;
+}
+
+/* u0: `velocity` (per compartment, or the fragment's), or the impeller's tip
+ * speed times a fraction. */
+static int read_velocity(gs_cfg_node *node, const char *dir, size_t ncomp, double *u0, gs_error *err) {
   gs_cfg_node *v = gs_cfg_get(node, "velocity"), *n = gs_cfg_get(node, "impeller_speed");
   if (v && n) return gs_cfg_fail(n, err, "give either velocity or impeller_speed, not both");
   if (!v && !n)
-    return gs_cfg_fail(node, err, "missing key 'velocity' (m/s), or 'impeller_speed' (rpm) with "
-                                  "'impeller_diameter' (m)");
+    return gs_cfg_fail(node, err, "missing key 'velocity' (m/s, or {fragment: FILE}), or 'impeller_speed' "
+                                  "(rpm) with 'impeller_diameter' (m)");
+  if (v && gs_cfg_kind_of(v) == GS_CFG_MAP) return read_fragment_velocity(v, dir, ncomp, u0, err);
   if (v) return gs_cfg_per_comp(node, "velocity", 1, 0, 0, 1, ncomp, u0, err);
   double rpm, diameter, fraction;
   int rc = gs_cfg_double_range(node, "impeller_speed", 1, 0, 0, 1, HUGE_VAL, 0, &rpm, err);
@@ -180,7 +198,7 @@ static int semimech_create(gs_cfg_node *node, const gs_grid *g, const char *dir,
   k->cell = gs_calloc(g->ncells, sizeof *k->cell, err);
   int differ = 0, rc = k->u0 && k->bound && k->cell ? GS_OK : GS_ENOMEM;
   if (!rc) rc = gs_kernel_beta0(node, 1, 0, g, &k->beta0, &differ, err);
-  if (!rc) rc = read_velocity(node, g->ncomp, k->u0, err);
+  if (!rc) rc = read_velocity(node, dir, g->ncomp, k->u0, err);
   if (!rc) rc = gs_cfg_double_range(node, "viscosity", 1, 0, 0, 1, HUGE_VAL, 0, &p->viscosity, err);
   if (!rc) rc = gs_cfg_double_range(node, "contact_angle", 1, 0, 0, 1, 180, 1, &theta, err);
   if (!rc) rc = gs_cfg_double_range(node, "solid_density", 1, 0, 0, 1, HUGE_VAL, 0, &p->rho_solid, err);

@@ -88,22 +88,13 @@ static int read_links(gs_cfg_node *links, size_t ncomp, double *K, gs_error *err
   return GS_OK;
 }
 
-/* The rates of a fragment written by `gransim compartments` (its
- * `compartments` and `rates`; the file's other keys are for the reader). */
+/* The rates of a fragment written by `gransim compartments` (its `rates`;
+ * the file's other keys are for the reader and the kernel). */
 static int read_fragment(gs_cfg_node *fn, const char *dir, size_t ncomp, double *K, gs_error *err) {
-  const char *name = gs_cfg_scalar(fn);
-  if (!name || !*name) return gs_cfg_fail(fn, err, "expected a file name (a fragment of gransim compartments)");
-  char path[2048];
-  snprintf(path, sizeof path, "%s%s%s", name[0] == '/' ? "" : dir, name[0] == '/' ? "" : "/", name);
-  gs_cfg *cfg = gs_cfg_load_file(path, err);
+  gs_cfg *cfg = gs_cfg_fragment_load(fn, dir, ncomp, err);
   if (!cfg) return GS_EINPUT;
-  gs_cfg_node *root = gs_cfg_root(cfg), *mat = NULL;
-  long n = 0;
-  int rc = root ? gs_cfg_require_kind(root, GS_CFG_MAP, err) : gs_cfg_fail(fn, err, "%s is empty", path);
-  if (!rc) rc = gs_cfg_long_range(root, "compartments", 1, 1, 1, 1000000, &n, err);
-  if (!rc && (size_t)n != ncomp)
-    rc = gs_cfg_fail(fn, err, "%s has %ld compartments, the grid %zu (set grid.compartments: %ld)", path, n, ncomp, n);
-  if (!rc) rc = gs_cfg_seq_req(root, "rates", &mat, err);
+  gs_cfg_node *mat = NULL;
+  int rc = gs_cfg_seq_req(gs_cfg_root(cfg), "rates", &mat, err);
   if (!rc) rc = read_matrix(mat, ncomp, K, err);
   gs_cfg_free(cfg);
   return rc;

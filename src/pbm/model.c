@@ -297,6 +297,7 @@ void gs_model_rhs(const gs_model *m, const gs_eval *ev, double t, const double *
     memset(gs_eval_numbers(m, ev, dydt, lo), 0, nc * n * sizeof(double));
     if (nq) memset(gs_eval_carried(m, ev, dydt, lo, 0), 0, nc * nq * sizeof(double));
     memset(gs_eval_ledger(m, ev, dledger, lo), 0, nc * nl * sizeof(double));
+    if (m->nscalar) memset(gs_eval_scalars(m, ev, dydt, lo), 0, nc * m->nscalar * sizeof(double));
   }
   if (threads_over_compartments(m, ev)) {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(m->nslots)

@@ -54,19 +54,28 @@ int gs_dist_init(gs_dist *d, const gs_model *m, int one_process, gs_error *err) 
   return GS_OK;
 }
 
-void gs_dist_resplit(gs_dist *d, const size_t *lo) {
-  const gs_model *m = d->m;
-  if (lo != d->lo) memcpy(d->lo, lo, ((size_t)d->size + 1) * sizeof *lo);
-  const size_t comp_lo = d->lo[d->rank], comp_hi = d->lo[d->rank + 1];
-  /* per compartment: ncells numbers, ncarried * ncells carried, 2 nvol ledger */
-  const size_t unit[3] = {m->grid.ncells, (size_t)m->ncarried * m->grid.ncells, 2 * (size_t)m->nvol};
-  const size_t base[3] = {0, m->nnum, m->nstate};
-  d->nlocal = 0;
-  for (int s = 0; s < 3; s++) {
-    d->off[s] = base[s] + comp_lo * unit[s];
-    d->len[s] = (comp_hi - comp_lo) * unit[s];
-    d->nlocal += d->len[s];
+/* The runs of the full vector that compartments [lo, hi) hold: per compartment
+ * ncells numbers, ncarried * ncells carried, 2 nvol ledger and nscalar
+ * mechanisms' scalars (a fluid bed's balances, each compartment's own, so a
+ * block carries its compartments' and the ranks need no reduction).  Returns
+ * their total length. */
+static size_t segments(const gs_model *m, size_t lo, size_t hi, size_t off[GS_DIST_NSEG],
+                       size_t len[GS_DIST_NSEG]) {
+  const size_t unit[GS_DIST_NSEG] = {m->grid.ncells, (size_t)m->ncarried * m->grid.ncells, 2 * (size_t)m->nvol,
+                                     m->nscalar};
+  const size_t base[GS_DIST_NSEG] = {0, m->nnum, m->nstate, m->scalar_at};
+  size_t total = 0;
+  for (int s = 0; s < GS_DIST_NSEG; s++) {
+    off[s] = base[s] + lo * unit[s];
+    len[s] = (hi - lo) * unit[s];
+    total += len[s];
   }
+  return total;
+}
+
+void gs_dist_resplit(gs_dist *d, const size_t *lo) {
+  if (lo != d->lo) memcpy(d->lo, lo, ((size_t)d->size + 1) * sizeof *lo);
+  d->nlocal = segments(d->m, d->lo[d->rank], d->lo[d->rank + 1], d->off, d->len);
 }
 
 /* Prefix sums P[0..n] of the costs. */
@@ -204,14 +213,14 @@ static double split_with(split_work *ws, const double *cost, size_t n, const dou
 }
 
 void gs_dist_pack(const gs_dist *d, const double *full, double *local) {
-  for (int s = 0; s < 3; s++) {
+  for (int s = 0; s < GS_DIST_NSEG; s++) {
     memcpy(local, full + d->off[s], d->len[s] * sizeof(double));
     local += d->len[s];
   }
 }
 
 void gs_dist_unpack(const gs_dist *d, const double *local, double *full) {
-  for (int s = 0; s < 3; s++) {
+  for (int s = 0; s < GS_DIST_NSEG; s++) {
     memcpy(full + d->off[s], local, d->len[s] * sizeof(double));
     local += d->len[s];
   }
@@ -219,7 +228,7 @@ void gs_dist_unpack(const gs_dist *d, const double *local, double *full) {
 
 size_t gs_dist_full_index(const gs_dist *d, size_t i) {
   int s = 0;
-  while (s < 2 && i >= d->len[s]) i -= d->len[s++];
+  while (s < GS_DIST_NSEG - 1 && i >= d->len[s]) i -= d->len[s++];
   return d->off[s] + i;
 }
 
@@ -320,16 +329,6 @@ double gs_dist_max_while(gs_dist *d, double v, int (*work)(void *), void *ctx) {
 }
 
 #ifdef GRANSIM_HAVE_MPI
-/* Rank r's three runs of the full vector: offsets and lengths. */
-static void block_of(const gs_dist *d, int r, size_t off[3], size_t len[3]) {
-  const gs_model *m = d->m;
-  const size_t unit[3] = {m->grid.ncells, (size_t)m->ncarried * m->grid.ncells, 2 * (size_t)m->nvol};
-  const size_t base[3] = {0, m->nnum, m->nstate};
-  for (int s = 0; s < 3; s++) {
-    off[s] = base[s] + d->lo[r] * unit[s];
-    len[s] = (d->lo[r + 1] - d->lo[r]) * unit[s];
-  }
-}
 #endif
 
 void gs_dist_collect(gs_dist *d, double *y) {
@@ -346,12 +345,11 @@ void gs_dist_collect(gs_dist *d, double *y) {
     return;
   }
   for (int r = 1; r < d->size; r++) {
-    size_t off[3], len[3];
-    block_of(d, r, off, len);
-    MPI_Recv(d->statebuf, (int)(len[0] + len[1] + len[2]), MPI_DOUBLE, r, TAG_STATE, MPI_COMM_WORLD,
-             MPI_STATUS_IGNORE);
+    size_t off[GS_DIST_NSEG], len[GS_DIST_NSEG];
+    const size_t total = segments(d->m, d->lo[r], d->lo[r + 1], off, len);
+    MPI_Recv(d->statebuf, (int)total, MPI_DOUBLE, r, TAG_STATE, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
     const double *b = d->statebuf;
-    for (int s = 0; s < 3; s++) {
+    for (int s = 0; s < GS_DIST_NSEG; s++) {
       memcpy(y + off[s], b, len[s] * sizeof(double));
       b += len[s];
     }

@@ -1,8 +1,8 @@
 /* Compartments distributed over MPI ranks (the parallel scheme of Sampat et al. (2018),
  * without its master bottleneck): each rank owns a contiguous block of
  * compartments, integrates only its own part of the state (its numbers,
- * carried volumes and ledger: three contiguous segments of the full state
- * vector, packed into one local vector) and evaluates only their rates;
+ * carried volumes, ledger and mechanisms' scalars: four contiguous segments
+ * of the full state vector, packed into one local vector) and evaluates only their rates;
  * before each right-hand side the last compartment of every block goes to
  * the next rank (the inflow of transfer); the integrators agree on every
  * step with all-reduces (max); the full state is assembled on rank 0 only,
@@ -14,13 +14,16 @@
 #include "gransim/error.h"
 #include "gransim/pbm.h"
 
+/* Segments of a rank's packed vector: numbers, carried volumes, ledger, scalars. */
+#define GS_DIST_NSEG 4
+
 typedef struct {
   int rank, size;
   const gs_model *m;
   size_t *lo;     /* size + 1: rank r owns compartments [lo[r], lo[r + 1]) */
-  size_t off[3];  /* this rank's segments of the full vector: numbers, */
-  size_t len[3];  /* carried volumes, ledger */
-  size_t nlocal;  /* len[0] + len[1] + len[2] */
+  size_t off[GS_DIST_NSEG]; /* this rank's segments of the full vector: numbers, */
+  size_t len[GS_DIST_NSEG]; /* carried volumes, ledger, mechanisms' scalars */
+  size_t nlocal;            /* their sum */
   /* the boundary exchange: one compartment's numbers and carried totals,
    * sent from a ring of GS_DIST_NSEND buffers without waiting (see
    * gs_dist_sync) */

@@ -210,10 +210,6 @@ int gs_case_run(gs_case *c, const gs_run_options *opt_in, double *yout, gs_run_r
   if (!rc) memcpy(run.Y, c->y0, n * sizeof(double));
   /* under MPI each rank evaluates its own block of compartments */
   if (!rc) rc = gs_dist_init(&run.dist, &c->model, opt.one_process, err);
-  /* the ranks' blocks hold numbers, carried totals and ledger, not scalars */
-  if (!rc && run.dist.size > 1 && c->model.nscalar)
-    rc = gs_error_set(err, GS_EINPUT, "this case's mechanisms carry scalar state (a fluid bed's "
-                                      "balances), which runs on one process: run it without mpirun");
   if (!rc && run.dist.size > 1 && gs_model_couples_all(&c->model))
     rc = gs_error_set(err, GS_EINPUT, "this case's exchange network couples every compartment, "
                                       "which runs on one process: run it without mpirun");

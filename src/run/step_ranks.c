@@ -100,6 +100,7 @@ static int local_rhs(void *ctx, double t, const double *yl, double *fl) {
   ev->comp_lo = ev->view_lo = d->lo[d->rank];
   ev->comp_hi = d->lo[d->rank + 1];
   ev->view_carried = d->len[0];
+  ev->view_scalars = d->len[0] + d->len[1] + d->len[2]; /* after the ledger in the packed vector */
   ev->halo = gs_dist_sync(d, yl);
   const double synced = gs_run_now();
   ev->in_integrator = 1;
