@@ -70,6 +70,8 @@ echo "cli_liggghts: LIGGGHTS run (200 spheres, 20000 steps, 1 rank) took $(awk "
 grep -q "gransim dem (liggghts): t = 0.10000 / 0.10000 s, 200 particles, .*, 0 s left$" "$W/l.log" ||
   { cat "$W/l.log"; fail "no progress line from thermo with the time left"; }
 grep -q "^fix wall0 all mesh/surface file .*box.stl type 3 .*scale 0.001" "$W/l/liggghts/in.gransim" || fail "deck mesh"
+# waiting ranks yield their core (Open MPI's busy-polling is the default)
+grep -q "OMPI_MCA_mpi_yield_when_idle=1 mpirun -np 1 " "$W/l.log" || { cat "$W/l.log"; fail "no yield_when_idle"; }
 for t in collisions.csv collision_kernel.csv impacts.csv impact_table.csv impact_table_box.csv impact_velocity.csv \
          velocity.csv residence.csv residence_class.csv timeseries.csv; do
   [ -s "$W/l/$t" ] || fail "liggghts engine wrote no $t"

@@ -304,10 +304,13 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
   if (c->vtk_every > 0 && mkdir(path, 0777) && errno != EEXIST)
     return gs_error_set(err, GS_EIO, "%s: cannot create: %s", path, strerror(errno));
   if (opt && opt->launcher) snprintf(launch, sizeof launch, "%s", opt->launcher);
-  /* Open MPI refuses root without these; other MPIs ignore the variables */
-  else snprintf(launch, sizeof launch, "%smpirun -np %d", geteuid() == 0 ?
+  /* Open MPI refuses root without the first three; other MPIs ignore the variables.  A rank
+   * waiting for another yields its core rather than busy-polling (unless the user chose),
+   * as the embedded engine's threads wait passively: on a machine shared with other work
+   * two polling ranks cost 3.2 times the CPU of two yielding ones (docs/performance.md) */
+  else snprintf(launch, sizeof launch, "%s%smpirun -np %d", geteuid() == 0 ?
                 "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 " : "",
-                ranks);
+                getenv("OMPI_MCA_mpi_yield_when_idle") ? "" : "OMPI_MCA_mpi_yield_when_idle=1 ", ranks);
 
   if ((rc = gs_dem_case_write_geometry(c, out, NULL, err))) return rc;
   size_t nbed = 0;
