@@ -67,7 +67,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   static const char *const files[] = {"liggghts/post/events_pp.txt", "liggghts/post/events_wall.txt",
                                       "liggghts/post/collision100.atom"};
   const char *at = (const char *)data, *end = at + size;
-  gs_lig_thermo th = {0};
+  gs_lig_thermo th = {.ncol = gs_lig_thermo_cols(the_case)};
   double cpu_acc[2] = {0, 0};
   for (int part = 0; part < 5; part++) {
     const char *sep = NULL;

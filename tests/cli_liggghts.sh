@@ -70,6 +70,8 @@ echo "cli_liggghts: LIGGGHTS run (200 spheres, 20000 steps, 1 rank) took $(awk "
 grep -q "gransim dem (liggghts): t = 0.10000 / 0.10000 s, 200 particles, .*, 0 s left$" "$W/l.log" ||
   { cat "$W/l.log"; fail "no progress line from thermo with the time left"; }
 grep -q "^fix wall0 all mesh/surface file .*box.stl type 3 .*scale 0.001" "$W/l/liggghts/in.gransim" || fail "deck mesh"
+# waiting ranks yield their core (Open MPI's busy-polling is the default)
+grep -q "OMPI_MCA_mpi_yield_when_idle=1 mpirun -np 1 " "$W/l.log" || { cat "$W/l.log"; fail "no yield_when_idle"; }
 for t in collisions.csv collision_kernel.csv impacts.csv impact_table.csv impact_table_box.csv impact_velocity.csv \
          velocity.csv residence.csv residence_class.csv timeseries.csv; do
   [ -s "$W/l/$t" ] || fail "liggghts engine wrote no $t"
@@ -137,6 +139,89 @@ for dd, nm in zip(d, ("embedded", "liggghts")):
     print("cli_liggghts: %s time series: %.1f collisions, %.1f impacts in the window (tables: %.0f, %.0f)" % (nm, ev, imp, tot, tot_imp))
     assert abs(ev - tot) < 1e-6 * tot + 1e-6 and abs(imp - tot_imp) < 1e-6 * tot_imp + 1e-6, (nm, ev, tot, imp, tot_imp)
 PY
+# the time series' contacts, torques and lost particles (LIGGGHTS' thermo columns): no nan; at the
+# steps of a contact snapshot (ppcoll<STEP>.atom) the contacts are its overlapping pairs; the last
+# row's within 20 % of the embedded engine's (both beds still settle); nothing lost
+python3 - "$W/e" "$W/l" <<'PY'
+import csv, sys
+ts = [list(csv.DictReader(open(d + "/timeseries.csv"))) for d in sys.argv[1:]]
+for r in ts[1]:
+    for k in ("contacts", "torque_axis_box", "lost"): assert r[k] != "nan", (k, r)
+    assert r["lost"] == "0", r
+    step = round(float(r["time"]) / 5.0e-6)
+    try: rows = open("%s/liggghts/post/ppcoll%d.atom" % (sys.argv[2], step)).read().split("ITEM: ENTRIES")[1].splitlines()[1:]
+    except FileNotFoundError: continue
+    n = sum(1 for l in rows if float(l.split()[13]) > 0)
+    assert int(r["contacts"]) == n, ("contacts", r["time"], r["contacts"], n)
+    print("cli_liggghts: t = %s s: %s contacts in the time series, %d overlapping pairs in the snapshot" % (r["time"], r["contacts"], n))
+ce, cl = float(ts[0][-1]["contacts"]), float(ts[1][-1]["contacts"])
+print("cli_liggghts: contacts at the end: %.0f / %.0f (embedded / liggghts)" % (ce, cl))
+assert cl > 0 and abs(cl / ce - 1) < 0.2, (ce, cl)
+PY
+# the torque on a wall about its rotation axis: 20 spheres settle on the floor of the box mesh,
+# which turns about the x axis at 1e-6 rpm; at rest the particles' torque on the walls is that of
+# their weight, -g sum m_i y_i, from LIGGGHTS' last snapshot (within 0.5 %), and the embedded
+# engine's within 2 % of LIGGGHTS'
+torque_yaml() { # torque_yaml ENGINE
+  box_yaml "$1" 0.2 3 "  - {name: box, mesh: box.stl, scale: 1.0e-3, material: granule, rotation: {origin: [0, 0, 0], axis: [1, 0, 0], rpm: 1.0e-6}}" \
+    "  - region: {box: {lo: [-0.008, 0.001, 0.002], hi: [0.008, 0.008, 0.006]}}
+    count: 20" "{start: 0.1, sample_every: 0.0025}"
+}
+torque_yaml embedded > "$W/te.yaml"
+torque_yaml liggghts > "$W/tl.yaml"
+"$BIN" dem "$W/te.yaml" --out "$W/te" --threads 1 --quiet || fail "embedded torque run"
+"$BIN" dem "$W/tl.yaml" --out "$W/tl" --ranks 1 --quiet 2> "$W/tl.log" || { cat "$W/tl.log"; fail "liggghts torque run"; }
+grep -q "^fix wall0 all mesh/surface/stress file .* reference_point 0 0 0" "$W/tl/liggghts/in.gransim" || fail "deck: no stress mesh"
+python3 - "$W/te" "$W/tl" <<'PY'
+import csv, glob, math, re, sys
+te, tl = (float(list(csv.DictReader(open(d + "/timeseries.csv")))[-1]["torque_axis_box"]) for d in sys.argv[1:])
+last = max(glob.glob(sys.argv[2] + "/liggghts/post/collision*.atom"), key=lambda p: int(re.findall(r"(\d+)\.atom$", p)[0]))
+rows = open(last).read().split("ITEM: ATOMS")[1].strip().splitlines()
+cols = rows[0].split()
+my = sum(500 * 4 / 3 * math.pi * v["radius"] ** 3 * v["y"] for v in (dict(zip(cols, map(float, l.split()))) for l in rows[1:]))
+want = -9.81 * my
+print("cli_liggghts: torque about the x axis at rest: %.6g / %.6g N m (embedded / liggghts), weight's %.6g" % (te, tl, want))
+assert want < 0 and abs(tl / want - 1) < 0.005 and abs(te / tl - 1) < 0.02, (te, tl, want)
+PY
+# lost particles: 100 spheres fall out of a box without walls; both engines count the same lost
+# and held particles at every output time (the same free fall; both remove a particle at the
+# neighbour-list rebuild after it left); with dem.max_lost 0.5 the LIGGGHTS run fails naming it
+fall_yaml() { # fall_yaml ENGINE MAX_LOST
+  cat <<YAML
+dem:
+  time_step: 5.0e-6
+  duration: 0.1
+  gravity: [0, 0, -9.81]
+  box: {lo: [-0.011, -0.011, -0.001], hi: [0.011, 0.011, 0.031]}
+  seed: 4
+  max_lost: $2
+  engine: $1
+materials:
+  - {name: granule, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}
+classes:
+  - {name: small, radius: 1.0e-3, material: granule}
+fill:
+  - {region: {box: {lo: [-0.008, -0.008, 0.002], hi: [0.008, 0.008, 0.025]}}, count: 100}
+statistics: {start: 0.05, sample_every: 0.0025}
+output: {every: 0.01}
+YAML
+}
+fall_yaml embedded 1 > "$W/fe.yaml"
+fall_yaml liggghts 1 > "$W/fl.yaml"
+"$BIN" dem "$W/fe.yaml" --out "$W/fe" --threads 1 --quiet || fail "embedded fall run"
+"$BIN" dem "$W/fl.yaml" --out "$W/fl" --ranks 1 --quiet 2> "$W/fl.log" || { cat "$W/fl.log"; fail "liggghts fall run"; }
+python3 - "$W/fe" "$W/fl" <<'PY'
+import csv, sys
+e, l = ([(r["time"], r["particles"], r["lost"]) for r in csv.DictReader(open(d + "/timeseries.csv"))] for d in sys.argv[1:])
+print("cli_liggghts: fall: (time, held, lost): %s" % l[2::3])
+assert e == l and l[-1][1:] == ("0", "100") and l[0][1:] == ("100", "0"), (e, l)
+PY
+fall_yaml liggghts 0.5 > "$W/fl2.yaml"
+if "$BIN" dem "$W/fl2.yaml" --out "$W/fl2" --ranks 1 --quiet 2> "$W/fl2.log"; then fail "max_lost was not enforced"; fi
+grep -q "DEM (LIGGGHTS): [0-9]* of the 100 particles inserted had left the box other than through an outlet by t = 0.0[0-9]* s, more than dem.max_lost = 0.5" \
+  "$W/fl2.log" || { cat "$W/fl2.log"; fail "max_lost message"; }
+[ ! -e "$W/fl2/timeseries.csv" ] || fail "a run past max_lost left tables"
+
 # outlets and hold-up: 70 particles fall at 1 m/s into an outlet (the residence case of
 # test_dem_stats); the class of 40 ('low') empties first, which LIGGGHTS 3.8 survives only with
 # a distribution holding type 1 (deck.c).  Both engines count the same particles per class
@@ -194,6 +279,8 @@ print("cli_liggghts: hold-up in the annulus at t = 0: %g / %g of %s particles" %
 assert h0[0] == h0[1] and 0 < h0[0] < float(ts[0][0]["particles"]), h0
 assert abs(float(ts[1][0]["holdup_mass"]) / float(ts[0][0]["holdup_mass"]) - 1) < 1e-6
 for r in ts[1]: assert r["holdup_number"] != "nan" and r["holdup_mass"] != "nan", r
+# the outlets remove, nothing is lost (lost counts the outlets' removals out)
+assert [r["lost"] for r in ts[1]] == ["0"] * len(ts[1]) and ts[1][-1]["particles"] != ts[1][0]["particles"], ts[1]
 times = [float(r["time"]) for r in ts[1]]
 assert times == sorted(set(times)), ("timeseries rows repeated or out of order", times)
 PY
@@ -233,11 +320,30 @@ PY
 # keys a deck cannot express are refused, naming the key: a moving plane, a cylinder
 plane_yaml liggghts "[0, 0, 0.01]" > "$W/bad.yaml"
 if "$BIN" dem --check "$W/bad.yaml" 2> "$W/bad.log"; then fail "a moving plane wall was accepted"; fi
-grep -q "walls\[0\] (floor).velocity: a moving plane is not expressible" "$W/bad.log" || { cat "$W/bad.log"; fail "plane error"; }
+n=$(grep -n "name: floor" "$W/bad.yaml" | cut -d: -f1)
+grep -q "bad.yaml:$n: walls\[0\] (floor).velocity: a moving plane is not expressible" "$W/bad.log" || { cat "$W/bad.log"; fail "plane error"; }
 sed 's/  - {name: xlo, plane: .*/  - {name: drum, cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.01}, material: granule}/' \
   "$W/pl.yaml" > "$W/bad.yaml"
 if "$BIN" dem --check "$W/bad.yaml" 2> "$W/bad.log"; then fail "a cylinder wall was accepted"; fi
-grep -q "walls\[1\] (drum): cylinder walls are not expressible" "$W/bad.log" || { cat "$W/bad.log"; fail "cylinder error"; }
+n=$(grep -n "name: drum" "$W/bad.yaml" | cut -d: -f1)
+grep -q "bad.yaml:$n: walls\[1\] (drum): cylinder walls are not expressible" "$W/bad.log" || { cat "$W/bad.log"; fail "cylinder error"; }
+# statistics.start: steady (the detector needs the run's collision rate between its pieces) and
+# rotation.start, refused by `gransim check` as by `gransim dem --check`, at the key's line
+sed 's/^statistics: {start: 0,/statistics: {start: steady,/' "$W/pl.yaml" > "$W/bad.yaml"
+n=$(grep -n "^statistics:" "$W/bad.yaml" | cut -d: -f1)
+for cmd in "check" "dem --check"; do
+  if "$BIN" $cmd "$W/bad.yaml" 2> "$W/bad.log"; then fail "$cmd: statistics.start: steady was accepted"; fi
+  grep -q "bad.yaml:$n: statistics.start: 'steady' is not expressible in a LIGGGHTS deck" "$W/bad.log" ||
+    { cat "$W/bad.log"; fail "$cmd: steady error"; }
+done
+torque_yaml liggghts | sed 's/rpm: 1.0e-6}}/rpm: 1.0e-6, start: 0.05}}/' > "$W/bad.yaml"
+n=$(grep -n "start: 0.05" "$W/bad.yaml" | cut -d: -f1)
+[ -n "$n" ] || fail "no rotation.start in the case"
+for cmd in "check" "dem --check"; do
+  if "$BIN" $cmd "$W/bad.yaml" 2> "$W/bad.log"; then fail "$cmd: rotation.start was accepted"; fi
+  grep -q "bad.yaml:$n: walls\[0\] (box): rotation.start is not expressible in a LIGGGHTS deck" "$W/bad.log" ||
+    { cat "$W/bad.log"; fail "$cmd: rotation.start error"; }
+done
 # a feed of classes with a range of radii (uniform 0.8-1.2 mm) and a truncated lognormal
 # (median 1 mm, gsd 1.3): LIGGGHTS inserts each class as 16 templates of equal number (deck.c);
 # 1000 particles fed without gravity.  LIGGGHTS' radii per class (its last snapshot) have the
@@ -301,6 +407,9 @@ for eng in ("embedded", "liggghts"):
     want = sum(n[k] * 500 * 4 / 3 * math.pi * mom[k][1] for k in (1, 2))
     print("cli_liggghts: fed mass (%s): %.5g kg, expected %.5g kg from %d + %d particles" % (eng, m, want, n[1], n[2]))
     assert sum(n.values()) == 1000 and abs(m / want - 1) < 0.04, (eng, m, want, n)
+    # the fed particles are inserted, not lost (lost counts the feeds' insertions in)
+    ts = list(csv.DictReader(open("%s/f_%s/timeseries.csv" % (w, eng))))
+    assert [r["lost"] for r in ts] == ["0"] * len(ts) and ts[-1]["particles"] == "1000", (eng, ts)
 PY
 # a coupled case's DEM stage runs to its steady state, which a deck cannot detect: refused, not run embedded
 ln -s "$2/examples/data" "$W/data"

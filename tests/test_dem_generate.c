@@ -353,7 +353,7 @@ static void liggghts_deck(void) {
   fclose(m);
   /* the deck reads copies beside it, named after the wall and the written file */
   CHECK(buf && strstr(buf, "mesh/surface file wall0_bowl.stl"));
-  CHECK(buf && strstr(buf, "mesh/surface file wall1_impeller.stl"));
+  CHECK(buf && strstr(buf, "mesh/surface/stress file wall1_impeller.stl")); /* turning: its torque */
   CHECK(buf && strstr(buf, "move/mesh mesh wall1 rotate origin 0 0 0 axis 0 0 1 period 0.3"));
   if (buf && !strstr(buf, "wall1_impeller.stl")) fprintf(stderr, "%s\n", buf);
   free(buf);

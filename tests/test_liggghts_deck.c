@@ -81,8 +81,9 @@ int main(void) {
     HAS(d, "coefficientRestitution peratomtypepair 3 &\n    0.4 0.4 0.5 &\n    0.4 0.4 0.5 &\n    0.5 0.5 0.6\n");
     HAS(d, "coefficientRollingFriction peratomtypepair 3 &\n    0.2 0.2 0.15");
     HAS(d, "pair_style gran model hertz tangential history rolling_friction cdt\n");
-    HAS(d, "liggghts_deck_plate.stl type 3 heal auto_remove_duplicates element_exclusion_list read ex_wall0.txt "
-           "scale 0.001 curvature_tolerant yes");
+    /* the turning wall sums the particles' force and torque about its rotation origin */
+    HAS(d, "fix wall0 all mesh/surface/stress file wall0_liggghts_deck_plate.stl type 3 heal auto_remove_duplicates "
+           "element_exclusion_list read ex_wall0.txt scale 0.001 curvature_tolerant yes reference_point 0 0 0  # ");
     HAS(d, "mesh n_meshes 1 meshes wall0\n");
     HAS(d, "fix rot0 all move/mesh mesh wall0 rotate origin 0 0 0 axis 0 0 1 period 0.1\n"); /* 600 rpm */
     HAS(d, "particletemplate/sphere");
@@ -98,7 +99,10 @@ int main(void) {
     HAS(d, "write_dump all custom post/left*_0.atom id type mass f_rtime modify region outlet0\n");
     HAS(d, "fix rtime all property/atom/regiontracer/time\n");
     HAS(d, "fix pdd_types all particledistribution/discrete");
-    HAS(d, "thermo_style custom step atoms ke c_rke cpu v_hn v_hm\n");
+    /* the time series' contacts, feed insertions and the torque about the axis (0, 0, 1) */
+    HAS(d, "compute cca all contact/atom\ncompute ncon all reduce sum c_cca\nvariable nc equal c_ncon/2\n"
+           "variable nin equal 0+f_ins0[1]\nvariable tq0 equal f_wall0[4]*(0)+f_wall0[5]*(0)+f_wall0[6]*(1)\n");
+    HAS(d, "thermo_style custom step atoms ke c_rke cpu v_hn v_hm v_nc v_nin v_tq0\n");
     HAS(d, "dump dcol all custom 200 post/collision*.atom id type x y z vx vy vz radius c_cc_1 c_cc_2\n");
     HAS(d, "dump dimp all local 200 post/impact*.atom c_wgl[1]");
     /* the contact lists of the events: every third of the Hertz contact of two 1 mm spheres at 10 m/s */

@@ -132,8 +132,8 @@ int gs_api_case_check(const gs_api_case *c, char *desc, size_t n, gs_error *err)
     const int liggghts = gs_dem_case_engine(d) == 1;
     char what[512];
     gs_dem_case_describe(d, what, sizeof what);
-    if (liggghts && (rc = gs_lig_check(d, err))) gs_error_prefix(err, "%s: ", gs_cfg_name(c->base));
-    else snprintf(desc, n, "DEM case%s: %s", liggghts ? " (engine liggghts)" : "", what);
+    /* (a refusal names the file and line of the key) */
+    if (!liggghts || !(rc = gs_lig_check(d, err))) snprintf(desc, n, "DEM case%s: %s", liggghts ? " (engine liggghts)" : "", what);
     gs_dem_case_free(d);
   } else if (kind == GS_API_SWA) {
     gs_swa_case s;

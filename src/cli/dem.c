@@ -141,7 +141,7 @@ int gs_cmd_dem(int argc, char **argv) {
     size_t len = strlen(desc);
     snprintf(desc + len, sizeof desc - len, "; gas on %d x %d x %d cells", n[0], n[1], n[2]);
   }
-  if (liggghts && (rc = gs_lig_check(c, &err))) fprintf(stderr, "gransim: %s: %s\n", path, err.msg);
+  if (liggghts && (rc = gs_lig_check(c, &err))) fprintf(stderr, "gransim: %s\n", err.msg); /* FILE:LINE: key */
   else if (check) printf("%s: valid%s. %s\n", path, liggghts ? " (engine liggghts)" : "", desc);
   else {
     if (progress) fprintf(stderr, "gransim dem: %s: %s%s\n", path, desc, liggghts ? "; engine liggghts" : "");

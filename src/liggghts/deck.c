@@ -8,6 +8,7 @@
  * wall's material. */
 #include <errno.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -36,6 +37,26 @@ static long lig_seed(const gs_dem_case *c, int k) {
 }
 
 static double mean2(double a, double b) { return 0.5 * (a + b); }
+
+/* A refusal of key (a path such as "walls[1].rotation") at its place in the
+ * case file, "FILE:LINE: " (the file alone where the key is not in it). */
+static int lig_fail(const gs_dem_case *c, gs_error *err, const char *key, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static int lig_fail(const gs_dem_case *c, gs_error *err, const char *key, const char *fmt, ...) {
+  char dotted[160], msg[sizeof err->msg];
+  size_t k = 0;
+  for (const char *p = key; *p && k + 1 < sizeof dotted; p++)
+    if (*p != ']') dotted[k++] = *p == '[' ? '.' : *p;
+  dotted[k] = 0;
+  gs_error scratch = {0};
+  gs_cfg_node *n = c->cfg ? gs_cfg_find(c->cfg, dotted, &scratch) : NULL;
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  if (n) return gs_error_set(err, GS_EINPUT, "%s:%d: %s", gs_cfg_file(n), gs_cfg_line(n), msg);
+  return gs_error_set(err, GS_EINPUT, "%s: %s", c->path, msg);
+}
 
 /* Material value of atom type t (1-based): a class or a wall. */
 static const gs_dem_material *type_mat(const gs_dem_case *c, size_t t) {
@@ -68,20 +89,21 @@ static int cyl_axis(const gs_dem_region *g) {
 /* Whether a LIGGGHTS region can be g: boxes, and cylinders along x, y or z;
  * an annulus (inner_radius) only where feed is 0, as the intersection of two
  * cylinders, which insert/rate/region cannot fill. */
-static int region_check(const gs_dem_region *g, const char *key, int feed, gs_error *err) {
+static int region_check(const gs_dem_case *c, const gs_dem_region *g, const char *key, int feed, gs_error *err) {
   if (g->kind == GS_DEM_REGION_BOX) return GS_OK;
   if (cyl_axis(g) < 0)
-    return gs_error_set(err, GS_EINPUT, "%s.cylinder: the LIGGGHTS engine takes cylinders along x, y or z only "
+    return lig_fail(c, err, key, "%s.cylinder: the LIGGGHTS engine takes cylinders along x, y or z only "
                         "(axis (%g, %g, %g)); use a box or such a cylinder", key, g->a[0], g->a[1], g->a[2]);
   if (feed && g->Rin > 0)
-    return gs_error_set(err, GS_EINPUT, "%s.cylinder.inner_radius: a LIGGGHTS feed region cannot be an annulus "
+    return lig_fail(c, err, key, "%s.cylinder.inner_radius: a LIGGGHTS feed region cannot be an annulus "
                         "(insert/rate/region fills simple regions); use a box or a full cylinder", key);
   return GS_OK;
 }
 
 /* A region as LIGGGHTS region commands (checked by region_check). */
-static int region_cmd(FILE *fp, const char *id, const gs_dem_region *g, const char *key, int feed, gs_error *err) {
-  int rc = region_check(g, key, feed, err);
+static int region_cmd(const gs_dem_case *c, FILE *fp, const char *id, const gs_dem_region *g, const char *key, int feed,
+                      gs_error *err) {
+  int rc = region_check(c, g, key, feed, err);
   if (rc) return rc;
   if (g->kind == GS_DEM_REGION_BOX) {
     fprintf(fp, "region %s block %.9g %.9g %.9g %.9g %.9g %.9g units box\n", id, g->lo[0], g->hi[0], g->lo[1],
@@ -127,6 +149,12 @@ static void run_cmd(FILE *fp, const gs_dem_case *c, long nsteps, const char *lab
     fprintf(fp, "run %ld\n", r);
     empty_outlets(fp, c);
   }
+}
+
+/* Whether wall s has a motion (a rotation, even at 0 rpm, or a velocity):
+ * its mesh then sums the torque, as the embedded engine's walls with motion. */
+static int wall_moves(const gs_dem_wall_src *s) {
+  return s->rotating || s->velocity[0] != 0 || s->velocity[1] != 0 || s->velocity[2] != 0;
 }
 
 /* Everything before the walls: atoms, box, materials, contact law, time
@@ -220,52 +248,62 @@ int gs_lig_class_radii(const gs_dem_case *c, size_t i, double *r) {
 /* What a deck cannot express, named by key. */
 int gs_lig_check(const gs_dem_case *c, gs_error *err) {
   if (c->wet)
-    return gs_error_set(err, GS_EINPUT, "%s: not expressible in a LIGGGHTS deck (droplets, the liquid on the "
+    return lig_fail(c, err, c->wet->has_spray ? "spray" : "granulation", "%s: not expressible in a LIGGGHTS deck (droplets, the liquid on the "
                         "particles and their aggregation live in the embedded engine); use engine: embedded",
                         c->wet->has_spray ? "spray" : "granulation");
   /* a plane becomes a mesh (plane_mesh.c) of the box's size: it may not move out of it */
   for (size_t w = 0; w < c->nwall_src; w++) {
     const gs_dem_wall_src *s = &c->wall_src[w];
+    char key[64];
+    snprintf(key, sizeof key, "walls[%zu]", w);
     if (s->kind == GS_DEM_SRC_CYLINDER)
-      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): cylinder walls are not expressible in the LIGGGHTS "
+      return lig_fail(c, err, key, "walls[%zu] (%s): cylinder walls are not expressible in the LIGGGHTS "
                           "engine (a primitive cylinder's contacts are not reported by compute wall/gran/local, "
                           "and a faceted one gets two contacts at each fold by LIGGGHTS' mesh rule); give the "
                           "wall as an STL mesh", w, s->name);
     if (s->kind == GS_DEM_SRC_PLANE && (s->rotating || s->velocity[0] != 0 || s->velocity[1] != 0 ||
-                                        s->velocity[2] != 0))
-      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s).%s: a moving plane is not expressible in the LIGGGHTS "
+                                        s->velocity[2] != 0)) {
+      snprintf(key, sizeof key, "walls[%zu].%s", w, s->rotating ? "rotation" : "velocity");
+      return lig_fail(c, err, key, "walls[%zu] (%s).%s: a moving plane is not expressible in the LIGGGHTS "
                           "engine (the deck meshes the plane where it cuts the box at t = 0); give the wall as "
                           "an STL mesh", w, s->name, s->rotating ? "rotation" : "velocity");
+    }
   }
   for (size_t w = 0; w < c->nwall_src; w++)
-    if (c->wall_src[w].rotating && c->wall_src[w].spin_start > 0)
-      return gs_error_set(err, GS_EINPUT, "walls[%zu] (%s): rotation.start is not expressible in a LIGGGHTS deck "
+    if (c->wall_src[w].rotating && c->wall_src[w].spin_start > 0) {
+      char key[64];
+      snprintf(key, sizeof key, "walls[%zu].rotation.start", w);
+      return lig_fail(c, err, key, "walls[%zu] (%s): rotation.start is not expressible in a LIGGGHTS deck "
                           "(its move/mesh turns from t = 0); use the embedded engine", w, c->wall_src[w].name);
+    }
   if (c->damping_given && c->prm.damping != GS_DEM_DAMPING_LIGGGHTS)
-    return gs_error_set(err, GS_EINPUT, "dem.damping: 'exact' is not expressible in LIGGGHTS, whose damping follows "
+    return lig_fail(c, err, "dem.damping", "dem.damping: 'exact' is not expressible in LIGGGHTS, whose damping follows "
                         "from e by its closed form; give 'liggghts' or leave the key out");
   if (c->mesh_contacts_given && c->prm.mesh_contacts != GS_DEM_MESH_LIGGGHTS)
-    return gs_error_set(err, GS_EINPUT, "dem.mesh_contacts: 'closest' is not expressible in LIGGGHTS, which counts "
+    return lig_fail(c, err, "dem.mesh_contacts", "dem.mesh_contacts: 'closest' is not expressible in LIGGGHTS, which counts "
                         "mesh contacts by its own rule; give 'liggghts' or leave the key out");
   if (c->start_steady)
-    return gs_error_set(err, GS_EINPUT, "statistics.start: 'steady' is not expressible in a LIGGGHTS deck (the "
-                        "detector needs the collision rate during the run); give a time");
+    return lig_fail(c, err, "statistics.start", "statistics.start: 'steady' is not expressible in a LIGGGHTS deck (the "
+                        "detector needs the collision rate during the run, and gransim runs the deck in one piece); "
+                        "give a time, e.g. the steady time an embedded run reports");
   char key[64];
   int rc = GS_OK;
   for (size_t k = 0; k < c->nfeed && !rc; k++) {
     snprintf(key, sizeof key, "feed[%zu].region", k);
-    rc = region_check(&c->feed[k].reg, key, 1, err);
+    rc = region_check(c, &c->feed[k].reg, key, 1, err);
   }
   for (size_t k = 0; k < c->noutlets && !rc; k++) {
     snprintf(key, sizeof key, "outlets[%zu].region", k);
-    rc = region_check(&c->outlets[k], key, 0, err);
+    rc = region_check(c, &c->outlets[k], key, 0, err);
   }
-  if (!rc && c->has_holdup) rc = region_check(&c->holdup, "statistics.holdup_region", 0, err);
+  if (!rc && c->has_holdup) rc = region_check(c, &c->holdup, "statistics.holdup_region", 0, err);
   if (rc) return rc;
   for (size_t i = 0; i < c->nclass; i++)
-    if (memcmp(&c->cls[i].mat, &c->cls[0].mat, sizeof c->cls[0].mat))
-      return gs_error_set(err, GS_EINPUT, "classes[%zu].material: the LIGGGHTS engine's reduction assumes one "
+    if (memcmp(&c->cls[i].mat, &c->cls[0].mat, sizeof c->cls[0].mat)) {
+      snprintf(key, sizeof key, "classes[%zu].material", i);
+      return lig_fail(c, err, key, "classes[%zu].material: the LIGGGHTS engine's reduction assumes one "
                           "particle material (that of classes[0]) for its Hertz contact times", i);
+    }
   return GS_OK;
 }
 
@@ -298,11 +336,16 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
       /* LIGGGHTS wants its keywords in this order: type, heal, element_exclusion_list, scale */
       char mesh[4200];
       gs_lig_mesh_name(c, w, mesh, sizeof mesh);
-      fprintf(fp, "fix wall%zu all mesh/surface file %s type %zu heal auto_remove_duplicates", w, mesh, ncl + 1 + w);
+      /* a moving wall's mesh also sums the particles' force and torque (mesh/surface/stress,
+       * about its rotation origin: the time series' torque_axis) */
+      fprintf(fp, "fix wall%zu all mesh/surface%s file %s type %zu heal auto_remove_duplicates", w,
+              wall_moves(s) ? "/stress" : "", mesh, ncl + 1 + w);
       /* LIGGGHTS refuses facets with more than two edge neighbours (the CoriMix
        * shell has such rings); its remedy: a first run writes them, this one excludes them */
       if (exclusion) fprintf(fp, " element_exclusion_list %s ex_wall%zu.txt", exclusion, w);
-      fprintf(fp, " scale %.9g curvature_tolerant yes  # %s\n", s->scale, s->name);
+      fprintf(fp, " scale %.9g curvature_tolerant yes", s->scale);
+      if (wall_moves(s)) fprintf(fp, " reference_point %.9g %.9g %.9g", s->origin[0], s->origin[1], s->origin[2]);
+      fprintf(fp, "  # %s\n", s->name);
     }
     fprintf(fp, "fix walls all wall/gran model hertz tangential history rolling_friction cdt mesh n_meshes %zu meshes",
             c->nwall_src);
@@ -362,7 +405,7 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
     snprintf(key, sizeof key, "feed[%zu].region", k);
     char rid[32];
     snprintf(rid, sizeof rid, "feed%zu", k);
-    if ((rc = region_cmd(fp, rid, &f->reg, key, 1, err))) return rc;
+    if ((rc = region_cmd(c, fp, rid, &f->reg, key, 1, err))) return rc;
     double span = fmin(f->end, c->duration) - f->start;
     long every = (long)fmax(1, round(f->every / dt)), start = (long)round(f->start / dt);
     /* LIGGGHTS reads these keywords in this order only */
@@ -378,13 +421,13 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
     char key[64], rid[32];
     snprintf(key, sizeof key, "outlets[%zu].region", k);
     snprintf(rid, sizeof rid, "outlet%zu", k);
-    if ((rc = region_cmd(fp, rid, &c->outlets[k], key, 0, err))) return rc;
+    if ((rc = region_cmd(c, fp, rid, &c->outlets[k], key, 0, err))) return rc;
   }
   /* each atom's time since it entered (its residence time when it leaves) */
   if (c->noutlets) fprintf(fp, "fix rtime all property/atom/regiontracer/time\n");
   /* the hold-up of the time series: in the hold-up region, or everything */
   if (c->has_holdup) {
-    if ((rc = region_cmd(fp, "holdup", &c->holdup, "statistics.holdup_region", 0, err))) return rc;
+    if ((rc = region_cmd(c, fp, "holdup", &c->holdup, "statistics.holdup_region", 0, err))) return rc;
     fprintf(fp, "variable hn equal count(all,holdup)\nvariable hm equal mass(all,holdup)\n");
   } else {
     fprintf(fp, "variable hn equal count(all)\nvariable hm equal mass(all)\n");
@@ -415,8 +458,27 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
    * one wall/gran/local only, so its columns are: wall and particle velocity 1-6, mesh,
    * triangle, atom 7-9, force 10-12, normal force 13-15, contact area 16, overlap 17 */
   if (c->nwall_src) fprintf(fp, "compute wgl all wall/gran/local id vel force force_normal contactArea delta\n");
-  fprintf(fp, "compute rke all erotate/sphere\n"
-              "thermo_style custom step atoms ke c_rke cpu v_hn v_hm\nthermo %ld\nthermo_modify lost ignore norm no\n", out_k);
+  /* the time series' columns beyond the energies: pair contacts (contact/atom counts each at
+   * both atoms), the particles the feeds inserted (fix insert's first output; the runner finds
+   * the lost ones from them), each wall's torque about its rotation axis (as the embedded
+   * engine: about the x axis through the origin for a wall without a turning axis, 0 for a
+   * wall without motion) */
+  fprintf(fp, "compute rke all erotate/sphere\ncompute cca all contact/atom\ncompute ncon all reduce sum c_cca\n"
+              "variable nc equal c_ncon/2\nvariable nin equal 0");
+  for (size_t k = 0; k < c->nfeed; k++) fprintf(fp, "+f_ins%zu[1]", k);
+  fprintf(fp, "\n");
+  for (size_t w = 0; w < c->nwall_src; w++) {
+    const gs_dem_wall_src *s = &c->wall_src[w];
+    const int turns = s->rotating && s->omega != 0; /* gs_dem_wall_set_motion's axis */
+    const double ax[3] = {turns ? s->axis[0] : 1, turns ? s->axis[1] : 0, turns ? s->axis[2] : 0};
+    if (wall_moves(s))
+      fprintf(fp, "variable tq%zu equal f_wall%zu[4]*(%.9g)+f_wall%zu[5]*(%.9g)+f_wall%zu[6]*(%.9g)\n", w, w, ax[0], w,
+              ax[1], w, ax[2]);
+    else fprintf(fp, "variable tq%zu equal 0\n", w);
+  }
+  fprintf(fp, "thermo_style custom step atoms ke c_rke cpu v_hn v_hm v_nc v_nin");
+  for (size_t w = 0; w < c->nwall_src; w++) fprintf(fp, " v_tq%zu", w);
+  fprintf(fp, "\nthermo %ld\nthermo_modify lost ignore norm no\n", out_k);
 
   if (c->vtk_every > 0) { /* text frames in DIR/vtk, named by step: gransim makes them VTK XML (frames.c) */
     long vk = (long)fmax(1, round(c->vtk_every / dt));

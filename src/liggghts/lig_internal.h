@@ -6,19 +6,26 @@
 
 #include "dem/dem_case.h"
 
-/* thermo_style custom step atoms ke c_rke cpu v_hn v_hm (deck.c) */
-#define GS_LIG_THERMO_COLS 7
+/* thermo_style custom step atoms ke c_rke cpu v_hn v_hm v_nc v_nin v_tq0 ..
+ * (deck.c): GS_LIG_THERMO_COLS columns, then one per wall */
+#define GS_LIG_THERMO_COLS 9
 typedef struct {
   size_t n, cap;
+  size_t ncol; /* GS_LIG_THERMO_COLS + the case's walls (gs_lig_thermo_cols) */
   double *row; /* per row: time [s], atoms, kinetic energy, rotational energy, cpu seconds, hold-up number and
-                  mass [kg] */
+                  mass [kg], pair contacts, particles inserted by the feeds so far, then per wall the torque of
+                  the particles about its rotation axis [N m] (0 for a wall that does not move) */
 } gs_lig_thermo;
-/* One line of LIGGGHTS' screen output: a thermo line (the 7 columns above,
+/* The columns of a thermo row of case c. */
+size_t gs_lig_thermo_cols(const gs_dem_case *c);
+/* One line of LIGGGHTS' screen output: a thermo line (th->ncol numbers,
  * nothing else) at a multiple of the output interval out_every and later
  * than the last row is added to th as a row at time step * dt (1); any other
  * line is left (0); -1: out of memory.  cpu_acc[2] (zero at the start)
  * carries the cpu seconds across LIGGGHTS' runs, which restart its clock. */
 int gs_lig_thermo_add(gs_lig_thermo *th, const char *line, double dt, double out_every, double cpu_acc[2]);
+/* Whether line is a thermo line of th's columns (1, its step in *step) or not (0). */
+int gs_lig_thermo_step(const gs_lig_thermo *th, const char *line, double *step);
 
 /* A deck that only reads mesh `wall` and writes the facets LIGGGHTS refuses
  * to ex_wall<wall>.txt (element_exclusion_list write). */

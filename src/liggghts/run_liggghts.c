@@ -163,7 +163,7 @@ static int run_deck(const char *dir, const char *launch, const char *bin, const 
     if (kept < 0) break;
     if (kept && progress) {
       /* the time left from the simulated time per wall second since the first row */
-      const double *r = th->row + GS_LIG_THERMO_COLS * (th->n - 1), now = gs_progress_clock();
+      const double *r = th->row + th->ncol * (th->n - 1), now = gs_progress_clock();
       char left[64] = "time left not known yet";
       if (t_first < 0) t_first = r[0], wall_first = now;
       else if (r[0] > t_first && now > wall_first) {
@@ -234,12 +234,11 @@ static int read_log(const gs_dem_case *c, const char *dir, gs_lig_thermo *th, gs
   snprintf(path, sizeof path, "%s/log.liggghts", dir);
   FILE *fp = fopen(path, "r");
   if (!fp) return gs_error_set(err, GS_EINPUT, "%s: cannot read: %s (no LIGGGHTS run in %s?)", path, strerror(errno), dir);
-  double cpu_acc[2] = {0, 0}, last = -1, x[7];
+  double cpu_acc[2] = {0, 0}, last = -1, step;
   const long nsteps = (long)ceil(c->duration / c->prm.dt - 1e-9);
   int rc = GS_OK;
   while (fgets(line, sizeof line, fp) && !rc) {
-    if (sscanf(line, "%lf %lf %lf %lf %lf %lf %lf", &x[0], &x[1], &x[2], &x[3], &x[4], &x[5], &x[6]) == 7)
-      last = fmax(last, x[0]);
+    if (gs_lig_thermo_step(th, line, &step)) last = fmax(last, step);
     if (gs_lig_thermo_add(th, line, c->prm.dt, c->out_every, cpu_acc) < 0) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   }
   fclose(fp);
@@ -281,7 +280,7 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
   if (ranks < 1) ranks = 1;
   if (reduce) {
     gs_lig_remove_tables(c, out);
-    gs_lig_thermo th = {0};
+    gs_lig_thermo th = {.ncol = gs_lig_thermo_cols(c)};
     rc = read_log(c, dir, &th, err);
     if (!rc) rc = gs_lig_reduce(c, out, &th, err);
     if (!rc) rc = gs_lig_vtk_frames(c, out, err);
@@ -305,10 +304,13 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
   if (c->vtk_every > 0 && mkdir(path, 0777) && errno != EEXIST)
     return gs_error_set(err, GS_EIO, "%s: cannot create: %s", path, strerror(errno));
   if (opt && opt->launcher) snprintf(launch, sizeof launch, "%s", opt->launcher);
-  /* Open MPI refuses root without these; other MPIs ignore the variables */
-  else snprintf(launch, sizeof launch, "%smpirun -np %d", geteuid() == 0 ?
+  /* Open MPI refuses root without the first three; other MPIs ignore the variables.  A rank
+   * waiting for another yields its core rather than busy-polling (unless the user chose),
+   * as the embedded engine's threads wait passively: on a machine shared with other work
+   * two polling ranks cost 3.2 times the CPU of two yielding ones (docs/performance.md) */
+  else snprintf(launch, sizeof launch, "%s%smpirun -np %d", geteuid() == 0 ?
                 "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 " : "",
-                ranks);
+                getenv("OMPI_MCA_mpi_yield_when_idle") ? "" : "OMPI_MCA_mpi_yield_when_idle=1 ", ranks);
 
   if ((rc = gs_dem_case_write_geometry(c, out, NULL, err))) return rc;
   size_t nbed = 0;
@@ -350,7 +352,7 @@ int gs_lig_case_run(gs_dem_case *c, const char *out, const gs_lig_options *opt, 
     return rc;
   }
   if (progress) fprintf(stderr, "gransim dem (liggghts): cd %s && %s %s -in in.gransim -log log.liggghts\n", dir, launch, bin);
-  gs_lig_thermo th = {0};
+  gs_lig_thermo th = {.ncol = gs_lig_thermo_cols(c)};
   rc = run_deck(dir, launch, bin, "in.gransim", "log.liggghts", "screen.liggghts", c, progress, &th, err);
   if (!rc) rc = gs_lig_reduce(c, out, &th, err);
   if (!rc) rc = gs_lig_vtk_frames(c, out, err);

@@ -86,6 +86,9 @@ typedef struct {
   int *rt_cls;             /* ... their classes */
   size_t nrt, caprt;
   double out_mass;
+  long *left_step;         /* every outlet dump (the whole run): its step ... */
+  double *left_n;          /* ... and how many atoms it removed */
+  size_t nleft, capleft;
 } pass;
 
 static void cmp_add(pass *a, const gs_dem_case *c, int k, const double x[3], const double v[3]) {
@@ -358,7 +361,8 @@ static int snapshot_steps(const char *dir, long **out, size_t *n, gs_error *err)
 
 /* The atoms that left through the outlets in the statistics window: the
  * left<STEP>_<OUTLET>.atom dumps the deck writes before each delete_atoms,
- * with each atom's time in the domain (fix property/atom/regiontracer/time). */
+ * with each atom's time in the domain (fix property/atom/regiontracer/time);
+ * and how many each dump removed, over the whole run (the lost particles). */
 static int residence(pass *a, const gs_dem_case *c, const char *post, gs_error *err) {
   const long k0 = (long)round(c->stats_start / c->prm.dt);
   DIR *dp = opendir(post);
@@ -368,10 +372,24 @@ static int residence(pass *a, const gs_dem_case *c, const char *post, gs_error *
     long st;
     size_t k;
     char tail[8], path[4900];
-    if (sscanf(e->d_name, "left%ld_%zu%7s", &st, &k, tail) != 3 || strcmp(tail, ".atom") || st <= k0) continue;
+    if (sscanf(e->d_name, "left%ld_%zu%7s", &st, &k, tail) != 3 || strcmp(tail, ".atom")) continue;
     snprintf(path, sizeof path, "%s/%s", post, e->d_name);
     gs_dump d;
     if ((rc = gs_dump_read(path, &d, err))) break;
+    if (a->nleft == a->capleft) {
+      size_t cap = a->capleft ? 2 * a->capleft : 256;
+      long *t = realloc(a->left_step, cap * sizeof *t);
+      if (t) a->left_step = t;
+      double *q = realloc(a->left_n, cap * sizeof *q);
+      if (q) a->left_n = q;
+      if (!t || !q) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+      else a->capleft = cap;
+    }
+    if (!rc) a->left_step[a->nleft] = st, a->left_n[a->nleft++] = (double)d.nrows;
+    if (rc || st <= k0) {
+      gs_dump_free(&d);
+      continue;
+    }
     long ct = gs_dump_col(&d, "type"), cm = gs_dump_col(&d, "mass"), cr = gs_dump_col(&d, "f_rtime");
     if (ct < 0 || cm < 0 || cr < 0) rc = gs_error_set(err, GS_EINPUT, "%s: no columns type, mass, f_rtime", path);
     if (!rc && a->nrt + d.nrows > a->caprt) {
@@ -394,6 +412,19 @@ static int residence(pass *a, const gs_dem_case *c, const char *post, gs_error *
   }
   closedir(dp);
   return rc;
+}
+
+/* The particles lost (left the box other than through an outlet) by thermo
+ * row r: those at t = 0 (the bed, and what the feeds inserted then) and
+ * inserted since, less those held and those the outlets removed (after the
+ * thermo row of their step); *inserted: the particles inserted by then. */
+static double lost_at(const pass *a, const gs_lig_thermo *th, size_t r, double dt, double *inserted) {
+  const double *v0 = th->row, *v = th->row + th->ncol * r;
+  const long step = (long)round(v[0] / dt);
+  double gone = 0;
+  for (size_t q = 0; q < a->nleft; q++) gone += a->left_step[q] < step ? a->left_n[q] : 0;
+  if (inserted) *inserted = v0[1] - v0[8] + v[8];
+  return v0[1] - v0[8] + v[8] - v[1] - gone;
 }
 
 int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, gs_error *err) {
@@ -466,6 +497,15 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   snprintf(path, sizeof path, "%s/events_wall.txt", post);
   if (!rc && nw) rc = count_events(&a, path, 1, err);
   if (!rc && c->noutlets) rc = residence(&a, c, post, err);
+  /* dem.max_lost, as the embedded engine's health check (which stops the run there) */
+  for (size_t r = 0; !rc && r < th->n; r++) {
+    double ins, lost = lost_at(&a, th, r, dt, &ins);
+    if (ins > 0 && lost > c->max_lost * ins)
+      rc = gs_error_set(err, GS_ENUMERIC, "DEM (LIGGGHTS): %.0f of the %.0f particles inserted had left the box "
+                        "other than through an outlet by t = %g s, more than dem.max_lost = %g of them: they "
+                        "escaped through a hole in a wall or were thrown out by overlapping contacts", lost, ins,
+                        th->row[th->ncol * r], c->max_lost);
+  }
   const double ns = nsnap ? (double)nsnap : 1;
   const double t0 = nsnap ? steps[0] * dt : NAN, t1 = nsnap ? steps[nsnap - 1] * dt : NAN;
   const double win = c->duration - c->stats_start;
@@ -587,30 +627,32 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     for (size_t w = 0; w < nw; w++) fprintf(fp, ",torque_axis_%s", c->wall_src[w].name);
     fprintf(fp, ",lost,steady,wall_seconds\n");
     for (size_t r = 0; r < th->n; r++) {
-      const double *v = th->row + GS_LIG_THERMO_COLS * r;
+      const double *v = th->row + th->ncol * r;
       /* event rates of the interval that ends at this row, where the contact
        * lists (from statistics.start on) cover all of it */
       const long step = (long)round(v[0] / dt), ko = step / a.out_k;
       const int have_rate = step > 0 && step - a.out_k >= start_k && ko < a.nout;
       const double span = a.out_k * dt;
-      fprintf(fp, "%.9g,%.0f,%.0f,%.9g,%.9g,%.9g,nan,", v[0], v[1], v[5], v[6], v[2], v[3]);
+      fprintf(fp, "%.9g,%.0f,%.0f,%.9g,%.9g,%.9g,%.0f,", v[0], v[1], v[5], v[6], v[2], v[3], v[7]);
       fprintf(fp, have_rate ? "%.9g" : "nan", have_rate ? a.ts_ev[ko] / span : 0.0);
       for (size_t w = 0; w < nw; w++)
         fprintf(fp, have_rate ? ",%.9g" : ",nan", have_rate ? a.ts_ev[(1 + w) * (size_t)a.nout + (size_t)ko] / span : 0.0);
-      for (size_t w = 0; w < nw; w++) fprintf(fp, ",nan");
-      fprintf(fp, ",nan,0,%.6f\n", v[4]);
+      for (size_t w = 0; w < nw; w++) fprintf(fp, ",%.9g", v[GS_LIG_THERMO_COLS + w]);
+      fprintf(fp, ",%.0f,0,%.6f\n", lost_at(&a, th, r, dt, NULL), v[4]);
     }
     const char *names[GS_DEM_CASE_MAX_WALLS];
     for (size_t w = 0; w < nw; w++) names[w] = c->wall_src[w].name;
     rc = gs_dem_table_end(&tab, NULL, err);
     if (!rc)
-      rc = gs_dem_timeseries_meta(tab.path, "engine liggghts: LIGGGHTS' thermo rows; what they do not report is nan",
+      rc = gs_dem_timeseries_meta(tab.path, "engine liggghts: LIGGGHTS' thermo rows (pair contacts from compute contact/atom, the "
+                                  "torque from fix mesh/surface/stress, lost: inserted minus held minus removed by "
+                                  "outlets); the steady flag is 0 (statistics.start: steady is refused)",
                                   nw, names, err);
   } else if (!rc) rc = err->code;
 
   free(a.num), free(a.cv_n), free(a.cv_s), free(a.cv_s2), free(a.cv_a), free(a.cv_v), free(a.cv_v2);
   free(a.wall_contacts), free(a.ln_u), free(a.u_wc), free(a.hist), free(a.pair_events), free(a.ids);
-  free(a.rt), free(a.rt_cls), free(a.vn_n), free(a.vn_s), free(a.vn_s2), free(a.vt_s), free(a.ts_ev);
+  free(a.rt), free(a.rt_cls), free(a.left_step), free(a.left_n), free(a.vn_n), free(a.vn_s), free(a.vn_s2), free(a.vt_s), free(a.ts_ev);
   if (have_dd) gs_dem_data_free(&dd);
   free(steps);
   if (rc) gs_lig_remove_tables(c, out); /* all the tables or none */
