@@ -15,6 +15,18 @@ fi
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 fail() { echo "cli_liggghts: FAIL: $*" >&2; exit 1; }
+
+# run_engines P WHAT YAMLFN [ARG...]: writes $W/Pe.yaml and $W/Pl.yaml with
+# `YAMLFN ENGINE ARG...` and runs the case on both engines (embedded on one
+# thread, LIGGGHTS on one rank) into $W/Pe and $W/Pl.
+run_engines() {
+  local p=$1 what=$2 fn=$3
+  shift 3
+  "$fn" embedded "$@" > "$W/${p}e.yaml"
+  "$fn" liggghts "$@" > "$W/${p}l.yaml"
+  "$BIN" dem "$W/${p}e.yaml" --out "$W/${p}e" --threads 1 --quiet || fail "embedded $what run"
+  "$BIN" dem "$W/${p}l.yaml" --out "$W/${p}l" --ranks 1 --quiet 2> "$W/${p}l.log" || { cat "$W/${p}l.log"; fail "liggghts $what run"; }
+}
 # a closed box 20 x 20 x 30 mm as an STL mesh (12 facets), in millimetres (scale 1e-3)
 python3 - "$W/box.stl" <<'PY'
 import sys
@@ -167,10 +179,7 @@ torque_yaml() { # torque_yaml ENGINE
     "  - region: {box: {lo: [-0.008, 0.001, 0.002], hi: [0.008, 0.008, 0.006]}}
     count: 20" "{start: 0.1, sample_every: 0.0025}"
 }
-torque_yaml embedded > "$W/te.yaml"
-torque_yaml liggghts > "$W/tl.yaml"
-"$BIN" dem "$W/te.yaml" --out "$W/te" --threads 1 --quiet || fail "embedded torque run"
-"$BIN" dem "$W/tl.yaml" --out "$W/tl" --ranks 1 --quiet 2> "$W/tl.log" || { cat "$W/tl.log"; fail "liggghts torque run"; }
+run_engines t torque torque_yaml
 grep -q "^fix wall0 all mesh/surface/stress file .* reference_point 0 0 0" "$W/tl/liggghts/in.gransim" || fail "deck: no stress mesh"
 python3 - "$W/te" "$W/tl" <<'PY'
 import csv, glob, math, re, sys
@@ -206,10 +215,7 @@ statistics: {start: 0.05, sample_every: 0.0025}
 output: {every: 0.01}
 YAML
 }
-fall_yaml embedded 1 > "$W/fe.yaml"
-fall_yaml liggghts 1 > "$W/fl.yaml"
-"$BIN" dem "$W/fe.yaml" --out "$W/fe" --threads 1 --quiet || fail "embedded fall run"
-"$BIN" dem "$W/fl.yaml" --out "$W/fl" --ranks 1 --quiet 2> "$W/fl.log" || { cat "$W/fl.log"; fail "liggghts fall run"; }
+run_engines f fall fall_yaml 1
 python3 - "$W/fe" "$W/fl" <<'PY'
 import csv, sys
 e, l = ([(r["time"], r["particles"], r["lost"]) for r in csv.DictReader(open(d + "/timeseries.csv"))] for d in sys.argv[1:])
@@ -253,10 +259,7 @@ statistics:
 output: {every: 0.01}
 YAML
 }
-res_yaml embedded > "$W/re.yaml"
-res_yaml liggghts > "$W/rl.yaml"
-"$BIN" dem "$W/re.yaml" --out "$W/re" --quiet || fail "embedded outlet run"
-"$BIN" dem "$W/rl.yaml" --out "$W/rl" --ranks 1 --quiet 2> "$W/rl.log" || { cat "$W/rl.log"; fail "liggghts outlet run"; }
+run_engines r outlet res_yaml
 grep -q "^write_dump all custom post/left\*_0.atom .* modify region outlet0" "$W/rl/liggghts/in.gransim" || fail "deck outlet dump"
 python3 - "$W/re" "$W/rl" <<'PY'
 import csv, json, re, sys
@@ -299,10 +302,7 @@ plane_yaml() { # plane_yaml ENGINE [VELOCITY]
     "  - region: {box: {lo: [-0.007, -0.007, 0.006], hi: [0.007, 0.007, 0.012]}}
     count: 20" "{start: 0, sample_every: 0.0025}"
 }
-plane_yaml embedded > "$W/pe.yaml"
-plane_yaml liggghts > "$W/pl.yaml"
-"$BIN" dem "$W/pe.yaml" --out "$W/pe" --threads 1 --quiet || fail "embedded plane run"
-"$BIN" dem "$W/pl.yaml" --out "$W/pl" --ranks 1 --quiet 2> "$W/pl.log" || { cat "$W/pl.log"; fail "liggghts plane run"; }
+run_engines p plane plane_yaml
 grep -q "^fix wall0 all mesh/surface file wall0_plane.stl type 3 " "$W/pl/liggghts/in.gransim" || fail "deck plane mesh"
 python3 - "$W/pe" "$W/pl" <<'PY'
 import csv, sys
