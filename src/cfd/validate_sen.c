@@ -18,9 +18,9 @@
 #include "gransim/dem.h"
 
 /* examples/fluid-bed-cfd.yaml without its comments and VTK output, and with
- * 2 gas cells across instead of 4: the drag closure needs cells of at least 2
- * particle diameters, and with 10 mm cells a 5 mm aggregate stopped the 4 g/s
- * run at 0.75 s.  Without the example's dem.threads_from: one thread, so that
+ * 2 gas cells across instead of 4, half the gas work.  The drag closure needs
+ * cells of at least 2 particle diameters along every axis, so the bed's depth
+ * (one 10 mm cell, either way) stops a run whose aggregates reach 5 mm.  Without the example's dem.threads_from: one thread, so that
  * the figures (a chaotic flow, which the DEM's per-thread force sums perturb)
  * do not depend on the machine's core count. */
 static const char bed_case[] =

@@ -118,8 +118,9 @@ int gs_cmd_validate_cfd(int argc, char **argv) {
     fprintf(fp,
             "Three runs of the lab bed of examples/fluid-bed-cfd.yaml (2000 particles of 2 mm, 1030 kg/m3,\n"
             "fluidised at 1.8 m/s, sprayed 8 g/s from 0.4 s to 0.8 s, seed 3; src/cfd/validate_sen.c\n"
-            "embeds it, with 2 gas cells across instead of 4, as the drag closure needs cells of 2\n"
-            "diameters and aggregates reach 5 mm), one at 4 g/s and one at 1.2 m/s; the figures come from the particles\n"
+            "embeds it, with 2 gas cells across instead of 4, half the gas work; the drag closure's\n"
+            "cells of at least 2 diameters and the bed's 10 mm depth keep aggregates below 5 mm),\n"
+            "one at 4 g/s and one at 1.2 m/s; the figures come from the particles\n"
             "themselves (speed, liquid volume l/(s+l), diameter). Each is a trend: the simulated value\n"
             "must exceed the reference. One seed each: the growth rows are indications of a trend.\n\n"
             "| check | simulated | reference | deviation | tolerance | within | set-up |\n"

@@ -154,11 +154,6 @@ static int transfer_create(gs_cfg_node *node, const gs_model *m, void **self, gs
   return GS_OK;
 }
 
-/* Rates sign * k * v[c] added to dst (sign -1: what leaves, +1: what comes in). */
-static void add_scaled(double *restrict dst, const double *restrict v, double f, size_t n) {
-  for (size_t c = 0; c < n; c++) dst[c] += f * v[c];
-}
-
 /* Compartment comp's rates and ledger: what leaves it, and what comes in
  * from the one before.  It writes only its own entries. */
 static void transfer_rates(void *self, const gs_model *m, const gs_eval *ev, size_t comp,
@@ -173,11 +168,11 @@ static void transfer_rates(void *self, const gs_model *m, const gs_eval *ev, siz
     const double k = T->k[sc], sign = from == 0 ? -1.0 : 1.0;
     const double *N = from == 0 ? gs_eval_numbers_c(m, ev, y, sc) : gs_eval_upstream_c(m, ev, y, comp, -1);
     double moved[GS_MAX_VOL];
-    add_scaled(gs_eval_numbers(m, ev, dydt, comp), N, sign * k, n);
+    gs_add_scaled(gs_eval_numbers(m, ev, dydt, comp), N, sign * k, n);
     for (size_t a = 0; a < dim; a++) moved[a] = k * gs_dot_strided(N, g->x + a, dim, n);
     for (int q = 0; q < m->ncarried; q++) {
       const double *Q = from == 0 ? gs_eval_carried_c(m, ev, y, sc, q) : gs_eval_upstream_c(m, ev, y, comp, q);
-      add_scaled(gs_eval_carried(m, ev, dydt, comp, q), Q, sign * k, n);
+      gs_add_scaled(gs_eval_carried(m, ev, dydt, comp, q), Q, sign * k, n);
       moved[dim + (size_t)q] = k * gs_sum(Q, n);
     }
     for (int a = 0; a < m->nvol; a++) ledger[a] += sign * moved[a];
