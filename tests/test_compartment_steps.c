@@ -15,7 +15,7 @@
  *     and run ahead of each other) with a rate switch, on 1, 2 and 3
  *     threads: the same numbers bit for bit; and a run that fails in the
  *     fourth compartment: the same failure on 1, 2 and 3 threads.
- *  4. Case errors: a method other than rk, an unknown value.
+ *  4. Case errors: a method other than rk, an unknown value (of steps, of outflow).
  *  5. Many compartments: the CoriMix example on 256 compartments along the
  *     same granulator (each 0.38/256 m long, the spray shared out alike),
  *     through the spray's start at t = 10 s, when the far compartments hold
@@ -219,6 +219,7 @@ static void test_errors(void) {
       {"method: euler, steps: per_compartment", "per_compartment steps need method rk"},
       {"method: cvode, steps: per_compartment", "per_compartment steps need method rk"},
       {"method: rk, steps: each", "steps"},
+      {"method: rk, steps: per_compartment, outflow: implicit", "solver.outflow = 'implicit': unknown outflow treatment"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
     char *yaml = tl_fmt("grid: {compartments: 2, axes: [{name: solid, type: linear, min: 0, max: 1, cells: 4}]}\n"
