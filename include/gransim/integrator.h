@@ -5,7 +5,9 @@
  *   "auto"   (default) rk while the case is not stiff, cvode while rk's steps
  *            would be held down by its stability limit (integrator_auto.c)
  *   "rk"     adaptive embedded Runge–Kutta from GSL odeiv2 (variant
- *            rkf45 | rkck | rk8pd, key `variant`, default rkck)
+ *            rkf45 | rkck | rk8pd, key `variant`, default rkck; a decay the
+ *            system leaves out of f stepped as key `outflow` says,
+ *            exponential | explicit, default exponential)
  *   "cvode"  SUNDIALS CVODE BDF for stiff cases (linear solver dense or gmres)
  *   "euler"  the adaptive explicit Euler of Sampat et al. (2018): dt doubled or halved so
  *            that dt * max(-f_i / y_i) stays below `safety` (default 0.1),
