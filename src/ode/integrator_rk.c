@@ -15,11 +15,13 @@
  * A linear decay -k y of the first components that the system leaves out
  * of f (gs_ode.ndecay: a compartment's outflow under per-compartment steps)
  * is stepped as the key `outflow` says (the registered gs_rk_outflow types
- * below): `exponential`, a Lawson (integrating-factor) step (Lawson 1967):
- * over a step from s, GSL's pair integrates u = e^{k (t - s)} y, whose rate
- * e^{k (t - s)} f has no stiffness from k, so the decay sets no stability
- * bound on the step, and the state is re-based (u = y) after every accepted
- * step; or `explicit`, f - k y integrated as it is.  Either way GSL also
+ * below): `exponential`, an integrating-factor step (Lawson 1967) in the
+ * form of Krogstad (2005): over a step from s, GSL's pair integrates u with
+ * y = e^{-k (t - s)} u + (1 - e^{-k (t - s)}) g0 / k, g0 = f at s, whose
+ * rate (f - g0) e^{k (t - s)} has no stiffness from k and vanishes where
+ * f stays at g0, so the decay sets no stability bound on the step, and the
+ * state is re-based (u = y) after every accepted step; or `explicit`,
+ * f - k y integrated as it is.  Either way GSL also
  * integrates W' = f for those components (excluded from the error control),
  * and what the decay removed is booked by the balance y0 + W - y1, which
  * the caller hands on exactly (gs_ode.decayed).
@@ -60,12 +62,12 @@ typedef struct gs_rk_outflow {
 
 static const gs_rk_outflow gs_rk_outflow_exponential = {
     .name = "exponential",
-    .summary = "Lawson step: the outflow integrated exactly, no stability bound from it",
+    .summary = "integrating factor: the outflow stepped exactly, no stability bound from it",
     .exponential = 1,
 };
 static const gs_rk_outflow gs_rk_outflow_explicit = {
     .name = "explicit",
-    .summary = "the outflow a rate like any other (its stability bound: k h < 3.3)",
+    .summary = "the outflow a rate like any other (stable while k h < 3.7 with rkck)",
     .exponential = 0,
 };
 static const gs_rk_outflow *const gs_rk_outflows[] = {&gs_rk_outflow_exponential,
@@ -120,9 +122,6 @@ static const gsl_odeiv2_step_type *gs_rk_step_type(int variant) {
   }
 }
 
-/* GSL calling convention -> gs_ode.  GSL_EBADFUNC makes evolve return at
- * once instead of retrying with a smaller step.  Non-finite derivatives are
- * caught here because GSL's error control never rejects NaN. */
 /* The frame of the exponential treatment over a step from s (the start of
  * the step tried), at t: y = phi u + psi g0 with phi = e^{-k (t - s)} and
  * psi = (1 - phi) / k, the exact solution of y' = -k y + g0 from u(s); so
@@ -161,6 +160,9 @@ static void gs_rk_decay_rates(gs_rk *self, double phi, double *dydt) {
   }
 }
 
+/* GSL calling convention -> gs_ode.  GSL_EBADFUNC makes evolve return at
+ * once instead of retrying with a smaller step.  Non-finite derivatives are
+ * caught here because GSL's error control never rejects NaN. */
 static int gs_rk_rhs(double t, const double y[], double dydt[], void *params) {
   gs_rk *self = params;
   const gs_ode *ode = self->ode;
