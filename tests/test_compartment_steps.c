@@ -13,8 +13,9 @@
  *     rtol 1e-9 against shared steps at rtol 1e-12, final states.
  *  3. Threads: six compartments (more than threads, so threads take several
  *     and run ahead of each other) with a rate switch, on 1, 2 and 3
- *     threads: the same numbers bit for bit; and a run that fails in the
- *     fourth compartment: the same failure on 1, 2 and 3 threads.
+ *     threads: the same numbers bit for bit (either outflow treatment);
+ *     and a run that fails in the fourth compartment: the same failure on
+ *     1, 2 and 3 threads.
  *  4. Case errors: a method other than rk, an unknown value (of steps, of outflow).
  *  5. Many compartments: the CoriMix example on 256 compartments along the
  *     same granulator (each 0.38/256 m long, the spray shared out alike),
@@ -153,6 +154,15 @@ static void test_chain(void) {
   free(ref);
 }
 
+/* s with its one occurrence of from replaced by to (s freed); NULL if it is
+ * not there. */
+static char *swap(char *s, const char *from, const char *to) {
+  char *at = s ? strstr(s, from) : NULL, *out = NULL;
+  if (at) out = tl_fmt("%.*s%s%s", (int)(at - s), s, to, at + strlen(from));
+  free(s);
+  return out;
+}
+
 static void test_threads(void) {
   const char *yaml =
       "grid: {compartments: 6, axes: [{name: solid, type: geometric, min: 0.01, ratio: 1.5, cells: 16, zero_first: true}]}\n"
@@ -163,28 +173,35 @@ static void test_threads(void) {
       "  - {type: transfer, rate: [0.7, 1.9, 0.4, 2.5, 1.1, 0.3]}\n"
       "solver: {method: rk, rtol: 1.0e-7, atol: 1.0e-12, steps: per_compartment}\n"
       "output: {end: 8, count: 17}\n";
-  double *first = NULL;
-  size_t n = 0;
   const int max = omp_get_max_threads();
-  for (int nt = 1; nt <= 3; nt++) {
-    omp_set_num_threads(nt); /* before the case: mechanisms keep scratch per thread */
-    gs_case c;
-    gs_run_report rep;
-    double *y = tl_build_run(yaml, &c, &rep);
-    if (y) {
-      n = c.model.nstate + c.model.nledger;
-      if (!first) first = y;
-      else {
-        CHECK(memcmp(first, y, n * sizeof(double)) == 0);
-        free(y);
+  /* the outflow stepped either way (solver.outflow; the default: exponential) */
+  for (int explicit = 0; explicit <= 1; explicit++) {
+    char *y_case = explicit ? swap(tl_fmt("%s", yaml), "steps: per_compartment}", "steps: per_compartment, outflow: explicit}")
+                            : tl_fmt("%s", yaml);
+    CHECK(y_case != NULL);
+    double *first = NULL;
+    size_t n = 0;
+    for (int nt = 1; y_case && nt <= 3; nt++) {
+      omp_set_num_threads(nt); /* before the case: mechanisms keep scratch per thread */
+      gs_case c;
+      gs_run_report rep;
+      double *y = tl_build_run(y_case, &c, &rep);
+      if (y) {
+        n = c.model.nstate + c.model.nledger;
+        if (!first) first = y;
+        else {
+          CHECK(memcmp(first, y, n * sizeof(double)) == 0);
+          free(y);
+        }
+        printf("threads %d, outflow %s: %ld compartment evaluations, coupling %.3g, balance %.3g\n", nt,
+               explicit ? "explicit" : "exponential", rep.stats.rhs_evals, rep.worst_coupling, rep.max_balance_error);
+        CHECK(rep.worst_coupling < 1e-12 && rep.max_balance_error < 1e-12);
       }
-      printf("threads %d: %ld compartment evaluations, coupling %.3g, balance %.3g\n", nt,
-             rep.stats.rhs_evals, rep.worst_coupling, rep.max_balance_error);
-      CHECK(rep.worst_coupling < 1e-12 && rep.max_balance_error < 1e-12);
+      gs_case_free(&c);
     }
-    gs_case_free(&c);
+    free(first);
+    free(y_case);
   }
-  free(first);
   /* the fourth compartment (fast transfer) runs out of steps: the same
    * failure, whatever the threads (the one a single thread meets first) */
   char *failing = tl_fmt("%.*ssteps: per_compartment, max_steps_per_output: 40}\n%s", (int)(strstr(yaml, "steps: per_compartment}") - yaml),
@@ -235,15 +252,6 @@ static void test_errors(void) {
     if (!strstr(err.msg, bad[i][1])) fprintf(stderr, "message: %s\n", err.msg);
     free(yaml);
   }
-}
-
-/* s with its one occurrence of from replaced by to (s freed); NULL if it is
- * not there. */
-static char *swap(char *s, const char *from, const char *to) {
-  char *at = s ? strstr(s, from) : NULL, *out = NULL;
-  if (at) out = tl_fmt("%.*s%s%s", (int)(at - s), s, to, at + strlen(from));
-  free(s);
-  return out;
 }
 
 static void test_many_compartments(void) {
