@@ -1,7 +1,8 @@
 # gransim run --resume is exact: a run killed with SIGKILL at a random moment
 # and resumed writes the very files an uninterrupted run writes (h5diff
 # without tolerance, summary.csv byte for byte), with every integrator (rk,
-# euler, cvode, auto) and with shared and per-compartment steps.  The case is the
+# euler, cvode, auto) and with shared and per-compartment steps (the outflow
+# stepped exponentially and explicitly).  The case is the
 # CoriMix example (aggregation with wetness choices, breakage, spray from
 # t = 10, transfer) on more compartments, committing every output time.
 #
@@ -36,6 +37,7 @@ exact() {
 n=0
 for solver in "rk, rtol: 1.0e-6, atol: 1.0, steps: shared" \
   "rk, rtol: 1.0e-6, atol: 1.0, steps: per_compartment" \
+  "rk, rtol: 1.0e-6, atol: 1.0, steps: per_compartment, outflow: explicit" \
   "euler" "cvode, rtol: 1.0e-6, atol: 1.0" "auto, rtol: 1.0e-6, atol: 1.0"; do
   n=$((n + 1))
   c=$WORK/case$n.yaml

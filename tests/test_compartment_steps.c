@@ -13,9 +13,10 @@
  *     rtol 1e-9 against shared steps at rtol 1e-12, final states.
  *  3. Threads: six compartments (more than threads, so threads take several
  *     and run ahead of each other) with a rate switch, on 1, 2 and 3
- *     threads: the same numbers bit for bit; and a run that fails in the
- *     fourth compartment: the same failure on 1, 2 and 3 threads.
- *  4. Case errors: a method other than rk, an unknown value.
+ *     threads: the same numbers bit for bit (either outflow treatment);
+ *     and a run that fails in the fourth compartment: the same failure on
+ *     1, 2 and 3 threads.
+ *  4. Case errors: a method other than rk, an unknown value (of steps, of outflow).
  *  5. Many compartments: the CoriMix example on 256 compartments along the
  *     same granulator (each 0.38/256 m long, the spray shared out alike),
  *     through the spray's start at t = 10 s, when the far compartments hold
@@ -23,7 +24,16 @@
  *     the ledger and the coupling exact (it stopped with a step-size
  *     underflow in compartment 99 at t = 10.05 while the spray was shared
  *     out over round-off); with GRANSIM_TEST_LONG=1 (test_compartment_steps_long)
- *     the whole 85 s. */
+ *     the whole 85 s.
+ *  6. The outflow stepped exponentially (solver.outflow, the default) and
+ *     explicitly: tanks in series fed at a constant rate F into the first,
+ *     nothing else, where compartment c holds (F/k) P(c, k t) (P the
+ *     regularized incomplete gamma function: the Erlang arrival is exact),
+ *     at every compartment across the front, within 20 rtol of F/k; the
+ *     coupling and the ledger to round-off; and with a fast outflow (k = 40/s,
+ *     outputs 20 s apart) the exponential step takes a fraction of the
+ *     explicit one's steps (bounded by stability: k h < 3.7). */
+#include <gsl/gsl_sf_gamma.h>
 #include <omp.h>
 
 #include "run/compartment_steps.h"
@@ -144,6 +154,15 @@ static void test_chain(void) {
   free(ref);
 }
 
+/* s with its one occurrence of from replaced by to (s freed); NULL if it is
+ * not there. */
+static char *swap(char *s, const char *from, const char *to) {
+  char *at = s ? strstr(s, from) : NULL, *out = NULL;
+  if (at) out = tl_fmt("%.*s%s%s", (int)(at - s), s, to, at + strlen(from));
+  free(s);
+  return out;
+}
+
 static void test_threads(void) {
   const char *yaml =
       "grid: {compartments: 6, axes: [{name: solid, type: geometric, min: 0.01, ratio: 1.5, cells: 16, zero_first: true}]}\n"
@@ -154,28 +173,35 @@ static void test_threads(void) {
       "  - {type: transfer, rate: [0.7, 1.9, 0.4, 2.5, 1.1, 0.3]}\n"
       "solver: {method: rk, rtol: 1.0e-7, atol: 1.0e-12, steps: per_compartment}\n"
       "output: {end: 8, count: 17}\n";
-  double *first = NULL;
-  size_t n = 0;
   const int max = omp_get_max_threads();
-  for (int nt = 1; nt <= 3; nt++) {
-    omp_set_num_threads(nt); /* before the case: mechanisms keep scratch per thread */
-    gs_case c;
-    gs_run_report rep;
-    double *y = tl_build_run(yaml, &c, &rep);
-    if (y) {
-      n = c.model.nstate + c.model.nledger;
-      if (!first) first = y;
-      else {
-        CHECK(memcmp(first, y, n * sizeof(double)) == 0);
-        free(y);
+  /* the outflow stepped either way (solver.outflow; the default: exponential) */
+  for (int explicit = 0; explicit <= 1; explicit++) {
+    char *y_case = explicit ? swap(tl_fmt("%s", yaml), "steps: per_compartment}", "steps: per_compartment, outflow: explicit}")
+                            : tl_fmt("%s", yaml);
+    CHECK(y_case != NULL);
+    double *first = NULL;
+    size_t n = 0;
+    for (int nt = 1; y_case && nt <= 3; nt++) {
+      omp_set_num_threads(nt); /* before the case: mechanisms keep scratch per thread */
+      gs_case c;
+      gs_run_report rep;
+      double *y = tl_build_run(y_case, &c, &rep);
+      if (y) {
+        n = c.model.nstate + c.model.nledger;
+        if (!first) first = y;
+        else {
+          CHECK(memcmp(first, y, n * sizeof(double)) == 0);
+          free(y);
+        }
+        printf("threads %d, outflow %s: %ld compartment evaluations, coupling %.3g, balance %.3g\n", nt,
+               explicit ? "explicit" : "exponential", rep.stats.rhs_evals, rep.worst_coupling, rep.max_balance_error);
+        CHECK(rep.worst_coupling < 1e-12 && rep.max_balance_error < 1e-12);
       }
-      printf("threads %d: %ld compartment evaluations, coupling %.3g, balance %.3g\n", nt,
-             rep.stats.rhs_evals, rep.worst_coupling, rep.max_balance_error);
-      CHECK(rep.worst_coupling < 1e-12 && rep.max_balance_error < 1e-12);
+      gs_case_free(&c);
     }
-    gs_case_free(&c);
+    free(first);
+    free(y_case);
   }
-  free(first);
   /* the fourth compartment (fast transfer) runs out of steps: the same
    * failure, whatever the threads (the one a single thread meets first) */
   char *failing = tl_fmt("%.*ssteps: per_compartment, max_steps_per_output: 40}\n%s", (int)(strstr(yaml, "steps: per_compartment}") - yaml),
@@ -210,6 +236,7 @@ static void test_errors(void) {
       {"method: euler, steps: per_compartment", "per_compartment steps need method rk"},
       {"method: cvode, steps: per_compartment", "per_compartment steps need method rk"},
       {"method: rk, steps: each", "steps"},
+      {"method: rk, steps: per_compartment, outflow: implicit", "solver.outflow = 'implicit': unknown outflow treatment"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
     char *yaml = tl_fmt("grid: {compartments: 2, axes: [{name: solid, type: linear, min: 0, max: 1, cells: 4}]}\n"
@@ -225,15 +252,6 @@ static void test_errors(void) {
     if (!strstr(err.msg, bad[i][1])) fprintf(stderr, "message: %s\n", err.msg);
     free(yaml);
   }
-}
-
-/* s with its one occurrence of from replaced by to (s freed); NULL if it is
- * not there. */
-static char *swap(char *s, const char *from, const char *to) {
-  char *at = s ? strstr(s, from) : NULL, *out = NULL;
-  if (at) out = tl_fmt("%.*s%s%s", (int)(at - s), s, to, at + strlen(from));
-  free(s);
-  return out;
 }
 
 static void test_many_compartments(void) {
@@ -285,7 +303,68 @@ static void test_many_compartments(void) {
   free(yaml);
 }
 
+/* Tanks in series (item 6): compartment c's solid volume against
+ * (F_v / k) P(c, k t) at the end; the worst error relative to F_v / k and the
+ * run's report. */
+static double tanks(int ncomp, double k, double end, int count, double rtol, const char *outflow,
+                    gs_run_report *rep) {
+  char *yaml = tl_fmt(
+      "grid: {compartments: %d, axes: [{name: solid, type: geometric, min: 0.01, ratio: 1.5, cells: 12, zero_first: true}]}\n"
+      "mechanisms:\n"
+      "  - {type: feed, compartment: 1, distribution: {type: gamma, number: 3, mean: [0.05], shape: [6]}}\n"
+      "  - {type: transfer, rate: %.17g}\n"
+      "solver: {method: rk, rtol: %g, atol: 1.0e-14, steps: per_compartment, outflow: %s}\n"
+      "output: {end: %g, count: %d}\n",
+      ncomp, k, rtol, outflow, end, count);
+  gs_case c;
+  double worst = INFINITY;
+  memset(rep, 0, sizeof *rep);
+  double *y = tl_build_run(yaml, &c, rep);
+  if (y) {
+    const double Fk = fed_rate(&c, 0) / k;
+    worst = 0;
+    for (int comp = 0; comp < ncomp; comp++) {
+      const double exact = Fk * gsl_sf_gamma_inc_P(comp + 1, k * end);
+      worst = fmax(worst, fabs(gs_model_held(&c.model, y, (size_t)comp, 0) - exact) / Fk);
+    }
+    CHECK(rep->t_end == end);
+    CHECK(rep->worst_coupling < 1e-12);
+    CHECK(rep->max_balance_error < 1e-12);
+    gs_case_free(&c);
+  } else {
+    check_failures++;
+  }
+  free(y);
+  free(yaml);
+  return worst;
+}
+
+static void test_outflow(void) {
+  const char *kinds[] = {"exponential", "explicit"};
+  long steps[2] = {0, 0};
+  for (int i = 0; i < 2; i++) {
+    gs_run_report rep;
+    /* 16 tanks, k t = 12 at the end: the first ones full, the front at
+     * compartment 12, the last ones still near empty */
+    for (int e = 6; e <= 9; e += 3) {
+      const double rtol = pow(10.0, -e), err = tanks(16, 2.0, 6.0, 7, rtol, kinds[i], &rep);
+      printf("tanks in series, outflow %s, rtol %g: worst %.3g of F/k, %ld steps, coupling %.3g, "
+             "balance %.3g\n",
+             kinds[i], rtol, err, rep.stats.steps, rep.worst_coupling, rep.max_balance_error);
+      CHECK(err < 2 * rtol); /* measured 0.1-0.3 rtol (exponential 9.6e-8 and 1.3e-10, explicit 2.6e-7 and 3.1e-10) */
+    }
+    const double err = tanks(8, 40.0, 40.0, 3, 1e-7, kinds[i], &rep);
+    steps[i] = rep.stats.steps;
+    printf("fast outflow (k = 40/s), %s: %ld steps, worst %.3g of F/k\n", kinds[i], steps[i], err);
+    CHECK(err < 2e-7); /* measured 4.4e-14 (exponential), 6.3e-8 */
+  }
+  /* explicit: k h < 3.7 over 40 s in each of 8 compartments, at least 3 459 */
+  CHECK(steps[1] > 3459);
+  CHECK(steps[0] < steps[1] / 4);
+}
+
 int main(void) {
+  test_outflow();
   test_many_compartments();
   test_example();
   test_chain();

@@ -5,7 +5,9 @@
  *   "auto"   (default) rk while the case is not stiff, cvode while rk's steps
  *            would be held down by its stability limit (integrator_auto.c)
  *   "rk"     adaptive embedded Runge–Kutta from GSL odeiv2 (variant
- *            rkf45 | rkck | rk8pd, key `variant`, default rkck)
+ *            rkf45 | rkck | rk8pd, key `variant`, default rkck; a decay the
+ *            system leaves out of f stepped as key `outflow` says,
+ *            exponential | explicit, default exponential)
  *   "cvode"  SUNDIALS CVODE BDF for stiff cases (linear solver dense or gmres)
  *   "euler"  the adaptive explicit Euler of Sampat et al. (2018): dt doubled or halved so
  *            that dt * max(-f_i / y_i) stays below `safety` (default 0.1),
@@ -75,6 +77,18 @@ typedef struct gs_ode {
    * that the Runge-Kutta weights reproduce exactly, needs it (per-compartment
    * steps, src/run/compartment_steps.c).  NULL: f does not depend on it. */
   void (*trying)(void *ctx, double t0, double h);
+  /* Optional (per-compartment steps' outflow; integrators with
+   * per_compartment set serve it): the first ndecay components also decay
+   * at -decay * y, a term f leaves out.  The integrator steps it as its
+   * settings say (rk's `outflow`: exactly, by an integrating factor, or
+   * explicitly with f), and after every accepted step, before
+   * between_steps, writes into decayed[0..ndecay) what the decay removed in
+   * that step, defined by the balance y0 + h sum_i b_i f_i - y1 (f_i the
+   * stages' rates without the decay), so that the caller can book it
+   * exactly.  ndecay 0: none. */
+  size_t ndecay;
+  double decay;
+  double *decayed;
 } gs_ode;
 
 typedef struct gs_integrator_stats {
@@ -135,7 +149,7 @@ typedef struct gs_integrator_type {
    * of names: */
   int ranks;            /* 1: integrates a state spread over MPI ranks (gs_ode.reduce_max) */
   int per_compartment;  /* 1: serves per-compartment steps (calls gs_ode.trying; its steps
-                         * integrate a quadratic forcing exactly) */
+                         * integrate a quartic forcing exactly; serves gs_ode.ndecay) */
   int exact_invariants; /* 1: linear invariants such as the volume ledger hold to round-off
                          * (0: implicit, Newton systems solved to a tolerance) */
 } gs_integrator_type;

@@ -12,16 +12,32 @@
  * here as a GSL control type, so that under MPI (gs_ode.reduce_max) the
  * largest error is taken over all ranks and every rank takes the same steps.
  *
+ * A linear decay -k y of the first components that the system leaves out
+ * of f (gs_ode.ndecay: a compartment's outflow under per-compartment steps)
+ * is stepped as the key `outflow` says (the registered gs_rk_outflow types
+ * below): `exponential`, an integrating-factor step (Lawson 1967) in the
+ * form of Krogstad (2005): over a step from s, GSL's pair integrates u with
+ * y = e^{-k (t - s)} u + (1 - e^{-k (t - s)}) g0 / k, g0 = f at s, whose
+ * rate (f - g0) e^{k (t - s)} has no stiffness from k and vanishes where
+ * f stays at g0, so the decay sets no stability bound on the step, and the
+ * state is re-based (u = y) after every accepted step; or `explicit`,
+ * f - k y integrated as it is.  Either way GSL also
+ * integrates W' = f for those components (excluded from the error control),
+ * and what the decay removed is booked by the balance y0 + W - y1, which
+ * the caller hands on exactly (gs_ode.decayed).
+ *
  * No GSL error handler is installed here (it is process-wide state); the
  * calls below are arranged never to hit GSL's argument-error paths. */
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_odeiv2.h>
 
+#include "cfg/nearest.h"
 #include "gransim/integrator.h"
 #include "ode/integrator_interval.h"
 
@@ -32,9 +48,45 @@ int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
 /* Tolerance scale for components excluded from error control: large enough
  * that atol * scale dwarfs any error, small enough to stay finite. */
 #define GS_RK_EXCLUDED_SCALE 1e300
+/* The longest step of the exponential treatment, in units of 1/k: e^{k h}
+ * stays far from overflow (e^500 ~ 1e217), and a step that long has
+ * emptied what it started with to below any tolerance anyway. */
+#define GS_RK_MAX_KH 500.0
+
+/* How the decay a system leaves out of f is stepped (key `outflow`). */
+typedef struct gs_rk_outflow {
+  const char *name;
+  const char *summary;
+  int exponential; /* 1: by the integrating factor e^{k (t - s)}; 0: with f, explicitly */
+} gs_rk_outflow;
+
+static const gs_rk_outflow gs_rk_outflow_exponential = {
+    .name = "exponential",
+    .summary = "integrating factor: the outflow stepped exactly, no stability bound from it",
+    .exponential = 1,
+};
+static const gs_rk_outflow gs_rk_outflow_explicit = {
+    .name = "explicit",
+    .summary = "the outflow a rate like any other (stable while k h < 3.7 with rkck)",
+    .exponential = 0,
+};
+static const gs_rk_outflow *const gs_rk_outflows[] = {&gs_rk_outflow_exponential,
+                                                      &gs_rk_outflow_explicit, NULL};
 
 typedef struct {
   size_t n;
+  /* the decay left out of f (gs_ode.ndecay, decay) and how it is stepped;
+   * m = n + nd: GSL's state is the caller's, then W, the integral of f over
+   * the step for the nd decaying components (yx; nbuf: the state f sees) */
+  size_t nd, m;
+  double k;
+  const gs_rk_outflow *outflow;
+  double *yx, *nbuf;
+  /* exponential: f of the decaying components at the start of the step
+   * (g0), taken from the next evaluation when g0_pending; plain: rates as
+   * f - k y in the state as it is (the first step's size estimate) */
+  double *g0;
+  int g0_pending, plain;
   double rtol, atol;
   double h_min, h_max;
   long max_steps;
@@ -70,6 +122,44 @@ static const gsl_odeiv2_step_type *gs_rk_step_type(int variant) {
   }
 }
 
+/* The frame of the exponential treatment over a step from s (the start of
+ * the step tried), at t: y = phi u + psi g0 with phi = e^{-k (t - s)} and
+ * psi = (1 - phi) / k, the exact solution of y' = -k y + g0 from u(s); so
+ * u' = (f - g0) / phi, which vanishes where f stays at g0 (a compartment
+ * whose inflow and outflow balance).  The step's re-basing evaluates them
+ * at the very time its last stage was evaluated at, so that both give the
+ * same state.  Explicit (or plain): phi = 1, psi = 0. */
+static int gs_rk_expo(const gs_rk *self) { return self->outflow->exponential && !self->plain; }
+static double gs_rk_phi(const gs_rk *self, double t) {
+  return gs_rk_expo(self) ? exp(-self->k * (t - self->try_t0)) : 1.0;
+}
+static double gs_rk_psi(const gs_rk *self, double t) {
+  return gs_rk_expo(self) ? -expm1(-self->k * (t - self->try_t0)) / self->k : 0.0;
+}
+
+/* The rates of GSL's state from f's (without the decay) of the state nbuf:
+ * u' = (f - g0) / phi (exponential) or f - k y (explicit) for the decaying
+ * components, and W' = f. */
+static void gs_rk_decay_rates(gs_rk *self, double phi, double *dydt) {
+  const size_t n = self->n, nd = self->nd;
+  const double k = self->k;
+  if (gs_rk_expo(self)) {
+    if (self->g0_pending) { /* the step's first evaluation, at its start */
+      memcpy(self->g0, dydt, nd * sizeof *dydt);
+      self->g0_pending = 0;
+    }
+    for (size_t i = 0; i < nd; i++) {
+      dydt[n + i] = dydt[i];
+      dydt[i] = (dydt[i] - self->g0[i]) / phi;
+    }
+  } else {
+    for (size_t i = 0; i < nd; i++) {
+      dydt[n + i] = dydt[i];
+      dydt[i] -= k * self->nbuf[i];
+    }
+  }
+}
+
 /* GSL calling convention -> gs_ode.  GSL_EBADFUNC makes evolve return at
  * once instead of retrying with a smaller step.  Non-finite derivatives are
  * caught here because GSL's error control never rejects NaN. */
@@ -78,7 +168,17 @@ static int gs_rk_rhs(double t, const double y[], double dydt[], void *params) {
   const gs_ode *ode = self->ode;
   self->stats.rhs_evals++;
   self->fail_t = t;
-  if (ode->f(ode->ctx, t, y, dydt)) self->rhs_failed = 1;
+  const double *state = y;
+  double phi = 1.0;
+  if (self->nd) { /* the decaying components as f sees them */
+    phi = gs_rk_phi(self, t);
+    const double psi = gs_rk_psi(self, t);
+    for (size_t i = 0; i < self->nd; i++) self->nbuf[i] = phi * y[i] + psi * self->g0[i];
+    memcpy(self->nbuf + self->nd, y + self->nd, (self->n - self->nd) * sizeof *y);
+    state = self->nbuf;
+  }
+  if (ode->f(ode->ctx, t, state, dydt)) self->rhs_failed = 1;
+  if (self->nd && !self->rhs_failed) gs_rk_decay_rates(self, phi, dydt);
   for (size_t i = 0; !self->rhs_failed && !ode->rates_checked && i < self->n; i++) {
     if (!isfinite(dydt[i])) {
       self->rhs_failed = 2;
@@ -91,7 +191,7 @@ static int gs_rk_rhs(double t, const double y[], double dydt[], void *params) {
   /* Under MPI every rank must make the same calls: a failed evaluation gives
    * zero rates and the step goes on; gs_rk_agree() then rolls it back on
    * every rank (one agreement per step rather than per evaluation). */
-  memset(dydt, 0, self->n * sizeof *dydt);
+  memset(dydt, 0, self->m * sizeof *dydt);
   return GSL_SUCCESS;
 }
 
@@ -140,12 +240,30 @@ static int gs_rk_control_hadjust(void *state, size_t dim, unsigned int ord, cons
   (void)yp;
   const gs_rk_control *c = state;
   const double S = 0.9, h_old = *h;
+  gs_rk *rk = c->rk;
+  /* decaying components: their error and value as y = phi u + psi g0, not
+   * as u (otherwise the absolute tolerance would shrink by phi = e^{-k h}),
+   * and the error of a quintic Hermite curve through the step's ends
+   * (values, slopes, second derivatives: the record another compartment's
+   * inflow is drawn from), which the exponential step does not see: where
+   * f moves from g0 at the start to g1 at the end (W' there), y holds
+   * e^{-k t} A, A = y0 - g0 / k + (g1 - g0) / (k^2 h), besides terms as
+   * slow as f, and the curve misses it by at most |A| (k h)^6 / (6! 2^6)
+   * (A, not y0 - g0 / k: a compartment that follows its inflow lags it by
+   * f' / k^2, which is no exponential) */
+  const double phi = rk->nd ? gs_rk_phi(rk, rk->try_t0 + h_old) : 1.0;
+  const double psi = rk->nd ? gs_rk_psi(rk, rk->try_t0 + h_old) : 0.0;
+  const double kh = rk->k * h_old, hermite = gs_rk_expo(rk) ? pow(kh, 6) / 46080.0 : 0.0;
+  const double *y0 = rk->evolve->y0, *g1 = rk->evolve->dydt_out + rk->n, k = rk->k;
   double rmax = DBL_MIN;
   for (size_t i = 0; i < dim; i++) {
-    double r = fabs(yerr[i]) / (c->rtol * fabs(y[i]) + c->atol * c->scale[i]);
+    const int d = i < rk->nd;
+    const double v = d ? phi * y[i] + psi * rk->g0[i] : y[i];
+    const double A = d ? y0[i] - rk->g0[i] / k + (g1[i] - rk->g0[i]) / (k * kh) : 0.0;
+    const double e = d ? phi * fabs(yerr[i]) + hermite * fabs(A) : fabs(yerr[i]);
+    double r = e / (c->rtol * fabs(v) + c->atol * c->scale[i]);
     if (r > rmax) rmax = r;
   }
-  gs_rk *rk = c->rk;
   const gs_ode *ode = rk->ode;
   if (ode->reduce_max) {
     double mine = rk->rhs_failed                ? GS_RK_AGREED_RHS_FAILED
@@ -236,6 +354,10 @@ static void gs_rk_release(void *vself) {
   if (self->control) gsl_odeiv2_control_free(self->control);
   if (self->step) gsl_odeiv2_step_free(self->step);
   free(self->scale);
+  free(self->yx);
+  free(self->nbuf);
+  free(self->g0);
+  self->yx = self->nbuf = self->g0 = NULL;
   self->evolve = NULL;
   self->control = NULL;
   self->step = NULL;
@@ -249,13 +371,17 @@ static void gs_rk_free(void *vself) {
 }
 
 static int gs_rk_alloc_gsl(gs_rk *self, int variant, const gs_ode *ode, gs_error *err) {
-  self->scale = gs_malloc(self->n * sizeof *self->scale, err);
+  self->scale = gs_malloc(self->m * sizeof *self->scale, err);
   if (!self->scale) return GS_ENOMEM;
-  for (size_t i = 0; i < self->n; i++) {
-    double s = ode->abs_scale ? ode->abs_scale[i] : 1.0;
-    self->scale[i] = s > 0 ? s : GS_RK_EXCLUDED_SCALE;
+  for (size_t i = 0; i < self->m; i++) {
+    double s = i < self->n && ode->abs_scale ? ode->abs_scale[i] : 1.0;
+    self->scale[i] = i < self->n && s > 0 ? s : GS_RK_EXCLUDED_SCALE; /* W: no error control */
   }
-  self->step = gsl_odeiv2_step_alloc(gs_rk_step_type(variant), self->n);
+  if (self->nd && (!(self->yx = gs_calloc(self->m, sizeof(double), err)) ||
+                   !(self->nbuf = gs_calloc(self->n, sizeof(double), err)) ||
+                   !(self->g0 = gs_calloc(self->nd, sizeof(double), err))))
+    return GS_ENOMEM;
+  self->step = gsl_odeiv2_step_alloc(gs_rk_step_type(variant), self->m);
   /* a_y = 1, a_dydt = 0: tolerance rtol * |y_i| + atol * scale_i */
   self->control = gsl_odeiv2_control_alloc(&gs_rk_control_type);
   if (self->control) {
@@ -264,10 +390,27 @@ static int gs_rk_alloc_gsl(gs_rk *self, int variant, const gs_ode *ode, gs_error
     c->scale = self->scale;
     c->rk = self;
   }
-  self->evolve = gsl_odeiv2_evolve_alloc(self->n);
+  self->evolve = gsl_odeiv2_evolve_alloc(self->m);
   if (!self->step || !self->control || !self->evolve)
-    return gs_error_set(err, GS_ENOMEM, "integrator rk: out of memory for %zu components", self->n);
+    return gs_error_set(err, GS_ENOMEM, "integrator rk: out of memory for %zu components", self->m);
   return GS_OK;
+}
+
+/* The key `outflow`: a registered treatment (default exponential). */
+static int gs_rk_read_outflow(gs_cfg_node *solver, const gs_rk_outflow **out, gs_error *err) {
+  const void *const *types = (const void *const *)gs_rk_outflows;
+  const char *name = gs_rk_outflows[0]->name;
+  int rc = solver ? gs_cfg_string_opt(solver, "outflow", name, &name, err) : GS_OK;
+  if (rc) return rc;
+  if ((*out = gs_registry_find(types, name))) return GS_OK;
+  char known[128], hint[96] = "";
+  gs_registry_names(types, known, sizeof known);
+  const char *names[8];
+  size_t count = 0;
+  while (gs_rk_outflows[count] && count < 8) names[count] = gs_rk_outflows[count]->name, count++;
+  const char *near = gs_nearest_word(name, names, count);
+  if (near) snprintf(hint, sizeof hint, " (did you mean '%s'?)", near);
+  return gs_cfg_fail(gs_cfg_get(solver, "outflow"), err, "unknown outflow treatment%s; expected one of: %s", hint, known);
 }
 
 /* The settings: a gs_rk with its keys filled in and nothing allocated. */
@@ -279,6 +422,7 @@ static int gs_rk_read(gs_cfg_node *solver, void **out, gs_error *err) {
   int rc = gs_integrator_common_keys(solver, &set->rtol, &set->atol, &h0, &set->h_min,
                                      &set->h_max, &set->max_steps, err);
   if (!rc) rc = gs_cfg_enum_opt(solver, "variant", gs_rk_variants, 1, &variant, err);
+  if (!rc) rc = gs_rk_read_outflow(solver, &set->outflow, err);
   if (rc) {
     free(set);
     return rc;
@@ -296,6 +440,9 @@ static int gs_rk_create(const void *settings, const gs_ode *ode, void **out, gs_
   if (!self) return GS_ENOMEM;
   *self = *(const gs_rk *)settings;
   self->n = ode->n;
+  self->nd = ode->ndecay;
+  self->k = ode->decay;
+  self->m = self->n + self->nd;
   gs_interval_init(&self->interval);
   int variant = 0;
   while (strcmp(gs_rk_variants[variant], self->variant)) variant++;
@@ -330,11 +477,23 @@ static double gs_rk_tol_norm(const gs_rk *self, const double *v, const double *y
  * start at 1e-11 s and take 16 steps growing by 5x before its first second
  * (the controller corrects a guess that is too large within a rejection or
  * two). */
+static int gs_rk_initial_estimate(gs_rk *self, double t, double span, const double *y, double *f0,
+                                  double *f1, gs_error *err);
 static int gs_rk_initial_step(gs_rk *self, double t, double span, const double *y,
                               gs_error *err) {
   /* scratch: evolve computes its own afterwards (reset below) */
-  double *f0 = self->evolve->dydt_out, *f1 = self->evolve->dydt_in, *y1 = self->evolve->yerr;
+  double *f0 = self->evolve->dydt_out, *f1 = self->evolve->dydt_in;
+  self->try_t0 = t;
+  self->plain = 1; /* y' itself, decay included */
+  int rc = gs_rk_initial_estimate(self, t, span, y, f0, f1, err);
+  self->plain = 0;
+  return rc;
+}
+
+static int gs_rk_initial_estimate(gs_rk *self, double t, double span, const double *y, double *f0,
+                                  double *f1, gs_error *err) {
   const gs_ode *ode = self->ode;
+  double *y1 = self->evolve->yerr;
   if (ode->trying) ode->trying(ode->ctx, t, 0.0); /* an evaluation at t only */
   if (gs_rk_rhs(t, y, f0, self) != GSL_SUCCESS || gs_rk_agree(self)) return gs_rk_rhs_error(self, err);
   const double d0 = gs_rk_tol_norm(self, y, y), d1 = gs_rk_tol_norm(self, f0, y);
@@ -383,15 +542,16 @@ static int gs_rk_fail(gs_rk *self, int status, double t0, double h, double *t, d
  * control (NaN never exceeds the tolerance), so roll such a step back. */
 static int gs_rk_check_finite(gs_rk *self, double t0, double *t, double *y, gs_error *err) {
   int ok;
+  const double *Y = self->nd ? self->yx : y; /* GSL's state */
   if (!self->ode->reduce_max) {
-    ok = gs_rk_all_finite(y, self->n);
+    ok = gs_rk_all_finite(Y, self->m);
   } else {
     /* failures anywhere: agreed in the controller with the error (GSL calls
      * it after every step it tries), otherwise here */
     double bad = self->agreed ? (self->rhs_failed ? 2.0 : self->agreed_nonfinite ? 1.0 : 0.0)
                               : self->ode->reduce_max(self->ode->ctx,
                                                       self->rhs_failed                  ? 2.0
-                                                      : gs_rk_all_finite(y, self->n) ? 0.0
+                                                      : gs_rk_all_finite(Y, self->m) ? 0.0
                                                                                         : 1.0);
     if (bad == 2.0) {
       if (!self->rhs_failed) self->rhs_failed = 3;
@@ -419,16 +579,50 @@ static int gs_rk_check_min_step(const gs_rk *self, double t, double t_out, gs_er
                       self->h_min, t);
 }
 
+/* After a step accepted from t0, for a system with a decay: the state
+ * y1 = phi u1 + psi g0 in the caller's y (re-based: u = y from here on),
+ * what the decay removed, y0 + W - y1, into gs_ode.decayed, W back to 0;
+ * and for the exponential treatment the next step's g0, f at the end of
+ * this one, which W' holds (the last evaluation was at the end of the
+ * accepted step, at t0 + h: rkf45, rkck and rk8pd give it), with the
+ * end-of-step rate that GSL reuses as the next step's first stage, u' = 0. */
+static void gs_rk_rebase(gs_rk *self, double t0, double *y) {
+  const size_t n = self->n, nd = self->nd;
+  double *Y = self->yx, *dydt = self->evolve->dydt_out, *out = self->ode->decayed;
+  const double *y0 = self->evolve->y0;
+  const double te = t0 + self->evolve->last_step, phi = gs_rk_phi(self, te), psi = gs_rk_psi(self, te);
+  const int expo = gs_rk_expo(self);
+  for (size_t i = 0; i < nd; i++) {
+    const double y1 = phi * Y[i] + psi * self->g0[i];
+    out[i] = (y0[i] + Y[n + i]) - y1;
+    Y[i] = y1;
+    Y[n + i] = 0;
+    if (expo) { /* f at the new start is g0 there, so u' = 0 */
+      self->g0[i] = dydt[n + i];
+      dydt[i] = 0;
+    }
+  }
+  memcpy(y, Y, n * sizeof *y);
+}
+
 static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out, double *y,
                          gs_error *err) {
   gs_rk *self = vself;
-  if (ode->n != self->n || !(t_out >= *t))
+  if (ode->n != self->n || ode->ndecay != self->nd || (self->nd && !ode->decayed) ||
+      !(t_out >= *t))
     return gs_error_set(err, GS_EINPUT, "integrator rk: bad call (n = %zu for %zu, t = %g to %g)",
                         ode->n, self->n, *t, t_out);
   if (t_out == *t) return GS_OK;
   self->ode = ode;
   self->rhs_failed = 0;
-  gsl_odeiv2_system sys = {gs_rk_rhs, NULL, self->n, self};
+  gsl_odeiv2_system sys = {gs_rk_rhs, NULL, self->m, self};
+  /* GSL's state: the caller's, then W (0 at every step's start) */
+  double *Y = y;
+  if (self->nd) {
+    Y = self->yx;
+    memcpy(Y, y, self->n * sizeof *y);
+    memset(Y + self->n, 0, self->nd * sizeof *Y);
+  }
   /* GSL reuses the last step's end-of-step derivative as the next step's
    * first stage; across a jump in f it is the rate from before the switch,
    * and every step size failed the error test (error growing with h) until
@@ -443,13 +637,17 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
     int rc = gs_interval_budget(&self->interval, self->max_steps, "rk", *t, err);
     if (rc) return rc;
     double t0 = *t, h = fmin(self->h, self->h_max);
+    if (self->nd && self->outflow->exponential) h = fmin(h, GS_RK_MAX_KH / self->k);
     self->agreed = 0;
     /* evolve shortens the step that would pass t_out and then sets t = t_out
      * exactly; it leaves h at the controller's proposal for later calls. */
     self->try_t0 = t0;
     if (ode->trying) ode->trying(ode->ctx, t0, fmin(h, t_out - t0));
+    /* GSL evaluates f at the start only after a reset (otherwise it reuses
+     * the end of the last step): g0 comes from that evaluation */
+    self->g0_pending = self->nd && self->evolve->count == 0;
     int status = gsl_odeiv2_evolve_apply(self->evolve, self->control, self->step, &sys, t, t_out,
-                                         &h, y);
+                                         &h, Y);
     self->stats.rejected += (long)self->evolve->failed_steps;
     self->evolve->failed_steps = 0;
     if (status != GSL_SUCCESS) return gs_rk_fail(self, status, t0, h, t, y, err);
@@ -460,7 +658,9 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
     self->stats.last_step = self->evolve->last_step;
     rc = gs_rk_check_min_step(self, *t, t_out, err);
     if (rc) return rc;
+    if (self->nd) gs_rk_rebase(self, t0, y);
     if (gs_interval_step_done(&self->interval, ode)) return GS_OK;
+    if (self->nd) memcpy(Y, y, self->n * sizeof *y); /* as between_steps left it */
   }
   return GS_OK;
 }

@@ -83,6 +83,9 @@ typedef struct {
   double t;            /* the integrator's time during an advance */
   double try_s, try_h; /* the step it tries */
   double *end_f;       /* rates at the end of the last stretch (has_next) */
+  /* what its outflow removed in the last step, per number and carried
+   * total (gs_ode.decayed; NULL without an outflow) */
+  double *decayed;
   int end_f_valid;
   gs_integrator it;
   gs_ode ode;
@@ -105,7 +108,10 @@ typedef struct worker {
   int stop;         /* its task comes after a failure: it stops */
   const node_list *up; /* the record of the compartment before, or NULL */
   size_t up_count;  /* nodes of up's record read for the step tried */
-  const double *last_f; /* the last evaluation's rates (the integrator's buffer) */
+  /* the last evaluation's rates N' of numbers and totals (the integrator's
+   * buffer, or nprime where the integrator sees them without the outflow) */
+  const double *last_f;
+  double *nprime;
   double last_t, stretch_t0; /* its time; the start of the stretch advanced */
   double *scratch, *ytmp; /* rates and a state outside the integrator */
   /* seconds: in the rates, waiting for the compartment before, with no
@@ -407,6 +413,40 @@ static void publish(node_list *L) {
   if (L->start_f_known) atomic_store_explicit(&L->published, L->count, memory_order_release);
 }
 
+/* The rates as the integrator takes them where the outflow -k N is stepped
+ * on its own (gs_ode.ndecay): the numbers' and totals' without it (kept
+ * first as N', the record's second derivatives), the ledger's exchanged
+ * volumes without what leaves (booked after each step from what the step
+ * removed, book_outflow), and Z' = 0 (Z is advanced by that too). */
+static void without_outflow(comp_t *cp, const double *y, double *f) {
+  struct gs_comp_steps *s = cp->s;
+  worker_t *w = cp->w;
+  const double k = cp->ode.decay;
+  memcpy(w->nprime, f, s->nflow * sizeof(double));
+  w->last_f = w->nprime;
+  for (size_t i = 0; i < s->nflow; i++) f[i] += k * y[i];
+  double vol[GS_MAX_VOL];
+  volumes_of(s, y, vol);
+  for (int a = 0; a < s->nvol; a++) f[s->off_ledger + (size_t)a] += k * vol[a];
+  if (cp->has_next) memset(f + s->off_z, 0, s->nflow * sizeof(double));
+}
+
+/* After an accepted step where the outflow is stepped on its own: what it
+ * removed (gs_ode.decayed, by the step's balance) leaves the ledger's
+ * exchanged volumes, and Z, the integral of N whose k-multiple the next
+ * compartment receives, grows by it / k, so that received = discharged
+ * still telescopes to round-off. */
+static void book_outflow(comp_t *cp) {
+  struct gs_comp_steps *s = cp->s;
+  const double *out = cp->decayed, k = cp->ode.decay;
+  double vol[GS_MAX_VOL];
+  volumes_of(s, out, vol);
+  for (int a = 0; a < s->nvol; a++) cp->y[s->off_ledger + (size_t)a] -= vol[a];
+  if (!cp->has_next) return;
+  double *z = cp->y + s->off_z;
+  for (size_t i = 0; i < s->nflow; i++) z[i] += out[i] / k;
+}
+
 static int comp_rhs(void *ctx, double t, const double *y, double *f) {
   comp_t *cp = ctx;
   worker_t *w = cp->w;
@@ -428,14 +468,16 @@ static int comp_rhs(void *ctx, double t, const double *y, double *f) {
   } else {
     memset(recv, 0, (size_t)s->nvol * sizeof(double));
   }
+  /* read at the step's end, before the integrator writes f again */
+  w->last_f = f;
+  w->last_t = t;
+  if (cp->ode.ndecay) without_outflow(cp, y, f);
+  else if (cp->has_next) memcpy(f + s->off_z, y, s->nflow * sizeof(double)); /* Z' = N */
   if (cp->has_next) {
-    memcpy(f + s->off_z, y, s->nflow * sizeof(double));
-    w->last_f = f; /* read at the step's end, before the integrator writes it again */
-    w->last_t = t;
     /* the first node's rates: the integrator's own evaluation at the start */
     node_list *L = cp->cur;
     if (!L->start_f_known && t == w->stretch_t0 && L->count == 1) {
-      memcpy(node_at(L, 0) + 1 + 2 * s->nflow, f, s->nflow * sizeof(double));
+      memcpy(node_at(L, 0) + 1 + 2 * s->nflow, w->last_f, s->nflow * sizeof(double));
       L->start_f_known = 1;
       publish(L);
     }
@@ -495,6 +537,7 @@ static int start_rates(comp_t *cp, double t0) {
 static int comp_step_done(void *ctx) {
   comp_t *cp = ctx;
   worker_t *w = cp->w;
+  if (cp->ode.ndecay) book_outflow(cp);
   if (!cp->has_next) return 0;
   if (w->last_t != cp->try_s + cp->try_h && extra_rates(cp, cp->t, cp->y)) {
     w->bad = w->bad ? w->bad : 3;
@@ -527,7 +570,7 @@ static void unpack(const struct gs_comp_steps *s, size_t comp, const double *y, 
 
 static int worker_init(struct gs_comp_steps *s, worker_t *w, gs_error *err) {
   w->s = s;
-  double **bufs[] = {&w->p0, &w->p1, &w->d0, &w->d1, &w->s0, &w->s1, &w->halo};
+  double **bufs[] = {&w->p0, &w->p1, &w->d0, &w->d1, &w->s0, &w->s1, &w->halo, &w->nprime};
   for (size_t i = 0; i < sizeof bufs / sizeof *bufs; i++)
     if (!(*bufs[i] = gs_calloc_apart(s->nflow * sizeof(double), err))) return GS_ENOMEM;
   if (!(w->scratch = gs_calloc_apart((s->off_z + s->nflow) * sizeof(double), err)) ||
@@ -617,7 +660,10 @@ int gs_comp_steps_create(gs_case *c, gs_comp_steps **out, gs_error *err) {
     cp->y = gs_calloc_apart(cp->n * sizeof(double), err);
     cp->scale = gs_calloc_apart(cp->n * sizeof(double), err); /* received and Z: no error control */
     cp->end_f = cp->has_next ? gs_calloc_apart(s->nflow * sizeof(double), err) : NULL;
-    if (!cp->y || !cp->scale || (cp->has_next && !cp->end_f)) return GS_ENOMEM;
+    /* the outflow, which the integrator steps on its own (solver.outflow) */
+    cp->decayed = s->k[comp] > 0 ? gs_calloc_apart(s->nflow * sizeof(double), err) : NULL;
+    if (!cp->y || !cp->scale || (cp->has_next && !cp->end_f) || (s->k[comp] > 0 && !cp->decayed))
+      return GS_ENOMEM;
     for (int r = 0; r < RING; r++) {
       node_list *L = &cp->rec[r];
       L->per = per;
@@ -634,7 +680,10 @@ int gs_comp_steps_create(gs_case *c, gs_comp_steps **out, gs_error *err) {
                        .npositive = s->nflow,
                        .rates_checked = 1,
                        .between_steps = comp_step_done,
-                       .trying = comp_trying};
+                       .trying = comp_trying,
+                       .ndecay = cp->decayed ? s->nflow : 0,
+                       .decay = s->k[comp],
+                       .decayed = cp->decayed};
     if (!c->integrator_setup.type->per_compartment)
       return gs_error_set(err, GS_EINPUT,
                           "solver.steps: per_compartment needs method rk (its coupling uses the "
@@ -1062,6 +1111,7 @@ void gs_comp_steps_free(gs_comp_steps *s) {
     free(cp->y);
     free(cp->scale);
     free(cp->end_f);
+    free(cp->decayed);
     for (int r = 0; r < RING; r++) {
       node_list *L = &cp->rec[r];
       for (size_t p = 0; p < DIR_PAGES && L->dir[p]; p++) free(L->dir[p]); /* blocks: the pool's */
@@ -1069,7 +1119,7 @@ void gs_comp_steps_free(gs_comp_steps *s) {
   }
   for (int i = 0; s->workers && i < s->nworkers; i++) {
     worker_t *w = &s->workers[i];
-    double *bufs[] = {w->p0, w->p1, w->d0, w->d1, w->s0, w->s1, w->halo, w->scratch, w->ytmp};
+    double *bufs[] = {w->p0, w->p1, w->d0, w->d1, w->s0, w->s1, w->halo, w->nprime, w->scratch, w->ytmp};
     for (size_t j = 0; j < sizeof bufs / sizeof *bufs; j++) free(bufs[j]);
   }
   free(s->workers);

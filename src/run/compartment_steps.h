@@ -9,10 +9,13 @@
  * steps any compartment needs (the CoriMix example: 3 414 compartment
  * evaluations instead of 4 x 1 239).
  *
- * Conservation stays exact (to round-off) although the steps differ: each
- * compartment that feeds another also integrates Z' = (N, Q), the integral
- * of its numbers and carried totals, so k_c Z is exactly what its
- * Runge-Kutta steps discharged.  Z through its step ends is a piecewise
+ * Conservation stays exact (to round-off) although the steps differ: the
+ * integrator steps each compartment's outflow -k_c N on its own
+ * (gs_ode.ndecay; exponentially or explicitly, solver.outflow) and says
+ * what every step removed, defined by the step's balance; that leaves the
+ * ledger, and a compartment that feeds another adds it / k_c to Z, the
+ * integral of its numbers and carried totals, so k_c Z is exactly what its
+ * steps discharged.  Z through its step ends is a piecewise
  * quintic Hermite curve Z_H (values Z, slopes N, second derivatives f).
  * The next compartment, on a step [s, s + h] of its own, takes as its
  * inflow k_c P'(t), P the quintic Hermite interpolant of Z_H on [s, s + h]:
