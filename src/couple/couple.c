@@ -56,6 +56,7 @@ static int read_settings(gs_cfg_node *root, gs_couple_settings *s, gs_cfg_node *
     return rc;
   s->restitution = gs_cfg_get(cp, "restitution");
   s->e_now = NAN;
+  s->geom_now = 1;
   gs_cfg_node *sc = gs_cfg_get(cp, "scaling");
   if (sc && !s->two_way)
     return gs_cfg_fail(sc, err, "scaling belongs to mode: two_way (the DEM is sized from the PBM population of each cycle)");

@@ -75,10 +75,17 @@ int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const
       return gs_cfg_fail(v, err, "the DEM classes of a coupled case come from the PBM grid "
                          "(coupling.classes); remove this list");
     if (!strcmp(key, "dem")) {
+      /* system scaling rescales the geometry every cycle (dem.geometry_scale) */
       static const char *const taken[] = {"duration", NULL};
+      gs_cfg_node *own = s->scale_n && gs_cfg_kind_of(v) == GS_CFG_MAP ? gs_cfg_get(v, "geometry_scale") : NULL;
+      if (own)
+        return gs_cfg_fail(own, err, "set by the coupling in a coupled case with scaling (coupling.scaling rescales "
+                           "the geometry every cycle); remove it");
       fputs("dem: {", fp);
       rc = put_map_except(fp, v, dir, taken, "coupling.steady.max_time", &first, err);
-      fprintf(fp, "%sduration: %.17g}\n", first ? "" : ", ", s->max_time);
+      fprintf(fp, "%sduration: %.17g", first ? "" : ", ", s->max_time);
+      if (s->scale_n) fprintf(fp, ", geometry_scale: %.17g", s->geom_now);
+      fputs("}\n", fp);
       have_dem = 1;
     } else if (!strcmp(key, "statistics")) {
       static const char *const taken[] = {"start", "sample_every", "steady", NULL};
