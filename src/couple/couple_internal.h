@@ -16,6 +16,7 @@ typedef struct {
   int outside_error;     /* classes.outside: 0 nearest, 1 error */
   long window;           /* steady.window: samples */
   double tolerance;      /* steady.tolerance */
+  unsigned quantities;   /* steady.quantities: GS_DEM_STEADY_* bits the detector watches */
   double sample_every;   /* steady.sample_every [s] */
   double max_time;       /* steady.max_time [s]: the DEM's longest duration */
   double collect;        /* steady.collect [s]: statistics after the detector fired, then the DEM stops */

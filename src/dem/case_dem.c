@@ -348,6 +348,7 @@ static int read_statistics(gs_dem_case *c, gs_cfg_node *root, gs_error *err) {
   c->sample_every = c->duration / 100;
   c->steady_window = 10;
   c->steady_tol = 0.1;
+  c->steady_q = GS_DEM_STEADY_DEFAULT;
   c->ncmp = 1;
   c->cmp_axis[0] = 1;
   c->cmp_edges = malloc(2 * sizeof(double));
@@ -389,6 +390,8 @@ static int read_statistics(gs_dem_case *c, gs_cfg_node *root, gs_error *err) {
     if ((rc = gs_cfg_require_kind(sd, GS_CFG_MAP, err)) ||
         (rc = gs_cfg_long_range(sd, "window", 0, 10, 2, 100000, &c->steady_window, err)) ||
         (rc = gs_cfg_double_range(sd, "tolerance", 0, 0.1, 0, 1, HUGE_VAL, 0, &c->steady_tol, err)) ||
+        (gs_cfg_get(sd, "quantities") &&
+         (rc = gs_dem_steady_quantities_read(gs_cfg_get(sd, "quantities"), &c->steady_q, err))) ||
         (rc = gs_cfg_check_unused(sd, err)))
       return rc;
   }

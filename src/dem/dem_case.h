@@ -86,6 +86,7 @@ struct gs_dem_case_s {
   gs_dem_region holdup;
   long steady_window;
   double steady_tol;
+  unsigned steady_q; /* statistics.steady.quantities: GS_DEM_STEADY_* bits */
   /* output */
   double out_every, vtk_every;
   /* spray and granulation (src/dem/dem_wet.h); NULL when the case has neither */
