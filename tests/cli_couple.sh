@@ -88,7 +88,7 @@ grep -q '^edges' "$WORK/out/dem/collision_kernel.csv" || fail "collision_kernel.
 
 # The detector fired and its figures are written (the verdict in steady.json's description).
 grep -qF '\nsteady\n' "$WORK/out/dem/steady.json" || fail "steady.json does not say steady"
-head -1 "$WORK/out/dem/steady.csv" | grep -q '^time,.*holdup_mean,holdup_deviation,collisions_mean,collisions_deviation,steady' ||
+head -1 "$WORK/out/dem/steady.csv" | grep -q '^time,holdup_mass,collisions_per_s,kinetic_energy,holdup_mean,holdup_deviation,collisions_mean,collisions_deviation,kinetic_mean,kinetic_deviation,steady$' ||
   fail "steady.csv header: $(head -1 "$WORK/out/dem/steady.csv")"
 ! grep -q '^#' "$WORK/out/dem/steady.csv" "$WORK/out/dem/classes.csv" || fail "'#' lines in steady.csv or classes.csv"
 grep -q ',1$' "$WORK/out/dem/steady.csv" || fail "no steady row in steady.csv"

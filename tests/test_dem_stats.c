@@ -78,6 +78,14 @@ static void test_detector(void) {
     if (gs_dem_is_steady(lvl, lvl, n, 5, 1e-9)) first = n;
   fprintf(stderr, "detector: steady signal fires, ramps do not; levelling ramp first steady at n = %d\n", first);
   CHECK(first == 25);
+  /* statistics.steady.quantities: hold-up and collision rate steady while the
+   * kinetic energy still decays by 3 % a sample: steady on the first two, not
+   * with the third (gs_dem_is_steady_n) */
+  const double *two[2] = {a, b}, *three[3] = {a, b, ramp};
+  CHECK(gs_dem_is_steady_n(two, 2, N, 10, 0.1) == 1);
+  CHECK(gs_dem_is_steady_n(three, 3, N, 10, 0.1) == 0);
+  CHECK(gs_dem_is_steady_n(three, 3, N, 10, 0.15) == 1); /* the ramp's ends lie 13-14 % from its mean */
+  CHECK(gs_dem_is_steady_n(three, 0, N, 10, 0.1) == 0);  /* nothing watched: never steady */
 }
 
 /* ---- residence times ----------------------------------------------------- */

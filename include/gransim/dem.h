@@ -277,6 +277,19 @@ void gs_dem_list_generators(FILE *fp);
 int gs_dem_case_run(gs_dem_case *c, const char *out_dir, int progress, gs_error *err);
 void gs_dem_case_free(gs_dem_case *c);
 
+/* The quantities the steady-state detector can watch (statistics.steady.
+ * quantities), NULL-terminated, in the order of the GS_DEM_STEADY_* bits:
+ * holdup_mass, collision_rate, kinetic_energy (translational + rotational). */
+extern const char *const gs_dem_steady_quantities[];
+enum { GS_DEM_STEADY_HOLDUP = 1, GS_DEM_STEADY_COLLISIONS = 2, GS_DEM_STEADY_KINETIC = 4 };
+/* The default: hold-up mass and collision rate (Sampat et al. 2018). */
+#define GS_DEM_STEADY_DEFAULT (GS_DEM_STEADY_HOLDUP | GS_DEM_STEADY_COLLISIONS)
+/* A `quantities` list (one or more of those names, each once) into *mask;
+ * a misspelt name is refused with a did-you-mean hint. */
+int gs_dem_steady_quantities_read(struct gs_cfg_node *list, unsigned *mask, gs_error *err);
+/* The names of mask, joined by sep ("holdup_mass, collision_rate"). */
+void gs_dem_steady_quantities_join(unsigned mask, const char *sep, char *buf, size_t n);
+
 /* The figures of a DEM case run at every statistics sample
  * (statistics.sample_every), handed to its observer. */
 typedef struct {

@@ -16,6 +16,7 @@ typedef struct {
   int outside_error;     /* classes.outside: 0 nearest, 1 error */
   long window;           /* steady.window: samples */
   double tolerance;      /* steady.tolerance */
+  unsigned quantities;   /* steady.quantities: GS_DEM_STEADY_* bits the detector watches */
   double sample_every;   /* steady.sample_every [s] */
   double max_time;       /* steady.max_time [s]: the DEM's longest duration */
   double collect;        /* steady.collect [s]: statistics after the detector fired, then the DEM stops */
@@ -28,6 +29,7 @@ typedef struct {
   double e_axis[GS_MAX_DIM]; /* its values (NAN: the axis does not count) */
   double e_now;          /* the DEM material's e for this stage (NAN: the case's own) */
   long scale_n;          /* scaling.particles: the DEM's particle count (0: no system scaling) */
+  double geom_now;       /* the DEM's dem.geometry_scale for this stage (1: the case's geometry) */
 } gs_couple_settings;
 
 /* DEM classes derived from the grid: edges in volume-equivalent diameter. */
@@ -77,6 +79,7 @@ typedef struct {
   double t_steady; /* [s] when the detector fired */
   double e;        /* restitution of classes.material (NAN: the case's own) */
   double l;        /* system scaling ratio l_i (1: no scaling) */
+  double geom;     /* the DEM geometry's scale against the case's (1: no scaling) */
 } gs_couple_dem_record;
 
 int gs_couple_load(const char *path, couple *k, int progress, gs_error *err);

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "couple/couple_internal.h"
+#include "gransim/dem.h"
 
 static void put_scalar(FILE *fp, const char *t) {
   fputc('"', fp);
@@ -66,6 +67,8 @@ int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const
                              const gs_couple_classes *cl, const double *fractions, gs_error *err) {
   if (gs_cfg_require_kind(root, GS_CFG_MAP, err)) return GS_EINPUT;
   int rc = GS_OK, have_dem = 0, have_stats = 0, have_out = 0;
+  char q[96]; /* the detector's quantities (coupling.steady.quantities) */
+  gs_dem_steady_quantities_join(s->quantities, ", ", q, sizeof q);
   fprintf(fp, "# written by gransim couple: the dem section with the classes derived from the PBM grid\n");
   for (size_t i = 0; i < gs_cfg_size(root) && !rc; i++) {
     const char *key = gs_cfg_key_at(root, i);
@@ -75,17 +78,24 @@ int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const
       return gs_cfg_fail(v, err, "the DEM classes of a coupled case come from the PBM grid "
                          "(coupling.classes); remove this list");
     if (!strcmp(key, "dem")) {
+      /* system scaling rescales the geometry every cycle (dem.geometry_scale) */
       static const char *const taken[] = {"duration", NULL};
+      gs_cfg_node *own = s->scale_n && gs_cfg_kind_of(v) == GS_CFG_MAP ? gs_cfg_get(v, "geometry_scale") : NULL;
+      if (own)
+        return gs_cfg_fail(own, err, "set by the coupling in a coupled case with scaling (coupling.scaling rescales "
+                           "the geometry every cycle); remove it");
       fputs("dem: {", fp);
       rc = put_map_except(fp, v, dir, taken, "coupling.steady.max_time", &first, err);
-      fprintf(fp, "%sduration: %.17g}\n", first ? "" : ", ", s->max_time);
+      fprintf(fp, "%sduration: %.17g", first ? "" : ", ", s->max_time);
+      if (s->scale_n) fprintf(fp, ", geometry_scale: %.17g", s->geom_now);
+      fputs("}\n", fp);
       have_dem = 1;
     } else if (!strcmp(key, "statistics")) {
       static const char *const taken[] = {"start", "sample_every", "steady", NULL};
       fputs("statistics: {", fp);
       rc = put_map_except(fp, v, dir, taken, "coupling.steady", &first, err);
-      fprintf(fp, "%sstart: steady, sample_every: %.17g, steady: {window: %ld, tolerance: %.17g}}\n",
-              first ? "" : ", ", s->sample_every, s->window, s->tolerance);
+      fprintf(fp, "%sstart: steady, sample_every: %.17g, steady: {window: %ld, tolerance: %.17g, quantities: [%s]}}\n",
+              first ? "" : ", ", s->sample_every, s->window, s->tolerance, q);
       have_stats = 1;
     } else if (!strcmp(key, "output")) {
       static const char *const taken[] = {"every", NULL};
@@ -152,8 +162,8 @@ int gs_couple_write_dem_case(FILE *fp, gs_cfg_node *root, const char *dir, const
   if (rc) return rc;
   if (!have_dem) return gs_cfg_fail(root, err, "missing key 'dem' (time_step, box, ...) in the DEM case");
   if (!have_stats)
-    fprintf(fp, "statistics: {start: steady, sample_every: %.17g, steady: {window: %ld, tolerance: %.17g}}\n",
-            s->sample_every, s->window, s->tolerance);
+    fprintf(fp, "statistics: {start: steady, sample_every: %.17g, steady: {window: %ld, tolerance: %.17g, "
+            "quantities: [%s]}}\n", s->sample_every, s->window, s->tolerance, q);
   /* one output row per sample, so that the time series holds the detector's samples */
   if (!have_out) fprintf(fp, "output: {every: %.17g}\n", s->sample_every);
   fputs("classes:\n", fp);

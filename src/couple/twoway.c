@@ -136,11 +136,11 @@ static double total_number(const couple *k, const double *Y) {
 }
 
 /* System scaling (coupling.scaling; docs/models.md, "System scaling"): the
- * DEM held scale_n particles of the real sizes in the user's (scaled-down)
- * geometry at the real fill level, so it stands for a volume l^3 times
- * smaller than the real one, l^3 = N_PBM / N.  A per-pair frequency goes as
- * 1/volume, so the real system's C_ij is the DEM's times l^-3.  The DEM's
- * own table stays as collision_kernel_dem.csv. */
+ * DEM held scale_n particles of the real sizes at the real fill level, in
+ * the case's geometry scaled by geometry_factor, so it stands for a volume
+ * l^3 times smaller than the real one, l^3 = N_PBM / N.  A per-pair
+ * frequency goes as 1/volume, so the real system's C_ij is the DEM's times
+ * l^-3.  The DEM's own table stays as collision_kernel_dem.csv. */
 static int scale_kernel(const char *dir, size_t nc, double l, gs_error *err) {
   char p[4600], raw[4600], line[16384];
   snprintf(p, sizeof p, "%s/collision_kernel.csv", dir);
@@ -175,6 +175,13 @@ static int scale_kernel(const char *dir, size_t nc, double l, gs_error *err) {
   if (!in || !out || !ok) return gs_error_set(err, GS_EIO, "%s: cannot copy to %s", p, raw);
   return GS_OK;
 }
+
+/* The DEM geometry's linear scale for a population of n granules: the
+ * case's geometry holds the first cycle's population (n_first granules) at
+ * the real fill level in N particles; the real equipment is then l_1 times
+ * the case's geometry, and a population of n granules needs l_1 / l_i =
+ * (n_first / n)^(1/3) times it for N particles at the same fill level. */
+static double geometry_factor(double n_first, double n) { return cbrt(n_first / n); }
 
 /* The volume-weighted mean restitution of the components given in
  * coupling.restitution over the population (NAN: none given, or no volume). */
@@ -287,7 +294,7 @@ static int write_cycles(const char *out, const cycle_row *rows, size_t m, gs_err
   FILE *fp = gs_csv_open_in(&t, out, "cycles.csv", err);
   if (!fp) return err->code;
   fprintf(fp, "cycle,t_start [s],t_end [s],trigger,volume_change [1],ended_by,particles [1],l_i [1],dem_steps [1],"
-              "dem_time [s],dem_wall [s],t_steady [s],restitution [1]\n");
+              "dem_time [s],dem_wall [s],t_steady [s],restitution [1],geometry_scale [1]\n");
   fprintf(fp, "# the coupling cycles of gransim couple (mode: two_way): cycle N's DEM ran on the population at "
               "t_start (trigger: what started it, volume_change: the relative change of the mean granule volume "
               "since the previous cycle's start), its collision frequencies drove the PBM to t_end (ended_by)\n");
@@ -296,12 +303,13 @@ static int write_cycles(const char *out, const cycle_row *rows, size_t m, gs_err
     fprintf(fp, "%zu,%.9g,%.9g,%s,%.9g,%s,%zu,%.9g,%ld,%.9g,%.6g,%.9g,", i + 1, w->h.t, w->t_end,
             trig_names[w->h.trigger], w->h.change, trig_names[w->by], w->r.particles, w->r.l, w->r.steps, w->r.t_dem,
             w->r.wall, w->r.t_steady);
-    if (isnan(w->r.e)) fputs("\n", fp); /* the case's own */
-    else fprintf(fp, "%.9g\n", w->r.e);
+    if (!isnan(w->r.e)) fprintf(fp, "%.9g", w->r.e); /* empty: the case's own */
+    fprintf(fp, ",%.9g\n", w->r.geom);
   }
   static const char *const units[] = {"cycle", "1", "t_start", "s", "t_end", "s", "volume_change", "1",
                                       "particles", "1", "l_i", "1", "dem_steps", "1", "dem_time", "s",
-                                      "dem_wall", "s", "t_steady", "s", "restitution", "1", NULL};
+                                      "dem_wall", "s", "t_steady", "s", "restitution", "1",
+                                      "geometry_scale", "1", NULL};
   return gs_csv_close(&t, "gransim couple", units, err);
 }
 
@@ -341,13 +349,13 @@ static int write_cycles_h5(const char *out, const couple *k, const cycle_row *ro
     const char *name, *units;
   } cols[] = {{"t_start", "s"}, {"t_end", "s"}, {"trigger", "1"}, {"volume_change", "1"}, {"ended_by", "1"},
               {"particles", "1"}, {"l_i", "1"}, {"dem_steps", "1"}, {"dem_time", "s"}, {"dem_wall", "s"},
-              {"t_steady", "s"}, {"restitution", "1"}};
+              {"t_steady", "s"}, {"restitution", "1"}, {"geometry_scale", "1"}};
   unsigned long long d1[1] = {m}, d3[3] = {m, nc, nc}, de[1] = {nc + 1};
   for (size_t c = 0; c < sizeof cols / sizeof cols[0] && !rc; c++) {
     for (size_t i = 0; i < m; i++) {
       const cycle_row *w = &rows[i];
       const double v[] = {w->h.t, w->t_end, w->h.trigger, w->h.change, w->by, (double)w->r.particles, w->r.l,
-                          (double)w->r.steps, w->r.t_dem, w->r.wall, w->r.t_steady, w->r.e};
+                          (double)w->r.steps, w->r.t_dem, w->r.wall, w->r.t_steady, w->r.e, w->r.geom};
       col[i] = v[c];
     }
     char path[128];
@@ -437,6 +445,7 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
   gs_case_free(&c);
   if (!Y) return GS_ENOMEM;
   start_head h = {.t = t_first, .v0 = mean_volume(k, Y), .trigger = TRIG_START, .n = n};
+  const double n_first = total_number(k, Y); /* the population the case's geometry is for (scaling) */
   /* where to start: the last cycle begun (--resume), or a fresh cycle 1 */
   long N = 0;
   int dem_done = 0;
@@ -493,16 +502,19 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
         fputc('\n', stderr);
       }
       k->s.e_now = restitution(k, Y);
+      k->s.geom_now = k->s.scale_n ? geometry_factor(n_first, total_number(k, Y)) : 1;
       if (!rc && opt->progress && !isnan(k->s.e_now))
         fprintf(stderr, "gransim couple: restitution of %s: %.4g (volume-weighted over the components)\n",
                 k->s.material, k->s.e_now);
       if (!rc) rc = gs_couple_dem_stage(k, part, fr, opt->progress, &rec, err);
       rec.l = k->s.scale_n ? cbrt(total_number(k, Y) / (double)k->s.scale_n) : 1;
+      rec.geom = k->s.geom_now;
       if (!rc && k->s.scale_n) {
         rc = scale_kernel(part, k->cl.n, rec.l, err);
         if (!rc && opt->progress)
-          fprintf(stderr, "gransim couple: system scaling: %ld DEM particles for %.6g granules, l_i = %.6g, C_ij x "
-                  "l_i^-3 = %.6g\n", k->s.scale_n, total_number(k, Y), rec.l, 1 / (rec.l * rec.l * rec.l));
+          fprintf(stderr, "gransim couple: system scaling: %ld DEM particles for %.6g granules, l_i = %.6g, "
+                  "geometry x %.6g, C_ij x l_i^-3 = %.6g\n", k->s.scale_n, total_number(k, Y), rec.l, rec.geom,
+                  1 / (rec.l * rec.l * rec.l));
       }
       if (!rc) rc = write_record(part, &rec, err);
       if (!rc && rename(part, dir)) rc = gs_error_set(err, GS_EIO, "%s: cannot rename to %s: %s", part, dir, strerror(errno));

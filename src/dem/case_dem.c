@@ -33,6 +33,14 @@ static int vec3(gs_cfg_node *map, const char *key, int required, const double *d
   return rc;
 }
 
+/* A position or length vector, times the case's dem.geometry_scale. */
+static int point3(const gs_dem_case *c, gs_cfg_node *map, const char *key, int required, const double *def,
+                  double out[3], gs_error *err) {
+  int rc = vec3(map, key, required, def, out, err);
+  for (int k = 0; k < 3 && !rc; k++) out[k] *= c->geom;
+  return rc;
+}
+
 static int unit_vec(gs_cfg_node *map, const char *key, double out[3], gs_error *err) {
   int rc = vec3(map, key, 1, NULL, out, err);
   if (rc) return rc;
@@ -42,8 +50,9 @@ static int unit_vec(gs_cfg_node *map, const char *key, double out[3], gs_error *
   return GS_OK;
 }
 
-/* region: {box: {lo, hi}} or {cylinder: {point, axis, radius, inner_radius, from, to}} */
-static int read_region(gs_cfg_node *n, gs_dem_region *g, gs_error *err) {
+/* region: {box: {lo, hi}} or {cylinder: {point, axis, radius, inner_radius, from, to}};
+ * every length times dem.geometry_scale */
+static int read_region(const gs_dem_case *dc, gs_cfg_node *n, gs_dem_region *g, gs_error *err) {
   int rc = gs_cfg_require_kind(n, GS_CFG_MAP, err);
   if (rc) return rc;
   memset(g, 0, sizeof *g);
@@ -51,21 +60,25 @@ static int read_region(gs_cfg_node *n, gs_dem_region *g, gs_error *err) {
   if (!!b == !!c) return gs_cfg_fail(n, err, "expected exactly one of 'box' or 'cylinder'");
   if (b) {
     g->kind = GS_DEM_REGION_BOX;
-    if ((rc = gs_cfg_require_kind(b, GS_CFG_MAP, err)) || (rc = vec3(b, "lo", 1, NULL, g->lo, err)) ||
-        (rc = vec3(b, "hi", 1, NULL, g->hi, err)))
+    if ((rc = gs_cfg_require_kind(b, GS_CFG_MAP, err)) || (rc = point3(dc, b, "lo", 1, NULL, g->lo, err)) ||
+        (rc = point3(dc, b, "hi", 1, NULL, g->hi, err)))
       return rc;
     for (int a = 0; a < 3; a++)
       if (!(g->hi[a] > g->lo[a])) return gs_cfg_fail(gs_cfg_get(b, "hi"), err, "expected hi > lo on every axis");
     rc = gs_cfg_check_unused(b, err);
   } else {
     g->kind = GS_DEM_REGION_CYLINDER;
-    if ((rc = gs_cfg_require_kind(c, GS_CFG_MAP, err)) || (rc = vec3(c, "point", 1, NULL, g->p, err)) ||
+    if ((rc = gs_cfg_require_kind(c, GS_CFG_MAP, err)) || (rc = point3(dc, c, "point", 1, NULL, g->p, err)) ||
         (rc = unit_vec(c, "axis", g->a, err)) ||
         (rc = gs_cfg_double_range(c, "radius", 1, 0, 0, 1, HUGE_VAL, 0, &g->R, err)) ||
         (rc = gs_cfg_double_range(c, "inner_radius", 0, 0, 0, 0, g->R, 1, &g->Rin, err)) ||
         (rc = gs_cfg_double_req(c, "from", &g->s0, err)) ||
         (rc = gs_cfg_double_range(c, "to", 1, 0, g->s0, 1, HUGE_VAL, 0, &g->s1, err)))
       return rc;
+    g->R *= dc->geom;
+    g->Rin *= dc->geom;
+    g->s0 *= dc->geom;
+    g->s1 *= dc->geom;
     rc = gs_cfg_check_unused(c, err);
   }
   if (!rc) rc = gs_cfg_check_unused(n, err);
@@ -172,6 +185,8 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
     gs_dem_mesh *me = NULL;
     rc = gs_cfg_require_kind(gen, GS_CFG_MAP, err);
     if (!rc) rc = gs_dem_generate(gen, &tr, &gm, err);
+    for (size_t i = 0; !rc && i < 9 * tr.ntri; i++) tr.v[i] *= c->geom;
+    for (int a = 0; a < 3; a++) gm.origin[a] *= c->geom;
     if (!rc && !(me = gs_dem_mesh_from_triangles(tr.v, tr.ntri, err))) rc = err->code;
     gs_dem_tris_free(&tr);
     if (rc) return rc;
@@ -191,8 +206,8 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
     char *abs = realpath(path, NULL);
     snprintf(src->mesh, sizeof src->mesh, "%s", abs ? abs : path);
     free(abs);
-    src->scale = scale;
-    gs_dem_mesh *me = gs_dem_mesh_read_stl(path, scale, err);
+    src->scale = scale * c->geom;
+    gs_dem_mesh *me = gs_dem_mesh_read_stl(path, src->scale, err);
     if (!me) return gs_error_prefix(err, "%s:%d: walls: ", gs_cfg_file(mesh), gs_cfg_line(mesh));
     int closed;
     if ((rc = gs_cfg_bool_opt(n, "closed", 0, &closed, err)) || (rc = closed ? mesh_closed(n, me, file, err) : 0)) {
@@ -202,7 +217,7 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
     w = gs_dem_add_mesh(c->dem, name, me, m, err);
   } else if (pl) {
     double p[3], nv[3];
-    if ((rc = gs_cfg_require_kind(pl, GS_CFG_MAP, err)) || (rc = vec3(pl, "point", 1, NULL, p, err)) ||
+    if ((rc = gs_cfg_require_kind(pl, GS_CFG_MAP, err)) || (rc = point3(c, pl, "point", 1, NULL, p, err)) ||
         (rc = unit_vec(pl, "normal", nv, err)) || (rc = gs_cfg_check_unused(pl, err)))
       return rc;
     memcpy(src->point, p, sizeof p);
@@ -211,11 +226,12 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
   } else {
     double p[3], a[3], R;
     int inside;
-    if ((rc = gs_cfg_require_kind(cy, GS_CFG_MAP, err)) || (rc = vec3(cy, "point", 1, NULL, p, err)) ||
+    if ((rc = gs_cfg_require_kind(cy, GS_CFG_MAP, err)) || (rc = point3(c, cy, "point", 1, NULL, p, err)) ||
         (rc = unit_vec(cy, "axis", a, err)) ||
         (rc = gs_cfg_double_range(cy, "radius", 1, 0, 0, 1, HUGE_VAL, 0, &R, err)) ||
         (rc = gs_cfg_bool_opt(cy, "inside", 1, &inside, err)) || (rc = gs_cfg_check_unused(cy, err)))
       return rc;
+    R *= c->geom;
     w = gs_dem_add_cylinder(c->dem, name, p, a, R, inside, m, err);
   }
   if (w < 0) return gs_error_prefix(err, "%s:%d: %s: ", gs_cfg_file(n), gs_cfg_line(n), gs_cfg_path(n));
@@ -232,7 +248,7 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
     spin_start = gm.start;
   }
   if (rot) {
-    if ((rc = gs_cfg_require_kind(rot, GS_CFG_MAP, err)) || (rc = vec3(rot, "origin", 1, NULL, origin, err)) ||
+    if ((rc = gs_cfg_require_kind(rot, GS_CFG_MAP, err)) || (rc = point3(c, rot, "origin", 1, NULL, origin, err)) ||
         (rc = unit_vec(rot, "axis", axis, err)))
       return rc;
     gs_cfg_node *rpm = gs_cfg_get(rot, "rpm"), *rad = gs_cfg_get(rot, "rad_per_s");
@@ -247,6 +263,8 @@ static int read_wall(gs_dem_case *c, gs_cfg_node *n, const named_mat *mats, size
         (rc = gs_cfg_check_unused(rot, err)))
       return rc;
   }
+  /* a geometry scaled by dem.geometry_scale turns at the same tip speed (docs/models.md, "System scaling") */
+  omega /= c->geom;
   const double zero[3] = {0, 0, 0};
   if ((rc = vec3(n, "velocity", 0, zero, vel, err))) return rc;
   src->rotating = rot != NULL || gm.rotating;
@@ -268,7 +286,7 @@ static int read_inserter(gs_dem_case *c, gs_cfg_node *n, int feed, gs_dem_insert
   gs_cfg_node *r;
   memset(in, 0, sizeof *in);
   if (!rc) rc = gs_cfg_map_req(n, "region", &r, err);
-  if (!rc) rc = read_region(r, &in->reg, err);
+  if (!rc) rc = read_region(c, r, &in->reg, err);
   if (rc) return rc;
   if (feed) {
     gs_cfg_node *mr = gs_cfg_get(n, "mass_rate"), *nr = gs_cfg_get(n, "number_rate");
@@ -330,6 +348,7 @@ static int read_statistics(gs_dem_case *c, gs_cfg_node *root, gs_error *err) {
   c->sample_every = c->duration / 100;
   c->steady_window = 10;
   c->steady_tol = 0.1;
+  c->steady_q = GS_DEM_STEADY_DEFAULT;
   c->ncmp = 1;
   c->cmp_axis[0] = 1;
   c->cmp_edges = malloc(2 * sizeof(double));
@@ -350,9 +369,10 @@ static int read_statistics(gs_dem_case *c, gs_cfg_node *root, gs_error *err) {
     c->cmp_edges = NULL;
     const double zero[3] = {0, 0, 0};
     if ((rc = gs_cfg_require_kind(cm, GS_CFG_MAP, err)) || (rc = unit_vec(cm, "axis", c->cmp_axis, err)) ||
-        (rc = vec3(cm, "origin", 0, zero, c->cmp_origin, err)) ||
+        (rc = point3(c, cm, "origin", 0, zero, c->cmp_origin, err)) ||
         (rc = gs_cfg_doubles_req(cm, "edges", 0, &c->cmp_edges, &ne, err)))
       return rc;
+    for (size_t k = 0; k < ne; k++) c->cmp_edges[k] *= c->geom;
     if (ne < 2) return gs_cfg_fail(gs_cfg_get(cm, "edges"), err, "expected 2 or more increasing edges");
     for (size_t k = 1; k < ne; k++)
       if (!(c->cmp_edges[k] > c->cmp_edges[k - 1]))
@@ -363,13 +383,15 @@ static int read_statistics(gs_dem_case *c, gs_cfg_node *root, gs_error *err) {
   gs_cfg_node *h = rc ? NULL : gs_cfg_get(s, "holdup_region");
   if (h) {
     c->has_holdup = 1;
-    rc = read_region(h, &c->holdup, err);
+    rc = read_region(c, h, &c->holdup, err);
   }
   gs_cfg_node *sd = rc ? NULL : gs_cfg_get(s, "steady");
   if (sd) {
     if ((rc = gs_cfg_require_kind(sd, GS_CFG_MAP, err)) ||
         (rc = gs_cfg_long_range(sd, "window", 0, 10, 2, 100000, &c->steady_window, err)) ||
         (rc = gs_cfg_double_range(sd, "tolerance", 0, 0.1, 0, 1, HUGE_VAL, 0, &c->steady_tol, err)) ||
+        (gs_cfg_get(sd, "quantities") &&
+         (rc = gs_dem_steady_quantities_read(gs_cfg_get(sd, "quantities"), &c->steady_q, err))) ||
         (rc = gs_cfg_check_unused(sd, err)))
       return rc;
   }
@@ -392,6 +414,7 @@ static int load(gs_dem_case *c, gs_error *err) {
   long seed = 1, threads_from = 20000;
   gs_cfg_node *box;
   if ((rc = gs_cfg_double_range(dem, "time_step", 1, 0, 0, 1, 1, 0, &p->dt, err)) ||
+      (rc = gs_cfg_double_range(dem, "geometry_scale", 0, 1, 0, 1, HUGE_VAL, 0, &c->geom, err)) ||
       (rc = gs_cfg_double_range(dem, "max_lost", 0, 0.01, 0, 0, 1, 0, &c->max_lost, err)) ||
       (rc = gs_cfg_double_range(dem, "duration", 1, 0, 0, 1, HUGE_VAL, 0, &c->duration, err)) ||
       (rc = vec3(dem, "gravity", 0, g0, p->gravity, err)) ||
@@ -400,8 +423,8 @@ static int load(gs_dem_case *c, gs_error *err) {
       (rc = gs_cfg_enum_opt(dem, "mesh_contacts", mesh_contacts, 0, &p->mesh_contacts, err)) ||
       (rc = gs_cfg_long_range(dem, "seed", 0, 1, 0, LONG_MAX, &seed, err)) ||
       (rc = gs_cfg_long_range(dem, "threads_from", 0, 20000, 1, LONG_MAX, &threads_from, err)) ||
-      (rc = gs_cfg_map_req(dem, "box", &box, err)) || (rc = vec3(box, "lo", 1, NULL, p->lo, err)) ||
-      (rc = vec3(box, "hi", 1, NULL, p->hi, err)) || (rc = gs_cfg_check_unused(box, err)))
+      (rc = gs_cfg_map_req(dem, "box", &box, err)) || (rc = point3(c, box, "lo", 1, NULL, p->lo, err)) ||
+      (rc = point3(c, box, "hi", 1, NULL, p->hi, err)) || (rc = gs_cfg_check_unused(box, err)))
     return rc;
   for (int a = 0; a < 3; a++)
     if (!(p->hi[a] > p->lo[a])) return gs_cfg_fail(gs_cfg_get(box, "hi"), err, "expected hi > lo on every axis");
@@ -483,7 +506,7 @@ static int load(gs_dem_case *c, gs_error *err) {
     for (size_t k = 0; k < c->noutlets && !rc; k++) {
       gs_cfg_node *o = gs_cfg_item(n, k), *r;
       if (!(rc = gs_cfg_require_kind(o, GS_CFG_MAP, err)) && !(rc = gs_cfg_map_req(o, "region", &r, err)) &&
-          !(rc = read_region(r, &c->outlets[k], err)))
+          !(rc = read_region(c, r, &c->outlets[k], err)))
         rc = gs_cfg_check_unused(o, err);
     }
   }
@@ -499,6 +522,10 @@ static int load(gs_dem_case *c, gs_error *err) {
   /* sections read by the layers above when they run the case: `gas` (the
    * gas phase, src/cfd, through gs_dem_case_section) */
   if (!rc) c->gas = gs_cfg_get(root, "gas");
+  /* the gas grid is read by src/cfd, which does not scale it */
+  if (!rc && c->gas && c->geom != 1)
+    rc = gs_cfg_fail(gs_cfg_get(dem, "geometry_scale"), err, "a case with a `gas` section cannot be scaled (its grid "
+                     "and inlets are not): expected geometry_scale 1");
   if (!rc) rc = gs_dem_case_check_limits(c, root, err);
   if (!rc) rc = gs_cfg_check_unused(root, err);
   /* the time step against the Rayleigh time of the smallest particle */

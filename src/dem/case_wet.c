@@ -21,6 +21,7 @@ static int read_spray(gs_dem_case *c, gs_cfg_node *s, gs_dem_nozzle *z, gs_error
       (rc = gs_cfg_double_range(s, "ledger_tolerance", 0, 1e-9, 0, 1, 1e-3, 0, &c->wet->tol, err)))
     return rc;
   z->half_angle = deg * M_PI / 180;
+  for (int a = 0; a < 3; a++) z->point[a] *= c->geom; /* dem.geometry_scale */
   for (int a = 0; a < 3; a++)
     if (!(z->point[a] > c->prm.lo[a] && z->point[a] < c->prm.hi[a]))
       return gs_cfg_fail(gs_cfg_get(s, "point"), err, "expected a point inside dem.box");

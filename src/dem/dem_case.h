@@ -66,6 +66,10 @@ struct gs_dem_case_s {
   size_t nwall_src;
   gs_dem_wall_src wall_src[GS_DEM_CASE_MAX_WALLS];
   double duration;
+  /* dem.geometry_scale: every length of the geometry (box, walls, regions,
+   * compartments, spray point) is multiplied by it at load; particle sizes
+   * are not, and rotations keep their tip speed (omega / geom) */
+  double geom;
   uint64_t seed;
   size_t nclass;
   gs_dem_class cls[GS_DEM_MAX_CLASSES];
@@ -82,6 +86,7 @@ struct gs_dem_case_s {
   gs_dem_region holdup;
   long steady_window;
   double steady_tol;
+  unsigned steady_q; /* statistics.steady.quantities: GS_DEM_STEADY_* bits */
   /* output */
   double out_every, vtk_every;
   /* spray and granulation (src/dem/dem_wet.h); NULL when the case has neither */

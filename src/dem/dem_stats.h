@@ -36,6 +36,8 @@ void gs_dem_stats_reset(gs_dem_stats *s, gs_dem_case *c, double t);
  * samples, both series a (hold-up mass) and b (collision rate) stay within
  * tol * mean of their window means, and both means are > 0. */
 int gs_dem_is_steady(const double *a, const double *b, long n, long w, double tol);
+/* The same over nq series s[0..nq-1] (the quantities of statistics.steady). */
+int gs_dem_is_steady_n(const double *const *s, int nq, long n, long w, double tol);
 /* Hold-up of the case (number and mass in the hold-up region, or all). */
 void gs_dem_holdup(const gs_dem_case *c, double *n, double *m);
 /* One sample of the state; takes the removed particles' residence times. */

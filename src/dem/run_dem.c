@@ -101,8 +101,10 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   gs_dem_health_init(&health, c);
   long cap = 1024, ns = 0, frame_cap = 64;
   double *frame_t = malloc((size_t)frame_cap * sizeof *frame_t); /* times of the VTK frames */
-  double *ser_m = malloc(cap * sizeof(double)), *ser_c = malloc(cap * sizeof(double));
-  if (!ser_m || !ser_c || !frame_t) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+  /* the detector's series: hold-up mass, collision rate, kinetic energy (statistics.steady.quantities) */
+  double *ser_m = malloc(cap * sizeof(double)), *ser_c = malloc(cap * sizeof(double)),
+         *ser_k = malloc(cap * sizeof(double));
+  if (!ser_m || !ser_c || !ser_k || !frame_t) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
 
   /* initial fill */
   for (size_t k = 0; k < c->nfill && !rc; k++) {
@@ -190,13 +192,18 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       gs_dem_holdup(c, &hn, &hm);
       if (ns == cap) {
         cap *= 2;
-        double *a = realloc(ser_m, cap * sizeof(double)), *b = realloc(ser_c, cap * sizeof(double));
+        double *a = realloc(ser_m, cap * sizeof(double)), *b = realloc(ser_c, cap * sizeof(double)),
+               *e = realloc(ser_k, cap * sizeof(double));
         if (a) ser_m = a;
         if (b) ser_c = b;
-        if (!a || !b) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
+        if (e) ser_k = e;
+        if (!a || !b || !e) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
       }
+      double et, er;
+      gs_dem_kinetic_energy(d, &et, &er);
       if (!rc) {
         ser_m[ns] = hm;
+        ser_k[ns] = et + er;
         ser_c[ns] = (double)(ev - (ev >= prev_events ? prev_events : ev)) / (smp_k * dt);
         ns++;
         prev_events = ev;
@@ -205,16 +212,17 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
       /* a bed at rest before its walls turn is not the steady state sought:
        * the detector's window holds samples from the last rotation start on */
       if (gs_dem_time(d) <= t_agitate * (1 + 1e-12)) k_agitate = ns;
-      if (!rc && !steady &&
-          gs_dem_is_steady(ser_m + k_agitate, ser_c + k_agitate, ns - k_agitate, c->steady_window, c->steady_tol)) {
+      const double *watched[3], *all[3] = {ser_m + k_agitate, ser_c + k_agitate, ser_k + k_agitate};
+      int nq = 0;
+      for (int q = 0; q < 3; q++) /* in the order of gs_dem_steady_quantities */
+        if (c->steady_q & (1u << q)) watched[nq++] = all[q];
+      if (!rc && !steady && gs_dem_is_steady_n(watched, nq, ns - k_agitate, c->steady_window, c->steady_tol)) {
         steady = 1;
         t_steady = gs_dem_time(d);
         if (progress) fprintf(stderr, "gransim dem: steady state at t = %.6g s\n", t_steady);
         open_window = c->start_steady;
       }
       if (!rc && c->observer.sample) {
-        double et, er;
-        gs_dem_kinetic_energy(d, &et, &er);
         gs_dem_view v;
         gs_dem_get_view(d, &v);
         gs_dem_sample smp = {.t = gs_dem_time(d), .step = gs_dem_step_count(d), .particles = v.n,
@@ -324,12 +332,14 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
     if (!rc) rc = wrc;
   }
   if (!rc && !gs_dem_stats_have_window(&st, c, gs_dem_time(d), t_steady)) {
-    if (c->start_steady)
+    if (c->start_steady) {
+      char q[96];
+      gs_dem_steady_quantities_join(c->steady_q, ", ", q, sizeof q);
       fprintf(stderr, "gransim: warning: %s: statistics.start is 'steady' but the steady state was not reached "
-              "by t = %.6g s (hold-up mass and collision rate within %g of their means over %ld samples): there "
-              "is no statistics window, so the rates in the tables are nan; run longer, or set statistics.start "
-              "to a time or loosen statistics.steady\n", c->path, gs_dem_time(d), c->steady_tol, c->steady_window);
-    else
+              "by t = %.6g s (%s within %g of their means over %ld samples): there is no statistics window, so the "
+              "rates in the tables are nan; run longer, or set statistics.start to a time or loosen "
+              "statistics.steady\n", c->path, gs_dem_time(d), q, c->steady_tol, c->steady_window);
+    } else
       fprintf(stderr, "gransim: warning: %s: no sample in the statistics window (statistics.start %.6g s, "
               "sample_every %.6g s, duration %.6g s): the rates in the tables are nan\n", c->path, c->stats_start,
               c->sample_every, c->duration);
@@ -346,6 +356,7 @@ int gs_dem_case_run(gs_dem_case *c, const char *dir, int progress, gs_error *err
   gs_dem_stats_free(&st);
   free(ser_m);
   free(ser_c);
+  free(ser_k);
   free(frame_t);
   return rc;
 }

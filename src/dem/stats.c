@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cfg/nearest.h"
 #include "dem/dem_stats.h"
 #include "gransim/dem_data.h"
 
@@ -75,18 +76,56 @@ void gs_dem_stats_reset(gs_dem_stats *s, gs_dem_case *c, double t) {
   gs_dem_counters_reset(c->dem);
 }
 
-int gs_dem_is_steady(const double *a, const double *b, long n, long w, double tol) {
-  if (w < 1 || n < w) return 0;
-  const double *s[2] = {a + n - w, b + n - w};
-  for (int q = 0; q < 2; q++) {
+const char *const gs_dem_steady_quantities[] = {"holdup_mass", "collision_rate", "kinetic_energy", NULL};
+
+int gs_dem_steady_quantities_read(gs_cfg_node *list, unsigned *mask, gs_error *err) {
+  int rc = gs_cfg_require_kind(list, GS_CFG_SEQ, err);
+  if (!rc && !gs_cfg_size(list)) rc = gs_cfg_fail(list, err, "expected one or more of: holdup_mass, collision_rate, "
+                                                  "kinetic_energy");
+  *mask = 0;
+  for (size_t i = 0; i < gs_cfg_size(list) && !rc; i++) {
+    gs_cfg_node *it = gs_cfg_item(list, i);
+    const char *name = gs_cfg_scalar(it);
+    int q = 0;
+    while (name && gs_dem_steady_quantities[q] && strcmp(name, gs_dem_steady_quantities[q])) q++;
+    if (!name || !gs_dem_steady_quantities[q]) {
+      const char *near = name ? gs_nearest_word(name, gs_dem_steady_quantities, 3) : NULL;
+      char hint[96] = "";
+      if (near) snprintf(hint, sizeof hint, "did you mean '%s'? ", near);
+      rc = gs_cfg_fail(it, err, "unknown quantity: %sexpected one of: holdup_mass, collision_rate, kinetic_energy",
+                       hint);
+    } else if (*mask & (1u << q)) {
+      rc = gs_cfg_fail(it, err, "'%s' is listed twice", name);
+    } else *mask |= 1u << q;
+  }
+  return rc;
+}
+
+void gs_dem_steady_quantities_join(unsigned mask, const char *sep, char *buf, size_t n) {
+  size_t used = 0;
+  if (n) buf[0] = '\0';
+  for (int q = 0; gs_dem_steady_quantities[q] && used < n; q++)
+    if (mask & (1u << q))
+      used += (size_t)snprintf(buf + used, n - used, "%s%s", used ? sep : "", gs_dem_steady_quantities[q]);
+}
+
+int gs_dem_is_steady_n(const double *const *series, int nq, long n, long w, double tol) {
+  if (w < 1 || n < w || nq < 1) return 0;
+  for (int q = 0; q < nq; q++) {
+    const double *s = series[q] + n - w;
     double mean = 0;
-    for (long k = 0; k < w; k++) mean += s[q][k];
+    for (long k = 0; k < w; k++) mean += s[k];
     mean /= (double)w;
     if (!(mean > 0)) return 0;
     for (long k = 0; k < w; k++)
-      if (!(fabs(s[q][k] - mean) <= tol * mean)) return 0;
+      if (!(fabs(s[k] - mean) <= tol * mean)) return 0;
   }
   return 1;
+}
+
+int gs_dem_is_steady(const double *a, const double *b, long n, long w, double tol) {
+  const double *const s[2] = {a, b};
+  return gs_dem_is_steady_n(s, 2, n, w, tol);
 }
 
 void gs_dem_holdup(const gs_dem_case *c, double *n, double *m) {
