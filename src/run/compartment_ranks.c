@@ -358,6 +358,12 @@ void gs_comp_ranks_finish(gs_comp_ranks *r, size_t *key, gs_comp_ranks_failure *
     MPI_Allreduce(&me, &owner, 1, MPI_INT, MPI_MIN, r->comm);
     MPI_Bcast(f, (int)sizeof *f, MPI_BYTE, owner, r->comm);
     *key = (size_t)first;
+    /* rank 0 says what went wrong (as one process would), and so does the
+     * rank where it did; the others only that it did */
+    if (r->rank && r->rank != owner && f->rc > 0) {
+      f->bad_rate = 0;
+      gs_error_set(&f->err, f->rc, "the run failed on another MPI rank");
+    }
   }
   omp_unset_lock(&r->lock);
 }
