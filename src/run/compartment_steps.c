@@ -301,6 +301,18 @@ static void relax(unsigned spins) {
 #endif
 }
 
+/* A wait that may be long: for another MPI rank, whose messages come
+ * every step of a compartment there (milliseconds), a rank sleeps after a
+ * while instead of taking the core from the processes beside it. */
+static void relax_long(const struct gs_comp_steps *s, unsigned spins) {
+  if (s->ranks && spins > 4000) { /* naps of 50 us, then 250 us: each wake-up costs CPU */
+    const struct timespec nap = {0, spins > 8000 ? 250000 : 50000};
+    nanosleep(&nap, NULL);
+  } else {
+    relax(spins);
+  }
+}
+
 /* Wait until the compartment before has published nodes up to t (or is
  * done); returns how many may be read, 0 when the task must stop (it comes
  * after a failure, or the compartment before ended short of t: it failed). */
@@ -318,7 +330,7 @@ static size_t wait_for(struct gs_comp_steps *s, const node_list *up, double t, s
     /* rather than wait, write the stretches every compartment is done with */
     if (spins % 64 == 63 && (s->nworkers > 1 || s->ranks) && s->outputs_ready) outputs(s, 0);
     if (s->ranks && spins % 8 == 0) gs_comp_ranks_poll(s->ranks); /* the record may be in */
-    relax(spins);
+    relax_long(s, spins);
   }
 }
 
@@ -791,7 +803,7 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
       const node_list *up = w->up;
       for (unsigned spins = 0; !atomic_load_explicit(&up->done, memory_order_acquire) && !stopped(s, w->key); spins++) {
         if (s->ranks && spins % 8 == 0) gs_comp_ranks_poll(s->ranks); /* its end may be in */
-        relax(spins);
+        relax_long(s, spins);
       }
       if (stopped(s, w->key)) {
         aborted = 1; /* the one before may still be writing its record */
@@ -967,7 +979,9 @@ static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
       /* a free thread writes the stretches every compartment is done with */
       outputs(s, 0);
       const double t_idle0 = now_seconds();
-      for (int i = 0; i < 50; i++) relax(idle); /* waiting for another thread's task */
+      if (s->ranks) relax_long(s, idle * 50); /* waiting for another rank's record, or a thread's task */
+      else
+        for (int i = 0; i < 50; i++) relax(idle); /* waiting for another thread's task */
       idle++;
       w->t_idle += now_seconds() - t_idle0;
       continue;
@@ -1168,6 +1182,13 @@ void gs_comp_steps_set_block(gs_comp_steps *s, size_t lo, size_t hi, gs_comp_ran
   s->lo = lo;
   s->hi = hi;
   s->ranks = r;
+  /* rings as deep as for several threads: the ranks before and after run
+   * ahead and behind by stretches (rank 0 only as far as its outputs, which
+   * wait for the last rank) */
+  const size_t node_bytes = s->comp[0].rec[0].stride * sizeof(double), per = s->comp[0].rec[0].per;
+  const size_t slot_bytes = per * node_bytes > NODE_KEEP_BYTES ? per * node_bytes : NODE_KEEP_BYTES;
+  s->depth = RING;
+  while (s->depth > 2 && s->depth * (s->ncomp - 1) * slot_bytes > RING_BYTES) s->depth--;
   if (!threads) s->nworkers = 1;
   if ((size_t)s->nworkers > hi - lo) s->nworkers = (int)(hi - lo);
   for (int w = 0; w <= s->nworkers; w++) s->home[w] = lo + (hi - lo) * (size_t)w / (size_t)s->nworkers;
