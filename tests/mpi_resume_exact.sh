@@ -2,7 +2,9 @@
 # SIGKILL at a random moment and resumed on two ranks writes the very files
 # an uninterrupted 2-rank run writes (h5diff without tolerance, summary.csv
 # byte for byte), with rk and euler (the integrators that run on ranks), also
-# when compartments move between ranks at every decision.  The case is the
+# when compartments move between ranks at every decision, and with rk taking
+# per-compartment steps (each rank's block its own, the records sent between
+# them).  The case is the
 # CoriMix example on more compartments with shared steps (cli_resume_exact.sh
 # in one process).
 #
@@ -25,8 +27,11 @@ at="" # output times committed at each kill
 length=$(awk -v n="$ncomp" 'BEGIN { printf "%.6g", 0.38 / n }')
 
 n=0
-for solver in "rk, rtol: 1.0e-6, atol: 1.0, steps: shared" "euler, steps: shared"; do
-  for move in 0 1; do
+for solver in "rk, rtol: 1.0e-6, atol: 1.0, steps: shared" "euler, steps: shared" \
+  "rk, rtol: 1.0e-6, atol: 1.0, steps: per_compartment"; do
+  moves="0 1"
+  [ "${solver#*per_compartment}" = "$solver" ] || moves=0 # blocks stay where they are
+  for move in $moves; do
     n=$((n + 1))
     c=$WORK/case$n.yaml
     sed -e "s/compartments: 4/compartments: $ncomp/" -e "s/length: 0.095/length: $length/" \
@@ -62,4 +67,4 @@ for solver in "rk, rtol: 1.0e-6, atol: 1.0, steps: shared" "euler, steps: shared
     done
   done
 done
-echo "mpi_resume_exact: ok ($trials kills each of rk and euler, with and without moves, on 2 ranks; output times committed at the kills:$at of $((end + 1)))"
+echo "mpi_resume_exact: ok ($trials kills each of rk and euler, with and without moves, and of per-compartment steps, on 2 ranks; output times committed at the kills:$at of $((end + 1)))"

@@ -57,12 +57,8 @@ same_on_two_ranks() {
   same_results "$WORK/${2}1" "$WORK/${2}2m"
 }
 
-# the example takes its own steps per compartment, which runs in one process:
-# under mpirun it says so and stops; with steps: shared it runs on ranks
-run_rc 1 "${MPI[@]}" -np 2 "$BIN" run "$SRC/examples/corimix-continuous.yaml" --out "$WORK/pc2" --quiet
-stderr_has "solver.steps: per_compartment runs in one process"
-no_result_files "$WORK/pc2"
-# an exchange network reads every compartment, which runs in one process too
+# (the example's own per-compartment steps on ranks: mpi_compartment_steps.sh)
+# an exchange network reads every compartment, which runs in one process
 cat >"$WORK/net.yaml" <<'EOF'
 grid: {compartments: 2, axes: [{name: v, type: geometric, min: 1, ratio: 2, cells: 4}]}
 initial: {type: cell, number: 10, index: [1]}

@@ -35,8 +35,9 @@ void gs_parallel_init(int *argc, char ***argv) {
   setenv("OMPI_MCA_btl_vader_eager_limit", "32768", 0);
   setenv("OMPI_MCA_btl_sm_eager_limit", "32768", 0);
   int provided;
-  /* threads inside a rank never call MPI */
-  MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
+  /* the threads of per-compartment steps call MPI, one at a time
+   * (src/run/compartment_ranks.c); the rest only from the main thread */
+  MPI_Init_thread(argc, argv, MPI_THREAD_SERIALIZED, &provided);
   started = 1;
   gs_mpi_errors_install();
 }

@@ -16,6 +16,7 @@
 #include "core/block_pool.h"
 #include "gransim/pbm.h"
 #include "pbm/all_finite.h"
+#include "run/compartment_ranks.h"
 #include "run/distributed.h"
 
 /* A stretch's accepted step ends of one compartment: times, the integral Z
@@ -185,6 +186,13 @@ struct gs_comp_steps {
   gs_error fail_err;
   double worst_coupling;
   gs_block_pool *pool; /* the records' blocks */
+  /* Under MPI (compartment_ranks.h): this process advances compartments
+   * [lo, hi) only; the record of lo - 1 arrives from the rank before
+   * (which keeps next_k[lo - 1] and running[lo - 1] as a thread would), and
+   * next_k[hi] counts the stretches whose record of hi - 1 has gone to the
+   * rank after.  Without MPI: [0, ncomp) and ranks NULL. */
+  size_t lo, hi;
+  gs_comp_ranks *ranks;
 };
 
 static double now_seconds(void) {
@@ -299,6 +307,18 @@ static void relax(unsigned spins) {
 #endif
 }
 
+/* A wait that may be long: for another MPI rank, whose messages come
+ * every step of a compartment there (milliseconds), a rank sleeps after a
+ * while instead of taking the core from the processes beside it. */
+static void relax_long(const struct gs_comp_steps *s, unsigned spins) {
+  if (s->ranks && spins > 4000) { /* naps of 50 us, then 250 us: each wake-up costs CPU */
+    const struct timespec nap = {0, spins > 8000 ? 250000 : 50000};
+    nanosleep(&nap, NULL);
+  } else {
+    relax(spins);
+  }
+}
+
 /* Wait until the compartment before has published nodes up to t (or is
  * done); returns how many may be read, 0 when the task must stop (it comes
  * after a failure, or the compartment before ended short of t: it failed). */
@@ -314,8 +334,9 @@ static size_t wait_for(struct gs_comp_steps *s, const node_list *up, double t, s
       return all && node_t(up, all - 1) >= t ? all : 0;
     }
     /* rather than wait, write the stretches every compartment is done with */
-    if (spins % 64 == 63 && s->nworkers > 1 && s->outputs_ready) outputs(s, 0);
-    relax(spins);
+    if (spins % 64 == 63 && (s->nworkers > 1 || s->ranks) && s->outputs_ready) outputs(s, 0);
+    if (s->ranks && spins % 8 == 0) gs_comp_ranks_poll(s->ranks); /* the record may be in */
+    relax_long(s, spins);
   }
 }
 
@@ -549,6 +570,8 @@ static int comp_step_done(void *ctx) {
     return 1;
   }
   publish(cp->cur);
+  /* the last compartment of a rank's block: the step end goes to the next rank now */
+  if (cp->s->ranks && cp->comp + 1 == cp->s->hi) gs_comp_ranks_poll(cp->s->ranks);
   return 0;
 }
 
@@ -587,6 +610,8 @@ int gs_comp_steps_create(gs_case *c, gs_comp_steps **out, gs_error *err) {
   s->m = m;
   s->base = c->eval;
   s->ncomp = m->grid.ncomp;
+  s->lo = 0;
+  s->hi = s->ncomp; /* all of them: one process */
   s->ncells = m->grid.ncells;
   s->nq = m->ncarried;
   s->nflow = s->ncells * (1 + (size_t)s->nq);
@@ -718,17 +743,20 @@ static void fail(struct gs_comp_steps *s, size_t k, size_t c, int rc, const gs_e
                  const worker_t *w) {
   omp_set_lock(&s->lock);
   const size_t key = task_key(s, k, c);
-  if (!s->fail_rc || key < atomic_load(&s->fail_key)) {
+  if (!s->fail_rc || key < task_key(s, s->fail_k, s->fail_c)) { /* this process's earliest */
     s->fail_rc = rc;
     s->fail_err = *err;
+    s->fail_k = k;
+    s->fail_c = c;
     /* a rate that was not finite: where, for the run's message */
     s->bad_rate = w && w->bad == 1;
     if (s->bad_rate) {
       s->bad_t = w->bad_t;
       s->bad_index = w->bad_index;
     }
-    atomic_store_explicit(&s->fail_key, key, memory_order_release);
   }
+  /* under MPI another rank's failure may have come earlier */
+  if (key < atomic_load(&s->fail_key)) atomic_store_explicit(&s->fail_key, key, memory_order_release);
   omp_unset_lock(&s->lock);
 }
 
@@ -822,8 +850,10 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
     }
     if (comp) { /* once the one before has booked what it discharged */
       const node_list *up = w->up;
-      for (unsigned spins = 0; !atomic_load_explicit(&up->done, memory_order_acquire) && !stopped(s, w->key); spins++)
-        relax(spins);
+      for (unsigned spins = 0; !atomic_load_explicit(&up->done, memory_order_acquire) && !stopped(s, w->key); spins++) {
+        if (s->ranks && spins % 8 == 0) gs_comp_ranks_poll(s->ranks); /* its end may be in */
+        relax_long(s, spins);
+      }
       if (stopped(s, w->key)) {
         aborted = 1; /* the one before may still be writing its record */
       } else {
@@ -836,6 +866,7 @@ static int run_compartment(struct gs_comp_steps *s, worker_t *w, size_t comp, si
     }
   }
   atomic_store_explicit(&L->done, 1, memory_order_release);
+  if (s->ranks && comp + 1 == s->hi) gs_comp_ranks_poll(s->ranks); /* its end to the next rank */
   return aborted;
 }
 
@@ -874,7 +905,7 @@ static long pick_task(struct gs_comp_steps *s, int wi, int *finished) {
   long best = -1;
   int best_rank = 4;
   *finished = 1;
-  for (size_t c = 0; c < s->ncomp; c++) {
+  for (size_t c = s->lo; c < s->hi; c++) {
     const size_t k = s->next_k[c];
     /* left: a task not after the earliest failure, or one running (which may
      * make the next of its compartment available) */
@@ -907,14 +938,19 @@ static void resplit(struct gs_comp_steps *s) {
   for (int wr = 0; wr < s->nworkers; wr++) {
     memset(extra, 0, (size_t)s->nworkers * sizeof(double));
     extra[wr] = s->recent[s->ncomp];
-    const double worst = gs_dist_balanced_split(s->recent, s->ncomp, extra, s->nworkers, s->home_try);
+    const double worst = gs_dist_balanced_split(s->recent + s->lo, s->hi - s->lo, extra, s->nworkers, s->home_try);
     if (worst < best) {
       best = worst;
       s->writer = wr;
-      memcpy(s->home, s->home_try, ((size_t)s->nworkers + 1) * sizeof(size_t));
+      for (int r = 0; r <= s->nworkers; r++) s->home[r] = s->lo + s->home_try[r];
     }
   }
   for (size_t i = 0; i <= s->ncomp; i++) s->recent[i] *= RECENT_KEEP;
+}
+
+/* The stretch of the earliest failure so far (none: beyond any stretch). */
+static size_t fail_stretch(const struct gs_comp_steps *s) {
+  return atomic_load_explicit(&s->fail_key, memory_order_acquire) / (s->ncomp + 1);
 }
 
 /* Stretches every compartment is done with go to done_fn, in order, one
@@ -926,14 +962,20 @@ static void outputs(struct gs_comp_steps *s, int wait) {
   for (;;) {
     omp_set_lock(&s->lock);
     const size_t k = s->outputs_done;
-    const int ready = k < s->nst && s->complete[k % s->depth] == s->ncomp && !s->fail_rc;
+    /* every compartment done with it, and before the earliest failure (a
+     * stretch every compartment is done with ends before it) */
+    const int ready = k < s->nst && s->complete[k % s->depth] == s->hi - s->lo && k < fail_stretch(s);
     if (!ready) atomic_store(&s->outputs_ready, 0);
     omp_unset_lock(&s->lock);
     if (!ready) break;
+    /* under MPI rank 0 needs the other ranks' blocks of an output time */
+    if (s->ranks && !gs_comp_ranks_output_ready(s->ranks, k)) break;
     gs_error err = {0};
     const double start = now_seconds();
     worker_t *me = &s->workers[omp_get_thread_num() < s->nworkers ? omp_get_thread_num() : 0];
-    int rc = s->done_fn ? s->done_fn(s->done_ctx, k, s->st[k].t1, s->ring[k % s->depth], &err) : GS_OK;
+    int rc = s->ranks ? gs_comp_ranks_output(s->ranks, k, s->ring[k % s->depth], s->marks[k % s->depth], &err)
+                      : GS_OK;
+    if (!rc && s->done_fn) rc = s->done_fn(s->done_ctx, k, s->st[k].t1, s->ring[k % s->depth], &err);
     if (rc) {
       fail(s, k, s->ncomp, rc, &err, NULL);
       break;
@@ -948,6 +990,15 @@ static void outputs(struct gs_comp_steps *s, int wait) {
     omp_unset_lock(&s->lock);
   }
   omp_unset_lock(&s->out_lock);
+}
+
+/* Stretches not yet passed to done_fn that will be (none after a failure). */
+static int outputs_left(struct gs_comp_steps *s) {
+  omp_set_lock(&s->lock);
+  const size_t end = s->nst < fail_stretch(s) ? s->nst : fail_stretch(s);
+  const int left = s->outputs_done < end;
+  omp_unset_lock(&s->lock);
+  return left;
 }
 
 /* One thread: take tasks until none is left (after a failure: none before
@@ -970,12 +1021,16 @@ static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
     if (c < 0) {
       if (finished) { /* the last stretches' outputs */
         outputs(s, 1);
-        break;
+        /* under MPI they may wait for the other ranks' blocks */
+        if (!s->ranks || (!outputs_left(s) && gs_comp_ranks_flushed(s->ranks))) break;
       }
+      if (s->ranks) gs_comp_ranks_poll(s->ranks);
       /* a free thread writes the stretches every compartment is done with */
       outputs(s, 0);
       const double t_idle0 = now_seconds();
-      for (int i = 0; i < 50; i++) relax(idle); /* waiting for another thread's task */
+      if (s->ranks) relax_long(s, idle * 50); /* waiting for another rank's record, or a thread's task */
+      else
+        for (int i = 0; i < 50; i++) relax(idle); /* waiting for another thread's task */
       idle++;
       w->t_idle += now_seconds() - t_idle0;
       continue;
@@ -1004,6 +1059,7 @@ static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
      * them had stalled the first compartments.  Any thread without a task
      * writes them too (above, and wait_for). */
     if (s->nworkers == 1 ? all : writes && atomic_load(&s->outputs_ready)) outputs(s, s->nworkers == 1);
+    if (s->ranks) gs_comp_ranks_poll(s->ranks);
   }
 }
 
@@ -1022,19 +1078,31 @@ int gs_comp_steps_run(gs_comp_steps *s, const gs_stretch *st, size_t nst, double
   s->fail_rc = 0;
   s->bad_rate = 0;
   atomic_store(&s->fail_key, SIZE_MAX);
+  if (s->ranks) gs_comp_ranks_start(s->ranks);
   /* Threads take (compartment, stretch) tasks: a compartment runs ahead of
    * the next one by up to RING stretches, and follows the one before through
    * a stretch they share, waiting only when it would step past the last
    * step end published (wait_for).  A task starts only once the one before
    * has started that stretch, so the furthest upstream of the running tasks
    * never waits, and the waits end. */
-  const size_t tasks = nst * s->ncomp;
+  const size_t tasks = nst * (s->hi - s->lo);
   const int nw = (size_t)s->nworkers < tasks ? s->nworkers : (int)tasks;
   if (nw > 1) {
 #pragma omp parallel num_threads(nw)
     work(s, &s->workers[omp_get_thread_num()], Y);
   } else {
     work(s, &s->workers[0], Y);
+  }
+  /* under MPI: the messages left, and the earliest failure of all ranks */
+  if (s->ranks) {
+    size_t key = s->fail_rc ? task_key(s, s->fail_k, s->fail_c) : SIZE_MAX;
+    gs_comp_ranks_failure fl = {s->fail_rc, s->bad_rate, s->bad_t, s->bad_index, s->fail_err};
+    gs_comp_ranks_finish(s->ranks, &key, &fl);
+    s->fail_rc = fl.rc;
+    s->bad_rate = fl.bad_rate;
+    s->bad_t = fl.bad_t;
+    s->bad_index = fl.bad_index;
+    s->fail_err = fl.err;
   }
   if (s->fail_rc) {
     *err = s->fail_err;
@@ -1156,4 +1224,122 @@ void gs_comp_steps_print_threads(const gs_comp_steps *s, FILE *f) {
                "outputs %.4f, without a task %.4f\n",
             i, w->t_busy, w->t_rhs, w->t_wait, w->t_done, w->t_idle);
   }
+}
+
+/* What the transport between MPI ranks reads and writes (compartment_ranks.h). */
+
+void gs_comp_steps_set_block(gs_comp_steps *s, size_t lo, size_t hi, gs_comp_ranks *r, int threads) {
+  s->lo = lo;
+  s->hi = hi;
+  s->ranks = r;
+  /* rings as deep as for several threads: the ranks before and after run
+   * ahead and behind by stretches (rank 0 only as far as its outputs, which
+   * wait for the last rank) */
+  const size_t node_bytes = s->comp[0].rec[0].stride * sizeof(double), per = s->comp[0].rec[0].per;
+  const size_t slot_bytes = per * node_bytes > NODE_KEEP_BYTES ? per * node_bytes : NODE_KEEP_BYTES;
+  s->depth = RING;
+  while (s->depth > 2 && s->depth * (s->ncomp - 1) * slot_bytes > RING_BYTES) s->depth--;
+  if (!threads) s->nworkers = 1;
+  if ((size_t)s->nworkers > hi - lo) s->nworkers = (int)(hi - lo);
+  for (int w = 0; w <= s->nworkers; w++) s->home[w] = lo + (hi - lo) * (size_t)w / (size_t)s->nworkers;
+  s->writer = 0;
+}
+
+size_t gs_comp_steps_node_len(const gs_comp_steps *s) { return 1 + 3 * s->nflow; }
+
+const gs_stretch *gs_comp_steps_stretch(const gs_comp_steps *s, size_t k) {
+  return k < s->nst ? &s->st[k] : NULL;
+}
+
+void gs_comp_steps_slot(gs_comp_steps *s, size_t k, double **Y, double **marks) {
+  *Y = s->ring[k % s->depth];
+  *marks = s->marks[k % s->depth];
+}
+
+int gs_comp_steps_up_begin(gs_comp_steps *s, size_t k) {
+  const size_t c = s->lo - 1;
+  node_list *L = &s->comp[c].rec[k % s->depth];
+  omp_set_lock(&s->lock);
+  /* the compartment after is done with what the slot held */
+  const int free_slot = k == s->next_k[c] && k < s->next_k[s->lo] + s->depth;
+  if (free_slot) {
+    release_blocks(L); /* those a stopped task did not give back */
+    L->count = 0;
+    L->start_f_known = 1; /* the nodes come with their rates */
+    atomic_store_explicit(&L->published, 0, memory_order_relaxed);
+    atomic_store_explicit(&L->done, 0, memory_order_relaxed);
+    s->running[c] = 1;
+  }
+  omp_unset_lock(&s->lock);
+  return free_slot;
+}
+
+int gs_comp_steps_up_nodes(gs_comp_steps *s, size_t k, const double *nodes, size_t count) {
+  node_list *L = &s->comp[s->lo - 1].rec[k % s->depth];
+  const size_t nflow = s->nflow, len = 1 + 3 * nflow;
+  for (size_t j = 0; j < count; j++) {
+    const double *at = nodes + j * len;
+    int rc = nodes_push(L, nflow, at[0], at + 1, at + 1 + nflow, at + 1 + 2 * nflow);
+    if (rc) return rc;
+  }
+  publish(L);
+  return GS_OK;
+}
+
+void gs_comp_steps_up_end(gs_comp_steps *s, size_t k, const double *sent, size_t fail_key) {
+  const size_t c = s->lo - 1;
+  node_list *L = &s->comp[c].rec[k % s->depth];
+  memcpy(s->comp[c].sent[k % s->depth], sent, (size_t)s->nvol * sizeof(double));
+  /* a failure there comes first: the compartment after sees it before the end */
+  if (fail_key != SIZE_MAX) gs_comp_steps_remote_failure(s, fail_key);
+  atomic_store_explicit(&L->done, 1, memory_order_release);
+  omp_set_lock(&s->lock);
+  s->running[c] = 0;
+  s->next_k[c]++;
+  omp_unset_lock(&s->lock);
+}
+
+void gs_comp_steps_remote_failure(gs_comp_steps *s, size_t key) {
+  omp_set_lock(&s->lock);
+  if (key < atomic_load(&s->fail_key)) atomic_store_explicit(&s->fail_key, key, memory_order_release);
+  omp_unset_lock(&s->lock);
+}
+
+size_t gs_comp_steps_failure_key(gs_comp_steps *s) {
+  omp_set_lock(&s->lock);
+  const size_t key = s->fail_rc ? task_key(s, s->fail_k, s->fail_c) : SIZE_MAX;
+  omp_unset_lock(&s->lock);
+  return key;
+}
+
+size_t gs_comp_steps_known_failure(const gs_comp_steps *s) {
+  return atomic_load_explicit(&s->fail_key, memory_order_acquire);
+}
+
+int gs_comp_steps_down_peek(gs_comp_steps *s, size_t *k, size_t *published, int *done) {
+  const size_t c = s->hi - 1;
+  omp_set_lock(&s->lock);
+  *k = s->next_k[s->hi];
+  const int begun = *k < s->nst && (s->next_k[c] > *k || (s->next_k[c] == *k && s->running[c]));
+  omp_unset_lock(&s->lock);
+  if (!begun) return 0;
+  const node_list *L = &s->comp[c].rec[*k % s->depth];
+  /* done first: once it is set, published is final */
+  *done = atomic_load_explicit(&L->done, memory_order_acquire);
+  *published = atomic_load_explicit(&L->published, memory_order_acquire);
+  return 1;
+}
+
+const double *gs_comp_steps_down_node(const gs_comp_steps *s, size_t k, size_t j) {
+  return node_at(&s->comp[s->hi - 1].rec[k % s->depth], j);
+}
+
+const double *gs_comp_steps_down_sent(const gs_comp_steps *s, size_t k) {
+  return s->comp[s->hi - 1].sent[k % s->depth];
+}
+
+void gs_comp_steps_down_gone(gs_comp_steps *s, size_t k) {
+  omp_set_lock(&s->lock);
+  s->next_k[s->hi] = k + 1; /* its ring slot may take another stretch */
+  omp_unset_lock(&s->lock);
 }

@@ -3,11 +3,16 @@
  * tasks.  The run is cut into stretches between output times and rate
  * switches; the threads reach the output times one after the other while
  * others advance later stretches, and the thread that completes a stretch
- * ending at an output time hands its state to the observers. */
+ * ending at an output time hands its state to the observers.  On several
+ * MPI ranks each rank advances its block of compartments so, the records
+ * crossing between the blocks and the output times' blocks going to rank 0
+ * (compartment_ranks.h). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "gransim/parallel.h"
+#include "run/compartment_ranks.h"
 #include "run/compartment_steps.h"
 #include "run/run_internal.h"
 
@@ -22,20 +27,23 @@ typedef struct {
   int *is_output; /* per stretch: its end is an output time */
   size_t nst;
   int running;    /* counters are being written by the threads */
+  gs_comp_ranks *ranks; /* on several MPI ranks */
+  int have_total;       /* on several ranks, after the run: total, every rank's steps */
+  gs_integrator_stats total;
 } comps_t;
 
 static int comps_create(gs_run *run, void **self, gs_error *err) {
-  if (run->dist.size > 1)
-    return gs_error_set(err, GS_EINPUT,
-                        "solver.steps: per_compartment runs in one process (its compartments "
-                        "take their own steps one after the other); run it without mpirun, or "
-                        "use steps: shared on %d MPI ranks",
-                        run->dist.size);
   comps_t *s = gs_calloc(1, sizeof *s, err);
   if (!s) return GS_ENOMEM;
   s->run = run;
   *self = s;
-  return gs_comp_steps_create(run->c, &s->cs, err);
+  int rc = gs_comp_steps_create(run->c, &s->cs, err);
+  /* collective: every rank creates its transport, whatever the others' rc */
+  if (run->dist.size > 1) {
+    rc = gs_run_agree(&run->dist, rc, err);
+    if (!rc) rc = gs_comp_ranks_create(s->cs, &run->c->model, &run->dist, &s->ranks, err);
+  }
+  return rc;
 }
 
 /* The stretches from run->t to the last output time. */
@@ -87,14 +95,40 @@ static int stretch_done(void *ctx, size_t k, double t, const double *Y, gs_error
   return rc;
 }
 
+/* On several ranks: the steps of every rank's compartments (collective). */
+static void total_stats(comps_t *s, const gs_run *run) {
+  gs_integrator_stats mine;
+  gs_comp_steps_stats(s->cs, &mine);
+  const int last = run->dist.rank == run->dist.size - 1;
+  double v[4] = {(double)mine.steps, (double)mine.rejected, (double)mine.rhs_evals, last ? mine.last_step : 0.0};
+  gs_parallel_sum(v, 4);
+  s->total = mine;
+  s->total.steps = (long)v[0];
+  s->total.rejected = (long)v[1];
+  s->total.rhs_evals = (long)v[2];
+  s->total.last_step = v[3];
+  s->have_total = 1;
+}
+
 static int comps_advance(void *self, gs_run *run, gs_error *err) {
   comps_t *s = self;
   int rc = cut_stretches(s, err);
+  if (s->ranks) rc = gs_run_agree(&run->dist, rc, err);
   if (rc || !s->nst) return rc;
   const double start = gs_run_now(), outputs = run->phase[GS_PH_OUTPUTS];
   s->running = 1;
-  rc = gs_comp_steps_run(s->cs, s->st, s->nst, run->Y, stretch_done, s, err);
+  /* on several ranks only rank 0 holds the whole state of an output time */
+  const int observes = run->dist.rank == 0;
+  rc = gs_comp_steps_run(s->cs, s->st, s->nst, run->Y, observes ? stretch_done : NULL, s, err);
   s->running = 0;
+  if (s->ranks) {
+    total_stats(s, run);
+    if (rc == STOPPED) { /* every rank returns with the state rank 0 held there */
+      gs_parallel_broadcast(&run->t, 1);
+      gs_parallel_broadcast(run->Y, run->c->ode.n);
+      run->stop = 1;
+    }
+  }
   const double rhs = gs_comp_steps_rhs_seconds(s->cs);
   run->phase[GS_PH_RHS] = rhs;
   run->phase[GS_PH_INTEGRATOR] = gs_run_now() - start - (run->phase[GS_PH_OUTPUTS] - outputs) - rhs;
@@ -119,19 +153,21 @@ static void comps_stats(const void *self, gs_integrator_stats *st) {
     st->steps = -1;
     return;
   }
-  gs_comp_steps_stats(s->cs, st);
+  if (s->have_total) *st = s->total;
+  else gs_comp_steps_stats(s->cs, st);
 }
 
 static void comps_print_timings(const void *self, const gs_run *run, FILE *f) {
   const comps_t *s = self;
-  const size_t ncomp = run->c->model.grid.ncomp;
+  const size_t lo = run->dist.lo[run->dist.rank], hi = run->dist.lo[run->dist.rank + 1];
+  if (run->dist.size > 1) fprintf(f, "  rank %d, compartments %zu-%zu:\n", run->dist.rank, lo + 1, hi);
   fprintf(f, "  per-compartment steps (steps / rejected / evaluations / ms in rates / ms in tasks):");
-  for (size_t comp = 0; comp < ncomp; comp++) {
+  for (size_t comp = lo; comp < hi; comp++) {
     gs_integrator_stats st;
     gs_comp_steps_comp_stats(s->cs, comp, &st);
     double rates, tasks;
     gs_comp_steps_comp_seconds(s->cs, comp, &rates, &tasks);
-    fprintf(f, "%s %ld/%ld/%ld/%.1f/%.1f", comp ? "," : "", st.steps, st.rejected, st.rhs_evals,
+    fprintf(f, "%s %ld/%ld/%ld/%.1f/%.1f", comp > lo ? "," : "", st.steps, st.rejected, st.rhs_evals,
             1e3 * rates, 1e3 * tasks);
   }
   fprintf(f, "; largest coupling mismatch %.2g; %d thread%s, waiting %.4f s in all\n",
@@ -148,6 +184,7 @@ static void comps_free(void *self) {
     s->run->rep->worst_coupling = gs_comp_steps_worst_coupling(s->cs);
   }
   gs_comp_steps_free(s->cs);
+  gs_comp_ranks_free(s->ranks);
   free(s->st);
   free(s->is_output);
   free(s);
