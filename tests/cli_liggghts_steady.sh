@@ -1,0 +1,159 @@
+# The LIGGGHTS engine with what its deck expresses between runs: a wall's rotation.start (its
+# fix move/mesh defined after the run up to then) and statistics.start: steady (further below).
+# Skips (exit 0) only when the liggghts binary is absent (liggghts-lib.sh).
+# Usage: bash cli_liggghts_steady.sh GRANSIM_BINARY SOURCE_DIR
+source "$(dirname "$0")/liggghts-lib.sh" cli_liggghts_steady "$@"
+
+# a blade in the plane y = 0, x from -8 to 8 mm, z from 11 to 18.5 mm, in millimetres (scale
+# 1e-3), beside liggghts-lib.sh's box.stl
+cat > "$W/blade.stl" <<'STL'
+solid blade
+ facet normal 0 1 0
+  outer loop
+   vertex -8 0 11
+   vertex 8 0 11
+   vertex 8 0 18.5
+  endloop
+ endfacet
+ facet normal 0 1 0
+  outer loop
+   vertex -8 0 11
+   vertex 8 0 18.5
+   vertex -8 0 18.5
+  endloop
+ endfacet
+endsolid blade
+STL
+# blade_yaml ENGINE ROTATION_START STATISTICS DURATION OUTPUT: about 100 spheres settle on the
+# floor of the box; the blade turns about the x axis through z = 10 mm at 600 rpm: pointing up
+# at rest it is clear of the bed, and it sweeps down to z = 1.5 mm half a turn (0.05 s) after
+# it starts
+blade_yaml() {
+  cat <<YAML
+dem:
+  time_step: 5.0e-6
+  duration: $4
+  gravity: [0, 0, -9.81]
+  box: {lo: [-0.011, -0.011, -0.001], hi: [0.011, 0.011, 0.031]}
+  damping: liggghts
+  mesh_contacts: liggghts
+  seed: 3
+  engine: $1
+materials:
+  - {name: granule, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}
+classes:
+  - {name: small, radius: 1.0e-3, material: granule}
+  - {name: large, radius: 1.5e-3, material: granule}
+walls:
+  - {name: box, mesh: box.stl, scale: 1.0e-3, material: granule}
+  - {name: blade, mesh: blade.stl, scale: 1.0e-3, material: granule,
+     rotation: {origin: [0, 0, 0.010], axis: [1, 0, 0], rpm: 600$2}}
+fill:
+  - region: {box: {lo: [-0.009, -0.009, 0.001], hi: [0.009, 0.009, 0.009]}}
+    count: 97
+statistics: $3
+output: {$5}
+YAML
+}
+
+# rotation.start 0.05 s: the deck defines the blade's move/mesh after the run to 0.05 s; the blade
+# is where it was at rest until then and has turned by omega (t - 0.05 s) after (its STL frames:
+# the tip's height within 1e-6 m); the blade's impacts and torque are exactly 0 up to 0.075 s
+# (a quarter turn: still clear of the bed) and not 0 after
+blade_yaml liggghts ", start: 0.05" "{start: 0, sample_every: 0.0025}" 0.12 "every: 0.0025, vtk_every: 0.01" > "$W/rot.yaml"
+"$BIN" check "$W/rot.yaml" > /dev/null || fail "check refuses rotation.start for LIGGGHTS"
+"$BIN" dem "$W/rot.yaml" --out "$W/rot" --ranks 1 --quiet 2> "$W/rot.log" || { cat "$W/rot.log"; fail "rotation.start run"; }
+grep -A1 "^run 10000$" "$W/rot/liggghts/in.gransim" | grep -q "^# blade starts to turn" || fail "deck: no run to the rotation start"
+grep -q "^fix rot1 all move/mesh mesh wall1 rotate origin 0 0 0.01 axis 1 0 0 period 0.1$" "$W/rot/liggghts/in.gransim" ||
+  fail "deck: no move/mesh after the run to the rotation start"
+python3 - "$W/rot" <<'PY'
+import csv, math, sys
+d = sys.argv[1]
+for step in (0, 8000, 10000, 14000, 18000, 20000):
+    t = step * 5e-6
+    th = 2 * math.pi / 0.1 * max(0.0, t - 0.05)
+    z = [float(l.split()[3]) for l in open("%s/vtk/walls_%d.stl" % (d, step)) if l.split()[:1] == ["vertex"]
+         and abs(abs(float(l.split()[1])) - 0.008) < 1e-9]
+    want = 0.010 + 0.0085 * math.cos(th)
+    print("cli_liggghts_steady: t = %.3f s: blade tip at z = %.7f m, turned by omega (t - 0.05 s): %.7f m" % (t, max(z, key=lambda v: abs(v - 0.010)), want))
+    assert abs(max(z, key=lambda v: abs(v - 0.010)) - want) < 1e-6, (step, z, want)
+ts = list(csv.DictReader(open(d + "/timeseries.csv")))
+before = [r for r in ts if float(r["time"]) <= 0.075]
+after = [r for r in ts if float(r["time"]) > 0.075]
+assert len(before) == 31 and after, len(before)
+assert all(float(r["torque_axis_blade"]) == 0 and float(r["impacts_per_s_blade"]) == 0 for r in before[1:]), before
+nz = sum(float(r["torque_axis_blade"]) != 0 for r in after), sum(float(r["impacts_per_s_blade"]) > 0 for r in after)
+print("cli_liggghts_steady: blade: torque and impacts 0 in the %d rows to 0.075 s; of the %d after, %d with a torque, %d with impacts" % (len(before), len(after), *nz))
+assert nz[0] >= len(after) // 2 and nz[1] >= 2, nz
+PY
+
+# statistics.start: steady on the same case for 0.4 s (a sample every 0.01 s, the detector over 6
+# samples within 30 %): gransim runs the deck in chunks (in.setup, then the runs on LIGGGHTS'
+# standard input) and reports the steady state; the detector, recomputed here from the time
+# series (one row per sample: the same contact lists and hold-up), fires at the reported time
+# and not before; the steady flag is 1 from then on; the tables cover the window from then to the
+# end only; --reduce of the folder (the detector on the finished run's dumps) writes the same tables
+blade_yaml liggghts ", start: 0.05" "{start: steady, sample_every: 0.01, steady: {window: 6, tolerance: 0.3}}" 0.4 "every: 0.01" \
+  > "$W/st.yaml"
+"$BIN" check "$W/st.yaml" > /dev/null || fail "check refuses statistics.start: steady for LIGGGHTS"
+"$BIN" dem "$W/st.yaml" --out "$W/st" --ranks 1 2> "$W/st.log" || { cat "$W/st.log"; fail "steady run"; }
+tl=$(sed -n 's/^gransim dem (liggghts): steady state at t = \([0-9.e+-]*\) s$/\1/p' "$W/st.log")
+[ -n "$tl" ] || { cat "$W/st.log"; fail "no steady state reported"; }
+grep -q "reading in.setup and then the runs in chunks" "$W/st.log" || fail "no chunked run"
+grep -q "^gransim: chunk done 80000$" "$W/st/liggghts/screen.liggghts" || fail "the chunks did not reach the end"
+! grep -q "^run " "$W/st/liggghts/in.setup" || fail "in.setup holds runs"
+python3 - "$W/st" "$tl" <<'PY'
+import csv, json, sys
+d, tl = sys.argv[1], float(sys.argv[2])
+ts = list(csv.DictReader(open(d + "/timeseries.csv")))
+rows = [r for r in ts if float(r["time"]) > 0.05 + 1e-9]  # the samples after the blade starts
+m = [float(r["holdup_mass"]) for r in rows]
+c = [float(r["collisions_per_s"]) for r in rows]
+def steady(a, b):
+    for s in (a, b):
+        mean = sum(s) / len(s)
+        if not mean > 0 or any(abs(x - mean) > 0.3 * mean for x in s): return False
+    return True
+fired = next((float(rows[k]["time"]) for k in range(5, len(rows)) if steady(m[k - 5:k + 1], c[k - 5:k + 1])), None)
+print("cli_liggghts_steady: LIGGGHTS steady at t = %g s (reported), %s s (recomputed from the time series)" % (tl, fired))
+assert fired is not None and abs(fired - tl) < 1e-9, (fired, tl)
+flags = [(float(r["time"]), r["steady"]) for r in ts]
+assert all(f == ("1" if t >= tl - 1e-9 else "0") for t, f in flags), flags
+desc = json.load(open(d + "/collisions.json"))["description"]
+want = "from t = %g to 0.4 s (%g s, %d snapshots from t = %g to 0.4 s)" % (tl, 0.4 - tl, round((0.4 - tl) / 0.01) + 1, tl)
+assert want in desc, (want, desc)
+for r in csv.DictReader(open(d + "/collisions.csv")):
+    assert abs(float(r["window_s"]) - (0.4 - tl)) < 1e-9 and float(r["events"]) > 0, r
+PY
+mkdir "$W/st_tables"
+cp "$W/st"/*.csv "$W/st_tables/"
+"$BIN" dem "$W/st.yaml" --out "$W/st" --reduce --quiet 2> "$W/re.log" || { cat "$W/re.log"; fail "--reduce of the steady run"; }
+for f in "$W/st_tables"/*.csv; do
+  [ "$(basename "$f")" = timeseries.csv ] && continue
+  cmp -s "$f" "$W/st/$(basename "$f")" || fail "--reduce wrote another $(basename "$f")"
+done
+# the embedded engine on the same case: its detector's firing time, for comparison (the engines'
+# trajectories part after a few collisions, so the times agree only as far as the steady state does)
+blade_yaml embedded ", start: 0.05" "{start: steady, sample_every: 0.01, steady: {window: 6, tolerance: 0.3}}" 0.4 "every: 0.01" \
+  > "$W/ste.yaml"
+"$BIN" dem "$W/ste.yaml" --out "$W/ste" --threads 1 2> "$W/ste.log" || { cat "$W/ste.log"; fail "embedded steady run"; }
+te=$(sed -n 's/^gransim dem: steady state at t = \([0-9.e+-]*\) s$/\1/p' "$W/ste.log")
+[ -n "$te" ] || { cat "$W/ste.log"; fail "embedded: no steady state"; }
+echo "cli_liggghts_steady: steady state at t = $te s (embedded) and $tl s (LIGGGHTS)"
+awk -v a="$te" -v b="$tl" 'BEGIN { exit !(a >= 0.1 && b >= 0.1) }' || fail "a steady state before the window of samples after the blade started"
+
+# a run that does not become steady (tolerance 0.1 %) stops with the detector's figures, no tables
+blade_yaml liggghts ", start: 0.05" "{start: steady, sample_every: 0.01, steady: {window: 6, tolerance: 0.001}}" 0.15 "every: 0.01" \
+  > "$W/ns.yaml"
+if "$BIN" dem "$W/ns.yaml" --out "$W/ns" --ranks 1 --quiet 2> "$W/ns.log"; then fail "a run that never became steady succeeded"; fi
+grep -q "ns.yaml: statistics.start is 'steady' but the steady state was not reached by t = 0.15 s (hold-up mass and collision rate within 0.001 of their means over 6 samples; over the last 6 samples they are within [0-9.e+-]* and [0-9.e+-]* of their means" "$W/ns.log" ||
+  { cat "$W/ns.log"; fail "not-steady message"; }
+[ ! -e "$W/ns/collisions.csv" ] || fail "tables of a run that never became steady"
+
+# LIGGGHTS killed part-way (a launcher that stops it after 2 s): the error, and no tables
+printf '#!/bin/sh\nexec timeout -s KILL 2 "$@"\n' > "$W/killer"
+chmod +x "$W/killer"
+if "$BIN" dem "$W/st.yaml" --out "$W/killed" --ranks 1 --launcher "$W/killer" --quiet 2> "$W/k.log"; then
+  fail "a killed run succeeded"; fi
+grep -q "LIGGGHTS failed (in.setup in " "$W/k.log" || { cat "$W/k.log"; fail "killed run message"; }
+[ ! -e "$W/killed/collisions.csv" ] && [ ! -e "$W/killed/timeseries.csv" ] || fail "tables of a killed run"
