@@ -373,14 +373,12 @@ for eng in ("embedded", "liggghts"):
     ts = list(csv.DictReader(open("%s/f_%s/timeseries.csv" % (w, eng))))
     assert [r["lost"] for r in ts] == ["0"] * len(ts) and ts[-1]["particles"] == "1000", (eng, ts)
 PY
-# a coupled case's DEM stage runs to its steady state, which a deck cannot detect: refused, not run embedded
+# the bundled coupled case with engine liggghts: `gransim check` accepts it (the coupled DEM stage on
+# LIGGGHTS runs in cli_liggghts_steady.sh)
 ln -s "$2/examples/data" "$W/data"
 sed 's/^    seed: 7$/    seed: 7\n    engine: liggghts/' "$2/examples/corimix-coupled.yaml" > "$W/cpl.yaml"
-n=$(grep -n "^    engine: liggghts" "$W/cpl.yaml" | cut -d: -f1)
-[ -n "$n" ] || fail "no engine line in the coupled case"
-if "$BIN" check "$W/cpl.yaml" 2> "$W/cpl.log"; then fail "a coupled case with engine liggghts was accepted"; fi
-grep -q "cpl.yaml:$n: dem.dem.engine: 'liggghts' cannot run a coupled case's DEM stage" "$W/cpl.log" ||
-  { cat "$W/cpl.log"; fail "coupled engine message"; }
+grep -q "^    engine: liggghts" "$W/cpl.yaml" || fail "no engine line in the coupled case"
+"$BIN" check "$W/cpl.yaml" > "$W/cpl.log" 2>&1 || { cat "$W/cpl.log"; fail "a coupled case with engine liggghts was refused"; }
 
 # every bundled DEM example: its deck runs 200 steps in LIGGGHTS (every `run` cut to 100 steps, every
 # loop to one pass), or --check refuses it naming what a deck cannot express

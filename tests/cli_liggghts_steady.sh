@@ -157,3 +157,66 @@ if "$BIN" dem "$W/st.yaml" --out "$W/killed" --ranks 1 --launcher "$W/killer" --
   fail "a killed run succeeded"; fi
 grep -q "LIGGGHTS failed (in.setup in " "$W/k.log" || { cat "$W/k.log"; fail "killed run message"; }
 [ ! -e "$W/killed/collisions.csv" ] && [ ! -e "$W/killed/timeseries.csv" ] || fail "tables of a killed run"
+
+# `gransim couple` (one way) with the DEM stage on LIGGGHTS: the blade case with two classes from
+# the PBM grid; the stage stops 0.05 s (coupling.steady.collect) after the detector fired, at a
+# sample, the tables covering just that window; `gransim dem` of the stage's case as run (its
+# duration cut there) writes the same kernel and impact tables
+mkdir "$W/cp"
+cp "$W/box.stl" "$W/blade.stl" "$W/cp/"
+cat > "$W/cp/tiny.yaml" <<'YAML'
+title: tiny coupled case on LIGGGHTS
+grid:
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-10, ratio: 2, cells: 15, zero_first: true}
+initial: {type: exponential, number: 1000, mean: 8.0e-9}
+output: {end: 10, count: 6}
+mechanisms:
+  - type: aggregation
+    kernel: {type: table, beta0: 1.0e-4}
+  - type: breakage
+    selection: {type: dem_impact, scale: 1.0e-3, u_break: 0.5}
+    daughters: {type: halves}
+dem:
+  dem:
+    time_step: 5.0e-6
+    box: {lo: [-0.011, -0.011, -0.001], hi: [0.011, 0.011, 0.031]}
+    gravity: [0, 0, -9.81]
+    seed: 3
+    engine: liggghts
+  materials:
+    - {name: granule, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}
+  walls:
+    - {name: box, mesh: box.stl, scale: 1.0e-3, material: granule}
+    - {name: blade, mesh: blade.stl, scale: 1.0e-3, material: granule,
+       rotation: {origin: [0, 0, 0.010], axis: [1, 0, 0], rpm: 600, start: 0.05}}
+  fill:
+    - region: {box: {lo: [-0.009, -0.009, 0.001], hi: [0.009, 0.009, 0.009]}}
+      count: 60
+      fractions: [0.5, 0.5]
+coupling:
+  mode: one_way
+  classes: {min_diameter: 2.0e-3, max_diameter: 3.0e-3, count: 2, material: granule}
+  steady: {window: 4, tolerance: 0.5, sample_every: 0.01, max_time: 0.3, collect: 0.05}
+YAML
+"$BIN" check "$W/cp/tiny.yaml" > /dev/null || fail "check refuses a coupled case with engine liggghts"
+"$BIN" couple "$W/cp/tiny.yaml" --out "$W/cp/out" 2> "$W/cp.log" || { cat "$W/cp.log"; fail "coupled run on LIGGGHTS"; }
+tc=$(sed -n 's/^gransim couple: DEM steady at t = \([0-9.e+-]*\) s; tables in .*/\1/p' "$W/cp.log")
+[ -n "$tc" ] || { cat "$W/cp.log"; fail "the coupled DEM stage reported no steady state"; }
+grep -q "^gransim couple: PBM to t = 10 " "$W/cp.log" || { cat "$W/cp.log"; fail "no PBM stage"; }
+python3 - "$W/cp/out/dem" "$tc" <<'PY'
+import csv, json, sys
+d, tc = sys.argv[1], float(sys.argv[2])
+stop = tc + 0.05
+desc = json.load(open(d + "/collisions.json"))["description"]
+want = "from t = %g to %g s" % (tc, stop)
+assert want in desc, (want, desc)
+ts = list(csv.DictReader(open(d + "/timeseries.csv")))
+assert abs(float(ts[-1]["time"]) - stop) < 1e-9, ts[-1]["time"]
+assert "duration: %r" % stop in open(d + "/case.yaml").read() or "duration: %.17g" % stop in open(d + "/case.yaml").read(), "case duration"
+print("cli_liggghts_steady: coupled DEM stage on LIGGGHTS: steady at t = %g s, stopped at %g s" % (tc, stop))
+PY
+"$BIN" dem "$W/cp/out/dem/case.yaml" --out "$W/cp/manual" --quiet 2> "$W/cpm.log" || { cat "$W/cpm.log"; fail "manual DEM run"; }
+for f in collision_kernel.csv impact_table.csv; do
+  cmp -s "$W/cp/out/dem/$f" "$W/cp/manual/$f" || fail "gransim dem of the stage's case wrote another $f"
+done

@@ -642,6 +642,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     fprintf(fp, ",lost,steady,wall_seconds\n");
     for (size_t r = 0; r < th->n; r++) {
       const double *v = th->row + th->ncol * r;
+      if (v[0] > a.t1 * (1 + 1e-12)) break; /* past where an observer stopped the run */
       /* event rates of the interval that ends at this row, where the contact
        * lists (from statistics.start on) cover all of it */
       const long step = (long)round(v[0] / dt), ko = step / a.out_k;
