@@ -156,7 +156,7 @@ int gs_lig_steady_not_reached(const gs_lig_steady *s, const gs_dem_case *c, gs_e
   return gs_error_set(err, GS_ENUMERIC,
                       "%s: statistics.start is 'steady' but the steady state was not reached by t = %.6g s (hold-up "
                       "mass and collision rate within %g of their means over %ld samples; over the last %ld samples "
-                      "they are within %.3g and %.3g of their means, of %zu samples since the walls turned): no "
+                      "they are within %.3g and %.3g of their means, nan without collisions; %zu samples seen): no "
                       "statistics window, so no tables (the thermo rows are in liggghts/log.liggghts); run longer, "
                       "or set statistics.start to a time or loosen statistics.steady",
                       c->path, s->ns ? s->t[s->ns - 1] : 0.0, c->steady_tol, c->steady_window, c->steady_window, dm,
