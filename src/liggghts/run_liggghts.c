@@ -307,7 +307,10 @@ static int run_chunks(const char *dir, const char *launch, const char *bin, gs_d
     gs_lig_write_runs(c, to, at, next, 1);
     snprintf(marker, sizeof marker, "gransim: chunk done %ld", next);
     fprintf(to, "print \"%s\"\n", marker);
-    if (fflush(to)) break; /* LIGGGHTS gone: its error follows */
+    if (fflush(to)) { /* LIGGGHTS gone: its error follows */
+      ended = 1;
+      break;
+    }
     for (ended = 1; fgets(line, sizeof line, from);) {
       if (out_line(&o, line) < 0) { rc = gs_error_set(err, GS_ENOMEM, "out of memory"); break; }
       if (!strcmp(line, marker)) { ended = 0; break; }

@@ -478,7 +478,9 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   /* demdata's snapshot estimate is only a comparison: without it (more than two
    * meshes, or no relative velocities) the tables are written all the same */
   gs_error derr = {0};
-  int have_dd = gs_dem_data_read(post, &opt, &dd, &derr) == GS_OK;
+  int have_dd = wdw->t_steady < 0 && gs_dem_data_read(post, &opt, &dd, &derr) == GS_OK;
+  /* (demdata reads every snapshot: with statistics.start: steady they begin at t = 0) */
+  if (wdw->t_steady >= 0) gs_error_set(&derr, GS_EINPUT, "the snapshots of statistics.start: steady span the whole run");
   long *steps = NULL;
   size_t nsnap = 0;
   const long k0 = (long)round(wdw->t0 / dt), k1 = (long)round(wdw->t1 / dt);
