@@ -4,7 +4,8 @@
  * and the screen output's thermo lines, reduced into the tables of a small
  * fixed case with two classes and a mesh wall, then a particle frame
  * (vtk/particles_100.dump, the deck's `dump custom` text frame) converted to
- * .vtp and .pvd (frames.c).  The input holds the five files in that order,
+ * .vtp and .pvd (frames.c); the steady-state detector (steady.c) on the same
+ * lists and snapshot.  The input holds the five files in that order,
  * separated by lines "%%". */
 #include <stdio.h>
 #include <stdlib.h>
@@ -51,7 +52,8 @@ static gs_dem_case *setup(void) {
       "materials:\n  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, mu_r: 0.2, density: 500}\n"
       "classes:\n  - {name: a, radius: 1.0e-3, material: g}\n  - {name: b, radius: 1.5e-3, material: g}\n"
       "walls:\n  - {name: plate, mesh: plate.stl, scale: 1.0e-3, material: g}\n"
-      "fill:\n  - {region: {box: {lo: [-0.01, -0.01, 0.001], hi: [0.01, 0.01, 0.01]}}, count: 10}\n";
+      "fill:\n  - {region: {box: {lo: [-0.01, -0.01, 0.001], hi: [0.01, 0.01, 0.01]}}, count: 10}\n"
+      "statistics: {start: 0, sample_every: 2.5e-4}\n";
   put("plate.stl", stl, sizeof stl - 1);
   put("case.yaml", yaml, sizeof yaml - 1);
   char path[512];
@@ -85,7 +87,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     at = sep ? sep + 3 : end;
   }
   gs_error err = {0};
-  if (gs_lig_reduce(the_case, dir, &th, &err) && getenv("FUZZ_VERBOSE")) fprintf(stderr, "%s\n", err.msg);
+  const gs_lig_window w = {.t0 = 0, .t1 = gs_dem_case_duration(the_case), .t_steady = -1};
+  if (gs_lig_reduce(the_case, dir, &th, &w, &err) && getenv("FUZZ_VERBOSE")) fprintf(stderr, "%s\n", err.msg);
+  /* statistics.start: steady's detector reads the same lists and snapshot (steady.c) */
+  gs_lig_steady sd;
+  gs_lig_steady_init(&sd, the_case);
+  char post[512];
+  snprintf(post, sizeof post, "%s/liggghts/post", dir);
+  gs_error serr = {0};
+  if (gs_lig_steady_update(&sd, the_case, post, 100, &serr) && getenv("FUZZ_VERBOSE")) fprintf(stderr, "%s\n", serr.msg);
+  gs_lig_steady_free(&sd);
   gs_error ferr = {0};
   if (gs_lig_vtk_frames(the_case, dir, &ferr) && getenv("FUZZ_VERBOSE")) fprintf(stderr, "%s\n", ferr.msg);
   free(th.row);

@@ -22,6 +22,7 @@
 #include "gransim/case.h"
 #include "gransim/couple.h"
 #include "gransim/dem.h"
+#include "gransim/liggghts.h"
 #include "gransim/output.h"
 #include "gransim/run.h"
 
@@ -262,15 +263,11 @@ static int dem_error(const couple *k, const char *written, gs_error *err) {
                       at ? gs_cfg_line(at) : k->dem_line, rest);
 }
 
-/* The DEM stage runs to its steady state (statistics.start: steady), which
- * the LIGGGHTS engine cannot detect: refused rather than run embedded. */
-static int engine_check(const couple *k, const gs_dem_case *dc, gs_error *err) {
+/* A DEM stage with the LIGGGHTS engine: what its deck cannot express is
+ * refused (src/liggghts), at the key's place in the coupled case. */
+static int engine_check(const couple *k, const gs_dem_case *dc, const char *written, gs_error *err) {
   if (gs_dem_case_engine(dc) != 1) return GS_OK;
-  const gs_cfg_node *at = find_path(k->dem, "dem.engine");
-  return gs_error_set(err, GS_EINPUT, "%s:%d: dem.dem.engine: 'liggghts' cannot run a coupled case's DEM stage, which "
-                      "runs to its steady state (statistics.start: steady, not expressible in a LIGGGHTS deck); use "
-                      "'embedded', or run the DEM case alone with `gransim dem` and give its tables to the PBM",
-                      at ? gs_cfg_file(at) : k->path, at ? gs_cfg_line(at) : k->dem_line);
+  return gs_lig_check(dc, err) ? dem_error(k, written, err) : GS_OK;
 }
 
 /* Placeholder tables of the derived classes, for `check` (no DEM run). */
@@ -315,7 +312,7 @@ int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
   if (!rc) {
     gs_dem_case *dc = gs_dem_case_load(dcase, err);
     if (!dc) rc = dem_error(&k, dcase, err);
-    else if (!(rc = engine_check(&k, dc, err))) gs_dem_case_describe(dc, dd, sizeof dd);
+    else if (!(rc = engine_check(&k, dc, dcase, err))) gs_dem_case_describe(dc, dd, sizeof dd);
     gs_dem_case_free(dc);
   }
   if (!rc) rc = gs_couple_write_placeholders(&k, kt, it, err);
@@ -416,7 +413,7 @@ int gs_couple_dem_stage(couple *k, const char *part, const double *fractions, in
   if (!rc) rc = gs_couple_write_classes(k, part, err);
   gs_dem_case *dc = rc ? NULL : gs_dem_case_load(dcase, err);
   if (!rc && !dc) rc = dem_error(k, dcase, err);
-  if (!rc) rc = engine_check(k, dc, err);
+  if (!rc) rc = engine_check(k, dc, dcase, err);
   stage_stop ss = {.collect = k->s.collect, .t_fired = -1, .t_stop = -1};
   const double w0 = gs_couple_now();
   if (!rc) {
@@ -425,7 +422,8 @@ int gs_couple_dem_stage(couple *k, const char *part, const double *fractions, in
               k->s.max_time, k->s.collect, part);
     gs_dem_observer ob = {.sample = stop_when_collected, .user = &ss};
     gs_dem_case_set_observer(dc, &ob);
-    rc = gs_dem_case_run(dc, part, progress, err);
+    const gs_lig_options lig = {.progress = progress};
+    rc = gs_dem_case_engine(dc) == 1 ? gs_lig_case_run(dc, part, &lig, err) : gs_dem_case_run(dc, part, progress, err);
     rec->steps = ss.steps;
     rec->e = k->s.e_now;
     rec->particles = ss.particles;

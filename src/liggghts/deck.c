@@ -133,14 +133,19 @@ static void empty_outlets(FILE *fp, const gs_dem_case *c) {
                 "delete_atoms region outlet%zu compress no\n", k, k, k);
 }
 
-static void run_cmd(FILE *fp, const gs_dem_case *c, long nsteps, const char *label) {
+static void run_cmd(FILE *fp, const gs_dem_case *c, long nsteps, const char *label, int unrolled) {
   if (nsteps <= 0) return;
   if (!c->noutlets) {
     fprintf(fp, "run %ld\n", nsteps);
     return;
   }
   long q = nsteps / 200, r = nsteps % 200;
-  if (q > 0) {
+  /* commands on standard input cannot loop (jump SELF rereads a file) */
+  for (long k = 0; unrolled && k < q; k++) {
+    fprintf(fp, "run 200\n");
+    empty_outlets(fp, c);
+  }
+  if (q > 0 && !unrolled) {
     fprintf(fp, "variable %s loop %ld\nlabel %s\nrun 200\n", label, q, label);
     empty_outlets(fp, c);
     fprintf(fp, "next %s\njump SELF %s\n", label, label);
@@ -155,6 +160,25 @@ static void run_cmd(FILE *fp, const gs_dem_case *c, long nsteps, const char *lab
  * its mesh then sums the torque, as the embedded engine's walls with motion. */
 static int wall_moves(const gs_dem_wall_src *s) {
   return s->rotating || s->velocity[0] != 0 || s->velocity[1] != 0 || s->velocity[2] != 0;
+}
+
+/* Whether wall s turns (a rotation at a rate other than 0). */
+static int wall_turns(const gs_dem_wall_src *s) { return s->rotating && s->omega != 0; }
+
+/* The step at which wall s starts to turn (rotation.start), or 0. */
+static long spin_step(const gs_dem_case *c, const gs_dem_wall_src *s) {
+  return s->spin_start > 0 ? (long)round(s->spin_start / c->prm.dt) : 0;
+}
+
+/* Wall w's rotation as a period (a negative rate turns the axis round).
+ * LIGGGHTS' move/mesh turns the mesh by omega (t - t_fix), t_fix the time the
+ * fix was defined: defined after the run up to rotation.start, it turns from
+ * the position at rest as the embedded engine's omega (t - start). */
+static void rotate_cmd(FILE *fp, const gs_dem_wall_src *s, size_t w) {
+  double sg = s->omega > 0 ? 1 : -1;
+  fprintf(fp, "fix rot%zu all move/mesh mesh wall%zu rotate origin %.9g %.9g %.9g axis %.9g %.9g %.9g period %.9g\n", w,
+          w, s->origin[0], s->origin[1], s->origin[2], sg * s->axis[0] + 0.0, sg * s->axis[1] + 0.0,
+          sg * s->axis[2] + 0.0, 2 * M_PI / fabs(s->omega));
 }
 
 /* Everything before the walls: atoms, box, materials, contact law, time
@@ -269,23 +293,12 @@ int gs_lig_check(const gs_dem_case *c, gs_error *err) {
                           "an STL mesh", w, s->name, s->rotating ? "rotation" : "velocity");
     }
   }
-  for (size_t w = 0; w < c->nwall_src; w++)
-    if (c->wall_src[w].rotating && c->wall_src[w].spin_start > 0) {
-      char key[64];
-      snprintf(key, sizeof key, "walls[%zu].rotation.start", w);
-      return lig_fail(c, err, key, "walls[%zu] (%s): rotation.start is not expressible in a LIGGGHTS deck "
-                          "(its move/mesh turns from t = 0); use the embedded engine", w, c->wall_src[w].name);
-    }
   if (c->damping_given && c->prm.damping != GS_DEM_DAMPING_LIGGGHTS)
     return lig_fail(c, err, "dem.damping", "dem.damping: 'exact' is not expressible in LIGGGHTS, whose damping follows "
                         "from e by its closed form; give 'liggghts' or leave the key out");
   if (c->mesh_contacts_given && c->prm.mesh_contacts != GS_DEM_MESH_LIGGGHTS)
     return lig_fail(c, err, "dem.mesh_contacts", "dem.mesh_contacts: 'closest' is not expressible in LIGGGHTS, which counts "
                         "mesh contacts by its own rule; give 'liggghts' or leave the key out");
-  if (c->start_steady)
-    return lig_fail(c, err, "statistics.start", "statistics.start: 'steady' is not expressible in a LIGGGHTS deck (the "
-                        "detector needs the collision rate during the run, and gransim runs the deck in one piece); "
-                        "give a time, e.g. the steady time an embedded run reports");
   char key[64];
   int rc = GS_OK;
   for (size_t k = 0; k < c->nfeed && !rc; k++) {
@@ -307,8 +320,18 @@ int gs_lig_check(const gs_dem_case *c, gs_error *err) {
   return GS_OK;
 }
 
-int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, const char *exclusion,
-                      gs_error *err) {
+/* The step the deck's statistics window opens at: statistics.start, or 0
+ * for statistics.start: steady, whose detector reads the dumps from t = 0
+ * (steady.c) and whose reduction leaves out what came before it fired. */
+static long window_step(const gs_dem_case *c) {
+  const long nsteps = (long)ceil(c->duration / c->prm.dt - 1e-9), k = (long)round(c->stats_start / c->prm.dt);
+  return c->start_steady ? 0 : k < nsteps ? k : nsteps;
+}
+
+long gs_lig_steps(const gs_dem_case *c) { return (long)ceil(c->duration / c->prm.dt - 1e-9); }
+
+int gs_lig_write_setup(const gs_dem_case *c, FILE *fp, const char *data_file, const char *exclusion,
+                       gs_error *err) {
   int rc = gs_lig_check(c, err);
   if (rc) return rc;
   for (size_t w = 0; w < c->nwall_src; w++)
@@ -318,11 +341,7 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   const gs_dem_params *p = &c->prm;
   const size_t ncl = c->nclass;
   const double dt = p->dt;
-  const long nsteps = (long)ceil(c->duration / dt - 1e-9);
-  const long smp_k = (long)fmax(1, round(c->sample_every / dt));
   const long out_k = (long)fmax(1, round(c->out_every / dt));
-  long start_k = (long)round(c->stats_start / dt);
-  if (start_k > nsteps) start_k = nsteps;
 
   fprintf(fp, "# LIGGGHTS 3.8 deck written by gransim from %s (dem.engine: liggghts)\n", c->path);
   fprintf(fp, "# Hertz-Mindlin with tangential history and CDT rolling friction; LIGGGHTS' damping from e\n"
@@ -434,16 +453,11 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
   }
   fprintf(fp, "fix integr all nve/sphere\n");
 
-  /* prescribed wall motion: rotation as a period (a negative rate turns the axis round) */
+  /* prescribed wall motion: the walls that turn from t = 0 (the others from
+   * their rotation.start, between the runs below) and the moving ones */
   for (size_t w = 0; w < c->nwall_src; w++) {
     const gs_dem_wall_src *s = &c->wall_src[w];
-    if (s->rotating && s->omega != 0) {
-      double sg = s->omega > 0 ? 1 : -1;
-      fprintf(fp, "fix rot%zu all move/mesh mesh wall%zu rotate origin %.9g %.9g %.9g axis %.9g %.9g %.9g period %.9g\n",
-              w, w, s->origin[0], s->origin[1], s->origin[2], sg * s->axis[0] + 0.0, sg * s->axis[1] + 0.0,
-              sg * s->axis[2] + 0.0,
-              2 * M_PI / fabs(s->omega));
-    }
+    if (wall_turns(s) && spin_step(c, s) == 0) rotate_cmd(fp, s, w);
     if (s->velocity[0] != 0 || s->velocity[1] != 0 || s->velocity[2] != 0)
       fprintf(fp, "fix lin%zu all move/mesh mesh wall%zu linear %.9g %.9g %.9g\n", w, w, s->velocity[0],
               s->velocity[1], s->velocity[2]);
@@ -487,29 +501,74 @@ int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, con
     fprintf(fp, "dump_modify dvtk format \"%%d %%d%s\"\n", " %.17g %.17g %.17g %.17g %.17g %.17g %.17g");
     if (c->nwall_src) fprintf(fp, "dump dstl all mesh/stl %ld ../vtk/walls_*.stl\n", vk);
   }
-  fprintf(fp, "# before the statistics window (%.9g s)\n", c->stats_start);
-  run_cmd(fp, c, start_k, "before");
-  fprintf(fp, "# the statistics window: a snapshot every %ld steps (%.9g s)\n", smp_k, smp_k * dt);
-  fprintf(fp, "dump dcol all custom %ld post/collision*.atom id type x y z vx vy vz radius", smp_k);
-  for (size_t i = 1; i <= ncl; i++) fprintf(fp, " c_cc_%zu", i);
-  fprintf(fp, "\ndump dpp all local %ld post/ppcoll*.atom", smp_k);
-  for (int q = 1; q <= 14; q++) fprintf(fp, " c_pgl[%d]", q);
-  fprintf(fp, "\n");
-  /* (without walls the runner writes an empty impact file per snapshot) */
-  if (c->nwall_src) {
-    fprintf(fp, "dump dimp all local %ld post/impact*.atom", smp_k);
-    for (int q = 1; q <= 17; q++) fprintf(fp, " c_wgl[%d]", q);
+  return ferror(fp) ? gs_error_set(err, GS_EIO, "cannot write the LIGGGHTS deck") : GS_OK;
+}
+
+/* What the deck does at step at: the walls that start to turn then, and the
+ * statistics window's dumps when it opens then. */
+static void events_at(const gs_dem_case *c, FILE *fp, long at) {
+  const long nsteps = gs_lig_steps(c), smp_k = (long)fmax(1, round(c->sample_every / c->prm.dt));
+  const size_t ncl = c->nclass;
+  const double dt = c->prm.dt;
+  for (size_t w = 0; w < c->nwall_src && at > 0 && at < nsteps; w++)
+    if (wall_turns(&c->wall_src[w]) && spin_step(c, &c->wall_src[w]) == at) {
+      fprintf(fp, "# %s starts to turn (rotation.start %.9g s)\n", c->wall_src[w].name, c->wall_src[w].spin_start);
+      rotate_cmd(fp, &c->wall_src[w], w);
+    }
+  if (at != window_step(c)) return;
+  {
+    if (c->start_steady)
+      fprintf(fp, "# statistics.start: steady: the snapshots and contact lists from t = 0, for the detector\n");
+    fprintf(fp, "# the statistics window: a snapshot every %ld steps (%.9g s)\n", smp_k, smp_k * dt);
+    fprintf(fp, "dump dcol all custom %ld post/collision*.atom id type x y z vx vy vz radius omegax omegay omegaz", smp_k);
+    for (size_t i = 1; i <= ncl; i++) fprintf(fp, " c_cc_%zu", i);
+    fprintf(fp, "\ndump dpp all local %ld post/ppcoll*.atom", smp_k);
+    for (int q = 1; q <= 14; q++) fprintf(fp, " c_pgl[%d]", q);
     fprintf(fp, "\n");
+    /* (without walls the runner writes an empty impact file per snapshot) */
+    if (c->nwall_src) {
+      fprintf(fp, "dump dimp all local %ld post/impact*.atom", smp_k);
+      for (int q = 1; q <= 17; q++) fprintf(fp, " c_wgl[%d]", q);
+      fprintf(fp, "\n");
+    }
+    /* the contact lists the collision events are counted from (tables.c) */
+    const long ek = gs_lig_event_every(c);
+    fprintf(fp, "dump dev all local %ld post/events_pp.txt c_pgl[7] c_pgl[8] c_pgl[14]\n", ek);
+    if (c->nwall_src) {
+      fprintf(fp, "dump dwev all local %ld post/events_wall.txt", ek);
+      for (int q = 1; q <= 9; q++) fprintf(fp, " c_wgl[%d]", q);
+      fprintf(fp, " c_wgl[17] c_wgl[13] c_wgl[14] c_wgl[15]\n");
+    }
   }
-  /* the contact lists the collision events are counted from (tables.c) */
-  const long ek = gs_lig_event_every(c);
-  fprintf(fp, "dump dev all local %ld post/events_pp.txt c_pgl[7] c_pgl[8] c_pgl[14]\n", ek);
-  if (c->nwall_src) {
-    fprintf(fp, "dump dwev all local %ld post/events_wall.txt", ek);
-    for (int q = 1; q <= 9; q++) fprintf(fp, " c_wgl[%d]", q);
-    fprintf(fp, " c_wgl[17] c_wgl[13] c_wgl[14] c_wgl[15]\n");
+}
+
+void gs_lig_write_runs(const gs_dem_case *c, FILE *fp, long from, long to, int unrolled) {
+  const long start_k = window_step(c);
+  /* in time order: up to each rotation.start (the wall's move/mesh defined
+   * there) and up to the statistics window (its dumps defined there); the
+   * events at from belong to the runs before it, but for from = 0 */
+  for (long at = from;;) {
+    if (at > from || from == 0) events_at(c, fp, at);
+    if (at >= to) break;
+    long next = to;
+    if (start_k > at && start_k < next) next = start_k;
+    for (size_t w = 0; w < c->nwall_src; w++) {
+      const long k = spin_step(c, &c->wall_src[w]);
+      if (wall_turns(&c->wall_src[w]) && k > at && k < next) next = k;
+    }
+    char label[40];
+    snprintf(label, sizeof label, "seg%ld", at);
+    fprintf(fp, "# to t = %.9g s\n", next * c->prm.dt);
+    run_cmd(fp, c, next - at, label, unrolled);
+    at = next;
   }
-  run_cmd(fp, c, nsteps - start_k, "window");
+}
+
+int gs_lig_write_deck(const gs_dem_case *c, FILE *fp, const char *data_file, const char *exclusion,
+                      gs_error *err) {
+  int rc = gs_lig_write_setup(c, fp, data_file, exclusion, err);
+  if (rc) return rc;
+  gs_lig_write_runs(c, fp, 0, gs_lig_steps(c), 0);
   return ferror(fp) ? gs_error_set(err, GS_EIO, "cannot write the LIGGGHTS deck") : GS_OK;
 }
 

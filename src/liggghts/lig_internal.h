@@ -3,6 +3,7 @@
 #ifndef GRANSIM_LIG_INTERNAL_H
 #define GRANSIM_LIG_INTERNAL_H
 #include <stddef.h>
+#include <stdio.h>
 
 #include "dem/dem_case.h"
 
@@ -54,6 +55,50 @@ void gs_lig_remove_tables(const gs_dem_case *c, const char *out);
  * engine's files (frames.c); the dumps removed once all are converted.
  * Nothing to do without frames. */
 int gs_lig_vtk_frames(const gs_dem_case *c, const char *out, gs_error *err);
-/* Reduce out/liggghts/post into out's tables (those of src/dem/stats.c). */
-int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, gs_error *err);
+/* The statistics window of a reduction: from t0 to t1 [s]; t_steady: when the
+ * steady-state detector fired (< 0: not run, or it did not fire). */
+typedef struct {
+  double t0, t1, t_steady;
+} gs_lig_window;
+/* Reduce out/liggghts/post into out's tables (those of src/dem/stats.c) over
+ * the window wdw. */
+int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, const gs_lig_window *wdw,
+                  gs_error *err);
+/* The deck in two parts (deck.c): all before its runs; and its runs from
+ * step from to step to, with what happens between them (rotation.start, the
+ * statistics window's dumps), without loops when unrolled (commands on
+ * standard input).  gs_lig_write_deck is the two, from 0 to gs_lig_steps. */
+int gs_lig_write_setup(const gs_dem_case *c, FILE *fp, const char *data_file, const char *exclusion, gs_error *err);
+void gs_lig_write_runs(const gs_dem_case *c, FILE *fp, long from, long to, int unrolled);
+/* The case's steps: its duration / time step. */
+long gs_lig_steps(const gs_dem_case *c);
+
+/* One contact list of an events file (tables.c): its rows (ncol numbers
+ * each) into *rows, their number in *n; returns its step + 1, 0 at the end,
+ * -1 when unreadable. */
+long gs_lig_next_list(FILE *fp, size_t ncol, double **rows, size_t *cap, size_t *n);
+
+/* The steady-state detector on the dumps (steady.c). */
+typedef struct {
+  long smp_k;                     /* steps between samples */
+  double t_agitate;               /* the last rotation.start: samples up to it are left out */
+  long pos;                       /* events_pp.txt: where the next list starts */
+  size_t lists;                   /* lists read */
+  unsigned long long *prev, *cur; /* the last list's pairs, sorted */
+  size_t nprev;
+  double *rows;
+  size_t caprows;
+  double *ev; /* contacts that began per sample interval j: steps ((j-1) smp_k, j smp_k] */
+  size_t cap_ev;
+  double *t, *m, *cr, *ke; /* per sample: time [s], hold-up mass [kg], collision rate [1/s], kinetic energy [J] */
+  size_t ns, cap, k_ag; /* samples, room, the first sample after t_agitate */
+  double t_steady;      /* when the detector fired, or -1 */
+} gs_lig_steady;
+void gs_lig_steady_init(gs_lig_steady *s, const gs_dem_case *c);
+/* The samples up to step upto from the dumps in post, each through the
+ * detector (s->t_steady once it fired). */
+int gs_lig_steady_update(gs_lig_steady *s, const gs_dem_case *c, const char *post, long upto, gs_error *err);
+/* The error of a run that did not become steady, with the last figures. */
+int gs_lig_steady_not_reached(const gs_lig_steady *s, const gs_dem_case *c, gs_error *err);
+void gs_lig_steady_free(gs_lig_steady *s);
 #endif

@@ -15,6 +15,7 @@
  * comparison. */
 #include <dirent.h>
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -86,6 +87,9 @@ typedef struct {
   int *rt_cls;             /* ... their classes */
   size_t nrt, caprt;
   double out_mass;
+  long k0, k1;             /* the statistics window: from step k0 to k1 */
+  double t0, t1;           /* ... in seconds */
+  long first_list;         /* the step of the first pair contact list (event rates from there on) */
   long *left_step;         /* every outlet dump (the whole run): its step ... */
   double *left_n;          /* ... and how many atoms it removed */
   size_t nleft, capleft;
@@ -166,7 +170,7 @@ static int class_of(pass *a, double id) {
 }
 
 /* One contact list of an events file: its rows (ncol numbers each), or 0 at the end. */
-static long next_list(FILE *fp, size_t ncol, double **rows, size_t *cap, size_t *n) {
+long gs_lig_next_list(FILE *fp, size_t ncol, double **rows, size_t *cap, size_t *n) {
   char line[1024];
   long step = -1, nrow = -1;
   while (fgets(line, sizeof line, fp)) {
@@ -201,7 +205,7 @@ static int count_events(pass *a, const char *path, int wall, gs_error *err) {
   unsigned long long *prev = NULL, *cur = NULL;
   int rc = GS_OK, first = 1;
   long st;
-  while (!rc && (st = next_list(fp, ncol, &rows, &cap, &n)) != 0) {
+  while (!rc && (st = gs_lig_next_list(fp, ncol, &rows, &cap, &n)) != 0) {
     unsigned long long *t = st < 0 ? NULL : realloc(cur, (n + 1) * sizeof *cur);
     if (!t) { rc = gs_error_set(err, GS_EINPUT, "%s: unreadable contact list", path); break; }
     cur = t;
@@ -223,10 +227,17 @@ static int count_events(pass *a, const char *path, int wall, gs_error *err) {
       if (dup) continue;
       cur[ncur++] = key;
       if (first || (nprev && bsearch(&key, prev, nprev, sizeof *prev, cmp_u64))) continue;
-      int c1 = class_of(a, wall ? v[8] : v[0]), c2 = wall ? 0 : class_of(a, v[1]);
-      if (c1 < 0 || c2 < 0) { a->unknown++; continue; }
       /* the output interval (ts_ev) the event falls in: steps ((k-1) out_k, k out_k] */
       long ko = (st - 1 + a->out_k - 1) / a->out_k;
+      /* before the statistics window (statistics.start: steady lists contacts from t = 0)
+       * an event counts in the time series only */
+      if (st - 1 <= a->k0 || st - 1 > a->k1) {
+        size_t w = wall ? (size_t)v[6] : 0;
+        if (ko < a->nout && w < a->nw + !wall) a->ts_ev[(wall ? 1 + w : 0) * (size_t)a->nout + (size_t)ko] += 1;
+        continue;
+      }
+      int c1 = class_of(a, wall ? v[8] : v[0]), c2 = wall ? 0 : class_of(a, v[1]);
+      if (c1 < 0 || c2 < 0) { a->unknown++; continue; }
       if (!wall) {
         size_t i = (size_t)(c1 < c2 ? c1 : c2), j = (size_t)(c1 < c2 ? c2 : c1);
         a->pair_events[i * a->ncl + j] += 1;
@@ -273,6 +284,7 @@ static int count_events(pass *a, const char *path, int wall, gs_error *err) {
       a->u_wc[a->nu++] = (int)at;
     }
     qsort(cur, ncur, sizeof *cur, cmp_u64);
+    if (first && !wall) a->first_list = st - 1;
     unsigned long long *sw = prev;
     prev = cur, nprev = ncur;
     cur = sw;
@@ -301,7 +313,7 @@ static int impact_table(const pass *a, const gs_dem_case *c, const char *dir, lo
     double contacts = 0;
     for (size_t w = 0; w < a->nw; w++)
       if (wall < 0 || (size_t)wall == w) contacts += a->wall_contacts[w * ncl + i];
-    double Ni = a->num[i] / ns, win = c->duration - c->stats_start;
+    double Ni = a->num[i] / ns, win = a->t1 - a->t0;
     rate[i] = Ni > 0 ? contacts / (Ni * win) : 0;
     if (rate_all) rate_all[i] = rate[i];
     size_t m = 0;
@@ -319,7 +331,7 @@ static int impact_table(const pass *a, const gs_dem_case *c, const char *dir, lo
            "# N_i over %.0f snapshots; rows: impacts per particle per second (impacts / (N_i window));\n"
            "# mu, sigma of the lognormal fit of U = |v - v_wall| at the first contact list holding the impact\n"
            "# (%zu speeds fitted, those slower than %g m/s left out; %zu class(es) take the pooled fit mu %.6g, sigma %.6g)\n",
-           wall < 0 ? "all walls" : "wall ", wall < 0 ? "" : c->wall_src[wall].name, c->stats_start, ns, np,
+           wall < 0 ? "all walls" : "wall ", wall < 0 ? "" : c->wall_src[wall].name, a->t0, ns, np,
            GS_DEM_MIN_IMPACT_SPEED, pooled, pmu, psg);
   return gs_dem_impact_table_write(path, comment, ncl, e, 0, rate, mu, sg, err);
 }
@@ -329,8 +341,8 @@ static int cmp_long(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-/* The steps of the collision<STEP>.atom snapshots in dir, increasing. */
-static int snapshot_steps(const char *dir, long **out, size_t *n, gs_error *err) {
+/* The steps from k0 to k1 of the collision<STEP>.atom snapshots in dir, increasing. */
+static int snapshot_steps(const char *dir, long k0, long k1, long **out, size_t *n, gs_error *err) {
   DIR *dp = opendir(dir);
   if (!dp) return gs_error_set(err, GS_EIO, "%s: cannot open: %s", dir, strerror(errno));
   size_t cap = 64;
@@ -339,7 +351,7 @@ static int snapshot_steps(const char *dir, long **out, size_t *n, gs_error *err)
   for (struct dirent *e; s && (e = readdir(dp));) {
     long st;
     char tail[8];
-    if (sscanf(e->d_name, "collision%ld%7s", &st, tail) != 2 || strcmp(tail, ".atom")) continue;
+    if (sscanf(e->d_name, "collision%ld%7s", &st, tail) != 2 || strcmp(tail, ".atom") || st < k0 || st > k1) continue;
     if (*n == cap) {
       long *t = realloc(s, 2 * cap * sizeof *t);
       if (!t) { free(s); s = NULL; break; }
@@ -363,8 +375,8 @@ static int snapshot_steps(const char *dir, long **out, size_t *n, gs_error *err)
  * left<STEP>_<OUTLET>.atom dumps the deck writes before each delete_atoms,
  * with each atom's time in the domain (fix property/atom/regiontracer/time);
  * and how many each dump removed, over the whole run (the lost particles). */
-static int residence(pass *a, const gs_dem_case *c, const char *post, gs_error *err) {
-  const long k0 = (long)round(c->stats_start / c->prm.dt);
+static int residence(pass *a, const char *post, gs_error *err) {
+  const long k0 = a->k0;
   DIR *dp = opendir(post);
   if (!dp) return gs_error_set(err, GS_EIO, "%s: cannot open: %s", post, strerror(errno));
   int rc = GS_OK;
@@ -386,7 +398,7 @@ static int residence(pass *a, const gs_dem_case *c, const char *post, gs_error *
       else a->capleft = cap;
     }
     if (!rc) a->left_step[a->nleft] = st, a->left_n[a->nleft++] = (double)d.nrows;
-    if (rc || st <= k0) {
+    if (rc || st <= k0 || st > a->k1) {
       gs_dump_free(&d);
       continue;
     }
@@ -427,7 +439,8 @@ static double lost_at(const pass *a, const gs_lig_thermo *th, size_t r, double d
   return v0[1] - v0[8] + v[8] - v[1] - gone;
 }
 
-int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, gs_error *err) {
+int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th, const gs_lig_window *wdw,
+                  gs_error *err) {
   char post[4400], path[4600];
   snprintf(post, sizeof post, "%s/liggghts/post", out);
   const size_t ncl = c->nclass, nw = c->nwall_src;
@@ -465,15 +478,19 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   /* demdata's snapshot estimate is only a comparison: without it (more than two
    * meshes, or no relative velocities) the tables are written all the same */
   gs_error derr = {0};
-  int have_dd = gs_dem_data_read(post, &opt, &dd, &derr) == GS_OK;
+  int have_dd = wdw->t_steady < 0 && gs_dem_data_read(post, &opt, &dd, &derr) == GS_OK;
+  /* (demdata reads every snapshot: with statistics.start: steady they begin at t = 0) */
+  if (wdw->t_steady >= 0) gs_error_set(&derr, GS_EINPUT, "the snapshots of statistics.start: steady span the whole run");
   long *steps = NULL;
   size_t nsnap = 0;
-  int rc = snapshot_steps(post, &steps, &nsnap, err);
+  const long k0 = (long)round(wdw->t0 / dt), k1 = (long)round(wdw->t1 / dt);
+  int rc = snapshot_steps(post, k0, k1, &steps, &nsnap, err);
   if (rc) {
     if (have_dd) gs_dem_data_free(&dd);
     return rc;
   }
-  pass a = {.ncl = ncl, .ncmp = c->ncmp, .nw = nw, .nbins = 40, .dv = c->prm.impact_dv > 0 ? c->prm.impact_dv : 0.25};
+  pass a = {.ncl = ncl, .ncmp = c->ncmp, .nw = nw, .nbins = 40, .dv = c->prm.impact_dv > 0 ? c->prm.impact_dv : 0.25,
+            .k0 = k0, .k1 = k1, .t0 = wdw->t0, .t1 = wdw->t1, .first_list = LONG_MAX};
   size_t nc = ncl * c->ncmp;
   a.num = calloc(ncl, sizeof(double));
   a.cv_n = calloc(nc, sizeof(double)), a.cv_s = calloc(nc, sizeof(double)), a.cv_s2 = calloc(nc, sizeof(double));
@@ -496,7 +513,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   if (!rc) rc = count_events(&a, path, 0, err);
   snprintf(path, sizeof path, "%s/events_wall.txt", post);
   if (!rc && nw) rc = count_events(&a, path, 1, err);
-  if (!rc && c->noutlets) rc = residence(&a, c, post, err);
+  if (!rc && c->noutlets) rc = residence(&a, post, err);
   /* dem.max_lost, as the embedded engine's health check (which stops the run there) */
   for (size_t r = 0; !rc && r < th->n; r++) {
     double ins, lost = lost_at(&a, th, r, dt, &ins);
@@ -508,8 +525,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   }
   const double ns = nsnap ? (double)nsnap : 1;
   const double t0 = nsnap ? steps[0] * dt : NAN, t1 = nsnap ? steps[nsnap - 1] * dt : NAN;
-  const double win = c->duration - c->stats_start;
-  const long start_k = (long)round(c->stats_start / dt);
+  const double win = a.t1 - a.t0;
   FILE *fp = NULL;
   gs_csv_out tab;
   double e[GS_DEM_MAX_CLASSES + 1];
@@ -523,7 +539,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
   if (!rc && !C) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
   if (!rc && (fp = gs_dem_table_begin(&tab, out, "collisions.csv", err))) {
     fprintf(fp, "# collision events from t = %.9g to %.9g s (%.9g s, %.0f snapshots from t = %.9g to %.9g s)%s\n",
-            c->stats_start, c->duration, win, ns, t0, t1, note);
+            a.t0, a.t1, win, ns, t0, t1, note);
     /* demdata's estimate from the contact snapshots, for comparison (it
      * over-counts enduring contacts of a resting bed: each counts as a collision per t_c) */
     fprintf(fp, "# contacts / Hertz contact time of the snapshots (src/demdata), C_ij:");
@@ -565,7 +581,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     fprintf(fp, "# wall impacts (contacts that began) from t = %.9g to %.9g s (%.9g s)%s; vn: normal speed "
             "relative to the wall, vt: tangential speed relative to the wall without the particle's spin (LIGGGHTS' "
             "contact lists hold no angular velocity), both at the first contact list holding the impact\n",
-            c->stats_start, c->duration, win, note);
+            a.t0, a.t1, win, note);
     fprintf(fp, "wall,class,name,impacts,impacts_per_s,impacts_per_particle_s,mean_vn,std_vn,mean_vt\n");
     for (size_t w = 0; w < nw; w++)
       for (size_t i = 0; i < ncl; i++) {
@@ -616,7 +632,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
 
   /* residence times: the atoms that left through outlets */
   if (!rc)
-    rc = gs_dem_residence_write(c, out, a.rt, a.rt_cls, a.nrt, a.out_mass, c->stats_start, c->duration, a.hold_n / ns,
+    rc = gs_dem_residence_write(c, out, a.rt, a.rt_cls, a.nrt, a.out_mass, a.t0, a.t1, a.hold_n / ns,
                                 a.hold_m / ns, "; engine liggghts: outlets emptied every 200 steps, residence time "
                                 "from fix property/atom/regiontracer/time", err);
 
@@ -628,17 +644,19 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     fprintf(fp, ",lost,steady,wall_seconds\n");
     for (size_t r = 0; r < th->n; r++) {
       const double *v = th->row + th->ncol * r;
+      if (v[0] > a.t1 * (1 + 1e-12)) break; /* past where an observer stopped the run */
       /* event rates of the interval that ends at this row, where the contact
        * lists (from statistics.start on) cover all of it */
       const long step = (long)round(v[0] / dt), ko = step / a.out_k;
-      const int have_rate = step > 0 && step - a.out_k >= start_k && ko < a.nout;
+      const int have_rate = step > 0 && step - a.out_k >= a.first_list && ko < a.nout;
       const double span = a.out_k * dt;
       fprintf(fp, "%.9g,%.0f,%.0f,%.9g,%.9g,%.9g,%.0f,", v[0], v[1], v[5], v[6], v[2], v[3], v[7]);
       fprintf(fp, have_rate ? "%.9g" : "nan", have_rate ? a.ts_ev[ko] / span : 0.0);
       for (size_t w = 0; w < nw; w++)
         fprintf(fp, have_rate ? ",%.9g" : ",nan", have_rate ? a.ts_ev[(1 + w) * (size_t)a.nout + (size_t)ko] / span : 0.0);
       for (size_t w = 0; w < nw; w++) fprintf(fp, ",%.9g", v[GS_LIG_THERMO_COLS + w]);
-      fprintf(fp, ",%.0f,0,%.6f\n", lost_at(&a, th, r, dt, NULL), v[4]);
+      fprintf(fp, ",%.0f,%d,%.6f\n", lost_at(&a, th, r, dt, NULL), wdw->t_steady >= 0 && v[0] >= wdw->t_steady * (1 - 1e-12),
+              v[4]);
     }
     const char *names[GS_DEM_CASE_MAX_WALLS];
     for (size_t w = 0; w < nw; w++) names[w] = c->wall_src[w].name;
@@ -646,7 +664,7 @@ int gs_lig_reduce(const gs_dem_case *c, const char *out, const gs_lig_thermo *th
     if (!rc)
       rc = gs_dem_timeseries_meta(tab.path, "engine liggghts: LIGGGHTS' thermo rows (pair contacts from compute contact/atom, the "
                                   "torque from fix mesh/surface/stress, lost: inserted minus held minus removed by "
-                                  "outlets); the steady flag is 0 (statistics.start: steady is refused)",
+                                  "outlets); steady: 1 from the time the steady-state detector fired (statistics.start: steady only)",
                                   nw, names, err);
   } else if (!rc) rc = err->code;
 
