@@ -3,8 +3,7 @@
  * contact (shared edges and vertices are not counted twice, and neighbouring
  * coplanar triangles add nothing), also when the file writes one vertex with
  * round-off; LIGGGHTS' contact rule (mesh_contacts: liggghts) adds a
- * neighbour's owned edge to a face contact, as LIGGGHTS 3.8 does, and keeps a sliding contact's
- * tangential history across coplanar triangles; a moving mesh pushes with its own velocity;
+ * neighbour's owned edge to a face contact, as LIGGGHTS 3.8 does; a moving mesh pushes with its own velocity;
  * a mesh turning at a given rpm (and translating) has its vertices exactly
  * where the rigid motion puts them; a sphere resting on a turning disk is
  * carried at the wall velocity omega x r; the real CoriMix meshes load. */
@@ -240,50 +239,6 @@ static void test_liggghts_contacts(void) {
   CHECK_REL(f, k * pow(d_face, 1.5), 1e-3);
 }
 
-/* LIGGGHTS keeps a mesh contact's tangential history when the sphere passes onto
- * a coplanar neighbour (FixContactHistoryMesh::handleContact).  A sphere sliding
- * under gravity across the diagonal of a square of two triangles then moves
- * exactly as on one large triangle holding its whole path; restarting the shear
- * spring at the diagonal (as before) moves it by 4e-7 m.  Returns
- * the sphere's state after the crossing. */
-static void slide(int ntri, double out[6]) {
-  gs_dem_params p;
-  memset(&p, 0, sizeof p);
-  p.dt = 1e-6;
-  p.skin = 1e-4;
-  p.gravity[2] = -9.81;
-  p.damping = GS_DEM_DAMPING_LIGGGHTS;
-  p.mesh_contacts = GS_DEM_MESH_LIGGGHTS;
-  for (int a = 0; a < 3; a++) p.lo[a] = -0.03, p.hi[a] = 0.03;
-  p.nclass = 1;
-  gs_error err = {0};
-  gs_dem *d = gs_dem_alloc(&p, &err);
-  const gs_dem_material mat = {8e6, 0.2, 0.5, 0.5, 0.0, 500};
-  int t = gs_dem_add_type(d, &mat, 0, &err);
-  const double L = 0.01;
-  const double two[18] = {-L, -L, 0, L, -L, 0, L, L, 0, -L, -L, 0, L, L, 0, -L, L, 0};
-  const double one[9] = {-L, -L, 0, 3 * L, -L, 0, -L, 3 * L, 0};
-  CHECK(gs_dem_add_mesh(d, "plate", gs_dem_mesh_from_triangles(ntri == 2 ? two : one, ntri, &err), &mat, &err) >= 0);
-  /* resting on the plate (overlap mg/k), moving at 0.2 m/s towards the diagonal y = x */
-  const double r = 1e-3, x[3] = {0.002, -0.002, r - 2.5e-6}, v[3] = {-0.2, 0.2, 0};
-  gs_dem_add_particle(d, t, r, x, v, NULL, &err);
-  CHECK(gs_dem_run(d, 20000, &err) == GS_OK);
-  gs_dem_view w;
-  gs_dem_get_view(d, &w);
-  out[0] = w.x[0], out[1] = w.y[0], out[2] = w.z[0], out[3] = w.vx[0], out[4] = w.vy[0], out[5] = w.vz[0];
-  gs_dem_free(d);
-}
-
-static void test_coplanar_history(void) {
-  double a[6], b[6];
-  slide(2, a);
-  slide(1, b);
-  fprintf(stderr, "sliding across a coplanar edge: at (%.6f, %.6f) m, v (%.6f, %.6f) m/s; on one triangle "
-          "(%.6f, %.6f) m, v (%.6f, %.6f) m/s\n", a[0], a[1], a[3], a[4], b[0], b[1], b[3], b[4]);
-  CHECK(a[1] > a[0] + 1e-3); /* it has crossed the diagonal */
-  for (int k = 0; k < 6; k++) CHECK_ABS(a[k], b[k], k < 3 ? 1e-12 : 1e-9);
-}
-
 /* A plate (two triangles) moving at +0.2 m/s along z hits a resting sphere:
  * elastic and frictionless, the sphere leaves at twice the plate speed. */
 static void test_moving(void) {
@@ -504,7 +459,6 @@ int main(void) {
   test_features();
   test_weld_tolerance();
   test_liggghts_contacts();
-  test_coplanar_history();
   test_moving();
   test_rotation();
   test_turntable();
