@@ -63,9 +63,6 @@ struct gs_dem_mesh {
 /* LIGGGHTS 3.8's edge and corner ownership for `mesh_contacts: liggghts`
  * (src/dem/mesh_topology.c); sets m->active once. */
 int gs_dem_mesh_liggghts_activity(gs_dem_mesh *m, gs_error *err);
-/* Whether triangles a and b share a vertex and are coplanar (LIGGGHTS'
- * areCoplanarNodeNeighs, with the curvature of its edge rule). */
-int gs_dem_mesh_coplanar_neighbours(const gs_dem_mesh *m, int a, int b);
 
 typedef struct {
   int kind;

@@ -163,13 +163,3 @@ int gs_dem_mesh_liggghts_activity(gs_dem_mesh *m, gs_error *err) {
   free(e);
   return corners_activity(m, m->active, err);
 }
-
-int gs_dem_mesh_coplanar_neighbours(const gs_dem_mesh *m, int a, int b) {
-  const int *va = m->vid + 3 * (size_t)a, *vb = m->vid + 3 * (size_t)b;
-  int share = 0;
-  for (int i = 0; i < 3; i++)
-    for (int j = 0; j < 3; j++) share |= va[i] == vb[j];
-  if (!share || a == b) return 0;
-  const double *na = m->nrm + 3 * (size_t)a, *nb = m->nrm + 3 * (size_t)b;
-  return fabs(na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2]) > COPLANAR_COS;
-}

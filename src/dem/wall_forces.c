@@ -117,9 +117,6 @@ typedef struct {
   double cp[3], n[3];  /* world frame; n points from the wall to the centre */
 } cand;
 
-/* the triangle of a LIGGGHTS-mode mesh contact key (mesh_candidates) */
-#define TRI_BITS ((1ull << 54) - 1)
-
 static void add_cand(cand *c, int *nc, const cand *x) {
   if (*nc >= MAXC) {
     /* keep the closest: replace the farthest if x is closer */
@@ -340,33 +337,11 @@ void gs_dem_wall_forces(gs_dem *d) {
         const gs_dem_wall *wl = &d->walls[x->wall];
         double *sh = nshear + 3 * k;
         nkey[k] = x->key;
-        int known = 0;
-        for (int s = 0; s < GS_DEM_WSLOTS && !known; s++)
+        for (int s = 0; s < GS_DEM_WSLOTS; s++)
           if (okey[s] == x->key) {
             memcpy(sh, oshear + 3 * s, 3 * sizeof(double));
-            known = 1;
+            break;
           }
-        if (!known && liggghts && wl->kind == GS_DEM_WALL_MESH && wl->mesh->active) {
-          /* LIGGGHTS (FixContactHistoryMesh::handleContact): a flat stretch of mesh is one
-           * surface.  A new contact on a triangle coplanar with one already taken this step
-           * gives no force, and one that follows a contact on a coplanar neighbour keeps its
-           * tangential history, so friction does not restart at every triangle edge. */
-          const int t = (int)(x->key & TRI_BITS);
-          int skip = 0;
-          for (int q = 0; q < k && !skip; q++)
-            skip = nkey[q] && c[q].wall == x->wall &&
-                   gs_dem_mesh_coplanar_neighbours(wl->mesh, t, (int)(c[q].key & TRI_BITS));
-          if (skip) {
-            nkey[k] = 0;
-            continue;
-          }
-          for (int s = 0; s < GS_DEM_WSLOTS; s++)
-            if (okey[s] && (okey[s] >> 56) == (x->key >> 56) &&
-                gs_dem_mesh_coplanar_neighbours(wl->mesh, t, (int)(okey[s] & TRI_BITS))) {
-              memcpy(sh, oshear + 3 * s, 3 * sizeof(double));
-              break;
-            }
-        }
         double vw[3];
         gs_dem_wall_velocity(wl, x->cp, vw);
         const double *nr = x->n, dist = x->dist, delta = r - dist;
