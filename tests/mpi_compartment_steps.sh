@@ -13,11 +13,7 @@
 # mpi_resume_exact.sh.
 #
 # Usage: bash mpi_compartment_steps.sh GRANSIM_BINARY SOURCE_DIR MPIEXEC [MPIEXEC_OPTIONS...]
-source "$(dirname "$0")/cli-lib.sh" "$1" "$2"
-shift 2
-[ $# -ge 1 ] || fail "no MPI launcher given (usage: bash $0 GRANSIM_BINARY SOURCE_DIR MPIEXEC [OPTIONS...])"
-MPI=("$@")
-export OMPI_MCA_mpi_yield_when_idle=1 OMP_WAIT_POLICY=passive
+source "$(dirname "$0")/mpi-lib.sh" "$@"
 command -v h5diff >/dev/null || fail "h5diff (hdf5-tools) is needed"
 ln -s "$(cd "$SRC" && pwd)/examples/data" "$WORK/data"
 

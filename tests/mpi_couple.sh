@@ -2,10 +2,7 @@
 # its own DEM stage into the same folder), says why once, and writes nothing.
 #
 # Usage: bash mpi_couple.sh GRANSIM_BINARY SOURCE_DIR MPIEXEC [MPIEXEC_OPTIONS...]
-source "$(dirname "$0")/cli-lib.sh" "$1" "$2"
-shift 2
-[ $# -ge 1 ] || fail "no MPI launcher given (usage: bash $0 GRANSIM_BINARY SOURCE_DIR MPIEXEC [OPTIONS...])"
-MPI=("$@")
+source "$(dirname "$0")/mpi-lib.sh" "$@"
 
 rc=0
 "${MPI[@]}" -np 2 "$BIN" couple "$SRC/examples/corimix-coupled.yaml" --out "$WORK/out" >"$WORK/stdout" 2>"$WORK/stderr" || rc=$?

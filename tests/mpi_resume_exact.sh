@@ -13,11 +13,7 @@
 # ctest-long
 #
 # Usage: bash mpi_resume_exact.sh GRANSIM_BINARY SOURCE_DIR MPIEXEC [MPIEXEC_OPTIONS...]
-source "$(dirname "$0")/cli-lib.sh" "$1" "$2"
-shift 2
-[ $# -ge 1 ] || fail "no MPI launcher given (usage: bash $0 GRANSIM_BINARY SOURCE_DIR MPIEXEC [OPTIONS...])"
-MPI=("$@")
-export OMPI_MCA_mpi_yield_when_idle=1 OMP_WAIT_POLICY=passive
+source "$(dirname "$0")/mpi-lib.sh" "$@"
 command -v h5diff >/dev/null || fail "h5diff (hdf5-tools) is needed"
 
 ncomp=8 end=30 trials=1

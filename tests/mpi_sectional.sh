@@ -17,12 +17,7 @@
 # part-way resumes on 2 ranks and ends as an uninterrupted run.
 #
 # Usage: bash mpi_sectional.sh GRANSIM_BINARY SOURCE_DIR MPIEXEC [MPIEXEC_OPTIONS...]
-source "$(dirname "$0")/cli-lib.sh" "$1" "$2"
-shift 2
-[ $# -ge 1 ] || fail "no MPI launcher given (usage: bash $0 GRANSIM_BINARY SOURCE_DIR MPIEXEC [OPTIONS...])"
-MPI=("$@")
-# ranks that sleep instead of spinning keep the test quick on a busy machine
-export OMPI_MCA_mpi_yield_when_idle=1 OMP_WAIT_POLICY=passive
+source "$(dirname "$0")/mpi-lib.sh" "$@"
 
 # values of a dataset of DIR/result.h5, one per line, in full precision
 values() {

@@ -6,10 +6,7 @@
 # rank 0 print the failing rank's message, without hanging.
 #
 # Usage: bash mpi_swa.sh GRANSIM_BINARY SOURCE_DIR MPIEXEC [MPIEXEC_OPTIONS...]
-source "$(dirname "$0")/cli-lib.sh" "$1" "$2"
-shift 2
-[ $# -ge 1 ] || fail "no MPI launcher given (usage: bash $0 GRANSIM_BINARY SOURCE_DIR MPIEXEC [OPTIONS...])"
-MPI=("$@")
+source "$(dirname "$0")/mpi-lib.sh" "$@"
 
 # the bundled twin-screw case (every SWA process, 3 compartments, sieves),
 # shortened to 2 residence times and 5 runs

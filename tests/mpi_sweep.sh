@@ -3,10 +3,7 @@
 # prints, a failing run is recorded, and a killed sweep resumes on 2 ranks.
 #
 # Usage: bash mpi_sweep.sh GRANSIM_BINARY SOURCE_DIR MPIEXEC [MPIEXEC_OPTIONS...]
-source "$(dirname "$0")/cli-lib.sh" "$1" "$2"
-shift 2
-[ $# -ge 1 ] || fail "no MPI launcher given (usage: bash $0 GRANSIM_BINARY SOURCE_DIR MPIEXEC [OPTIONS...])"
-MPI=("$@")
+source "$(dirname "$0")/mpi-lib.sh" "$@"
 
 c=$(write_case tiny.yaml "$(lossy_case 1 'output: {end: 2, count: 3}')")
 SET=(--set mechanisms.0.kernel.beta0=1e-3,1,2e-3,5e-4,1e-4 --set output.end=1,2 --outputs M2)
