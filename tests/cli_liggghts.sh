@@ -213,30 +213,7 @@ grep -q "DEM (LIGGGHTS): [0-9]* of the 100 particles inserted had left the box o
 # leaving in the window, with mean residence times within 3 % (LIGGGHTS' outlets are emptied
 # every 200 steps = 0.4 ms of ~25 ms); the hold-up in an annulus at t = 0 (one bed) is equal.
 res_yaml() { # res_yaml ENGINE
-  cat <<YAML
-dem:
-  time_step: 2.0e-6
-  duration: 0.06
-  gravity: [0, 0, 0]
-  skin: 2.0e-4
-  box: {lo: [-0.03, -0.03, -0.02], hi: [0.03, 0.03, 0.06]}
-  engine: $1
-materials:
-  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, density: 500}
-classes:
-  - {name: low, radius: 1.0e-3, material: g}
-  - {name: high, radius: 1.0e-3, material: g}
-fill:
-  - {region: {box: {lo: [-0.02, -0.02, 0.01], hi: [0.02, 0.02, 0.03]}}, count: 40, fractions: [1, 0], velocity: [0, 0, -1]}
-  - {region: {box: {lo: [-0.02, -0.02, 0.03], hi: [0.02, 0.02, 0.05]}}, count: 30, fractions: [0, 1], velocity: [0, 0, -1]}
-outlets:
-  - {region: {box: {lo: [-0.03, -0.03, -0.02], hi: [0.03, 0.03, 0.0]}}}
-statistics:
-  start: 0.02
-  sample_every: 0.001
-  holdup_region: {cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.015, inner_radius: 0.008, from: 0.0, to: 0.06}}
-output: {every: 0.01}
-YAML
+  outlet_yaml "$1" 0.06 "{start: 0.02, sample_every: 0.001, holdup_region: {cylinder: {point: [0, 0, 0], axis: [0, 0, 1], radius: 0.015, inner_radius: 0.008, from: 0.0, to: 0.06}}}" "{every: 0.01}"
 }
 run_engines r outlet res_yaml
 grep -q "^write_dump all custom post/left\*_0.atom .* modify region outlet0" "$W/rl/liggghts/in.gransim" || fail "deck outlet dump"

@@ -192,27 +192,7 @@ grep -q "ns.yaml: statistics.start is 'steady' but the steady state was not reac
 # with an outlet the chunks write the outlets' 200-step runs out in full (a `jump SELF` loop cannot
 # be read from standard input): 70 particles fall through it, the hold-up drains, so the detector
 # never fires, but every chunk runs to the end
-cat > "$W/out.yaml" <<'YAML'
-dem:
-  time_step: 2.0e-6
-  duration: 0.03
-  gravity: [0, 0, 0]
-  skin: 2.0e-4
-  box: {lo: [-0.03, -0.03, -0.02], hi: [0.03, 0.03, 0.06]}
-  engine: liggghts
-materials:
-  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, density: 500}
-classes:
-  - {name: low, radius: 1.0e-3, material: g}
-  - {name: high, radius: 1.0e-3, material: g}
-fill:
-  - {region: {box: {lo: [-0.02, -0.02, 0.01], hi: [0.02, 0.02, 0.03]}}, count: 40, fractions: [1, 0], velocity: [0, 0, -1]}
-  - {region: {box: {lo: [-0.02, -0.02, 0.03], hi: [0.02, 0.02, 0.05]}}, count: 30, fractions: [0, 1], velocity: [0, 0, -1]}
-outlets:
-  - {region: {box: {lo: [-0.03, -0.03, -0.02], hi: [0.03, 0.03, 0.0]}}}
-statistics: {start: steady, sample_every: 0.001, steady: {window: 4, tolerance: 0.5}}
-output: {every: 0.001}
-YAML
+outlet_yaml liggghts 0.03 "{start: steady, sample_every: 0.001, steady: {window: 4, tolerance: 0.5}}" "{every: 0.001}" > "$W/out.yaml"
 if "$BIN" dem "$W/out.yaml" --out "$W/out" --ranks 1 --quiet 2> "$W/out.log"; then fail "the draining bed became steady"; fi
 grep -q "out.yaml: statistics.start is 'steady' but the steady state was not reached by t = 0.03 s" "$W/out.log" ||
   { cat "$W/out.log"; fail "outlet run message"; }

@@ -26,3 +26,29 @@ with open(sys.argv[1], "w") as f:
             f.write("  endloop\n endfacet\n")
     f.write("endsolid box\n")
 PY
+
+# outlet_yaml ENGINE DURATION STATISTICS OUTPUT: 70 particles of two classes (40 'low' below 30
+# 'high') falling at 1 m/s, without gravity, into an outlet across the box's floor
+outlet_yaml() {
+  cat <<YAML
+dem:
+  time_step: 2.0e-6
+  duration: $2
+  gravity: [0, 0, 0]
+  skin: 2.0e-4
+  box: {lo: [-0.03, -0.03, -0.02], hi: [0.03, 0.03, 0.06]}
+  engine: $1
+materials:
+  - {name: g, E: 8.0e6, nu: 0.2, e: 0.4, mu_s: 0.5, density: 500}
+classes:
+  - {name: low, radius: 1.0e-3, material: g}
+  - {name: high, radius: 1.0e-3, material: g}
+fill:
+  - {region: {box: {lo: [-0.02, -0.02, 0.01], hi: [0.02, 0.02, 0.03]}}, count: 40, fractions: [1, 0], velocity: [0, 0, -1]}
+  - {region: {box: {lo: [-0.02, -0.02, 0.03], hi: [0.02, 0.02, 0.05]}}, count: 30, fractions: [0, 1], velocity: [0, 0, -1]}
+outlets:
+  - {region: {box: {lo: [-0.03, -0.03, -0.02], hi: [0.03, 0.03, 0.0]}}}
+statistics: $3
+output: $4
+YAML
+}
