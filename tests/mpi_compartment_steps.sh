@@ -5,7 +5,8 @@
 # ranks (blocks 2+2 and 1+1+2), and on 2 ranks x 2 threads, writes the same
 # result.h5 (h5diff without tolerance) and summary.csv (byte for byte); so
 # does the example on 8 compartments (blocks 2+3+3 on 3 ranks, 4+4 on 2 x 2
-# threads); a non-finite rate in one compartment, in two (the earliest one
+# threads), also with compartments moved between the ranks at every output
+# time (the final message says that they moved); a non-finite rate in one compartment, in two (the earliest one
 # by stretch, then compartment, is the one reported, as in one process) and
 # in a compartment of the middle rank stops every rank with status 1 and one
 # process's message, without hanging, and leaves what one process leaves; so
@@ -17,12 +18,18 @@ source "$(dirname "$0")/mpi-lib.sh" "$@"
 command -v h5diff >/dev/null || fail "h5diff (hdf5-tools) is needed"
 ln -s "$(cd "$SRC" && pwd)/examples/data" "$WORK/data"
 
-# identical CASE TAG NP THREADS: CASE on NP ranks x THREADS threads writes the
-# files of the one-process run $WORK/TAG-1
+# identical CASE TAG NP THREADS [moved]: CASE on NP ranks x THREADS threads
+# writes the files of the one-process run $WORK/TAG-1; moved: with a block
+# boundary moved at every output time (GRANSIM_TEST_MOVE_COMPARTMENTS)
 identical() {
-  local d=$WORK/$2-$3x$4
-  run_rc 0 timeout 300 "${MPI[@]}" -np "$3" --bind-to none "$BIN" run "$1" --out "$d" --quiet --threads "$4"
+  local d=$WORK/$2-$3x$4${5:-} env=()
+  [ -z "${5:-}" ] || env=(-x GRANSIM_TEST_MOVE_COMPARTMENTS=1)
+  run_rc 0 timeout 300 "${MPI[@]}" -np "$3" --bind-to none "${env[@]}" "$BIN" run "$1" --out "$d" --quiet --threads "$4"
   grep -q "per-compartment steps" "$WORK/stderr" || { show_output; fail "$1 did not take per-compartment steps"; }
+  if [ -n "${5:-}" ]; then
+    grep -q "compartments moved between ranks [0-9]* times" "$WORK/stderr" ||
+      { show_output; fail "$1 on $3 ranks: no compartment moved"; }
+  fi
   h5diff "$WORK/$2-1/result.h5" "$d/result.h5" >"$WORK/h5diff.out" 2>&1 ||
     { head -n 20 "$WORK/h5diff.out" >&2; fail "$1 on $3 ranks x $4 threads: result.h5 differs from one process's"; }
   cmp "$WORK/$2-1/summary.csv" "$d/summary.csv" >&2 || fail "$1 on $3 ranks x $4 threads: summary.csv differs"
@@ -45,6 +52,9 @@ for c in "$ex:c4" "$c8:c8"; do
   identical "$case" "$tag" 2 1
   identical "$case" "$tag" 3 1
   identical "$case" "$tag" 2 2
+  identical "$case" "$tag" 2 1 moved
+  identical "$case" "$tag" 3 1 moved
+  identical "$case" "$tag" 2 2 moved
 done
 
 # failures: a kernel table that overflows in some compartments (a rate that is

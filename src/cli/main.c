@@ -166,10 +166,10 @@ static int cmd_run(int argc, char **argv) {
   else if (!rc && rank == 0 && rep.per_compartment)
     fprintf(stderr,
             "gransim: %s: done to t = %g in %.4f s (per-compartment steps: %ld steps and %ld "
-            "evaluations of one compartment's rates in all); results in %s/result.h5 and "
+            "evaluations of one compartment's rates in all%s); results in %s/result.h5 and "
             "%s/summary.csv; largest volume-balance error %.2g, loss through grid boundaries "
             "%.2g\n",
-            path, rep.t_end, rep.wall_seconds, rep.stats.steps, rep.stats.rhs_evals, out, out,
+            path, rep.t_end, rep.wall_seconds, rep.stats.steps, rep.stats.rhs_evals, moved, out, out,
             rep.max_balance_error, rep.max_loss);
   else if (!rc && rank == 0)
     fprintf(stderr,

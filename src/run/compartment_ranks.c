@@ -303,6 +303,13 @@ int gs_comp_ranks_output(gs_comp_ranks *r, size_t k, const double *Y, const doub
   return GS_OK;
 }
 
+void gs_comp_ranks_resplit(gs_comp_ranks *r, const size_t *lo) {
+  memcpy(r->blo, lo, ((size_t)r->size + 1) * sizeof(size_t));
+  r->lo = lo[r->rank];
+  r->hi = lo[r->rank + 1];
+  gs_comp_steps_set_block(r->s, r->lo, r->hi, r, r->serialized);
+}
+
 void gs_comp_ranks_start(gs_comp_ranks *r) {
   r->down_from = 0;
   r->staged = r->up_begun = 0;
@@ -431,6 +438,7 @@ int gs_comp_ranks_create(gs_comp_steps *s, const gs_model *m, const gs_dist *d, 
   return gs_error_set(err, GS_EINPUT, "per-compartment steps on MPI ranks need a build with -DGRANSIM_MPI=ON");
 }
 void gs_comp_ranks_start(gs_comp_ranks *r) { (void)r; }
+void gs_comp_ranks_resplit(gs_comp_ranks *r, const size_t *lo) { (void)r, (void)lo; }
 void gs_comp_ranks_poll(gs_comp_ranks *r) { (void)r; }
 int gs_comp_ranks_flushed(gs_comp_ranks *r) { return (void)r, 1; }
 int gs_comp_ranks_output_ready(gs_comp_ranks *r, size_t k) { return (void)r, (void)k, 1; }

@@ -44,6 +44,9 @@ typedef struct {
  * s then advances this rank's block only.  Collective. */
 int gs_comp_ranks_create(gs_comp_steps *s, const gs_model *m, const gs_dist *d, gs_comp_ranks **out,
                          gs_error *err);
+/* Between runs of gs_comp_steps_run: rank r now advances [lo[r], lo[r + 1])
+ * (size + 1 entries, the same on every rank). */
+void gs_comp_ranks_resplit(gs_comp_ranks *r, const size_t *lo);
 /* At the start of gs_comp_steps_run. */
 void gs_comp_ranks_start(gs_comp_ranks *r);
 /* Send what is ready, file what has arrived; returns at once when another

@@ -133,6 +133,7 @@ struct gs_comp_steps {
   comp_t *comp;
   worker_t *workers;
   int nworkers;
+  int nworkers_made; /* the threads it was made for (a rank's block may shrink and grow again) */
   /* the run of gs_comp_steps_run in progress: its stretches and the full
    * states at their ends (RING of them, until written) */
   const gs_stretch *st;
@@ -626,7 +627,7 @@ int gs_comp_steps_create(gs_case *c, gs_comp_steps **out, gs_error *err) {
   int nw = omp_get_max_threads();
   if (nw > m->nslots) nw = m->nslots;
   if ((size_t)nw > s->ncomp) nw = (int)s->ncomp;
-  s->nworkers = nw < 1 ? 1 : nw;
+  s->nworkers = s->nworkers_made = nw < 1 ? 1 : nw;
   s->k = gs_calloc(s->ncomp, sizeof(double), err);
   /* on pages of their own (GS_APART): threads write neighbouring
    * compartments and workers at every step, and the schedule at every task */
@@ -1045,7 +1046,7 @@ static void work(struct gs_comp_steps *s, worker_t *w, const double *Y) {
     s->recent[c] += spent;
     s->running[c] = 0;
     s->next_k[c]++;
-    const int all = ++s->complete[k % s->depth] == s->ncomp;
+    const int all = ++s->complete[k % s->depth] == s->hi - s->lo; /* this rank's block */
     if (all) atomic_store(&s->outputs_ready, 1);
     const int writes = (int)(w - s->workers) == s->writer;
     omp_unset_lock(&s->lock);
@@ -1125,12 +1126,16 @@ const double *gs_comp_steps_marks(const gs_comp_steps *s, size_t k) {
   return s->marks[k % s->depth];
 }
 
-void gs_comp_steps_resume(gs_comp_steps *s, const double *marks) {
-  for (size_t comp = 0; comp < s->ncomp; comp++) {
+void gs_comp_steps_resume_comps(gs_comp_steps *s, const double *marks, size_t lo, size_t hi) {
+  for (size_t comp = lo; comp < hi; comp++) {
     comp_t *cp = &s->comp[comp];
     cp->it.type->resume(cp->it.self, marks + comp * GS_INTEGRATOR_MARK);
   }
 }
+
+void gs_comp_steps_resume(gs_comp_steps *s, const double *marks) { gs_comp_steps_resume_comps(s, marks, 0, s->ncomp); }
+
+double gs_comp_steps_output_seconds(const gs_comp_steps *s) { return s->t_out; }
 
 void gs_comp_steps_comp_stats(const gs_comp_steps *s, size_t comp, gs_integrator_stats *st) {
   const comp_t *cp = &s->comp[comp];
@@ -1239,7 +1244,7 @@ void gs_comp_steps_set_block(gs_comp_steps *s, size_t lo, size_t hi, gs_comp_ran
   const size_t slot_bytes = per * node_bytes > NODE_KEEP_BYTES ? per * node_bytes : NODE_KEEP_BYTES;
   s->depth = RING;
   while (s->depth > 2 && s->depth * (s->ncomp - 1) * slot_bytes > RING_BYTES) s->depth--;
-  if (!threads) s->nworkers = 1;
+  s->nworkers = threads ? s->nworkers_made : 1;
   if ((size_t)s->nworkers > hi - lo) s->nworkers = (int)(hi - lo);
   for (int w = 0; w <= s->nworkers; w++) s->home[w] = lo + (hi - lo) * (size_t)w / (size_t)s->nworkers;
   s->writer = 0;

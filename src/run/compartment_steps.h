@@ -77,11 +77,17 @@ int gs_comp_steps_run(gs_comp_steps *s, const gs_stretch *st, size_t nst, double
  * (gs_ode.jumped).  On success *t = stop. */
 int gs_comp_steps_advance(gs_comp_steps *s, double *t, double stop, double *Y, int jumped,
                           gs_error *err);
-/* During done(k) for a stretch with mark set: the compartments' marks at
- * its end (ncomp * GS_INTEGRATOR_MARK values). */
+/* During done(k) for a stretch with mark set (and after the run, for its
+ * last stretch): the compartments' marks at its end (ncomp *
+ * GS_INTEGRATOR_MARK values). */
 const double *gs_comp_steps_marks(const gs_comp_steps *s, size_t k);
 /* A resumed run: every compartment's integrator takes its mark. */
 void gs_comp_steps_resume(gs_comp_steps *s, const double *marks);
+/* The same for compartments [lo, hi) only (those a rank takes over). */
+void gs_comp_steps_resume_comps(gs_comp_steps *s, const double *marks, size_t lo, size_t hi);
+/* Seconds spent passing complete stretches to done_fn (and, on ranks,
+ * sending or receiving output times' blocks). */
+double gs_comp_steps_output_seconds(const gs_comp_steps *s);
 /* Steps and evaluations summed over the compartments (each evaluation is
  * one compartment's rates); last_step: the last compartment's. */
 void gs_comp_steps_stats(const gs_comp_steps *s, gs_integrator_stats *st);

@@ -30,7 +30,20 @@ typedef struct {
   gs_comp_ranks *ranks; /* on several MPI ranks */
   int have_total;       /* on several ranks, after the run: total, every rank's steps */
   gs_integrator_stats total;
+  size_t base; /* the first stretch of the piece of the run in progress */
+  /* rebalancing on ranks (NULL: none): per compartment its task seconds
+   * at the last decision, and rank 0's output seconds; the costs since then
+   * (compartments, then each rank's own work); a split's lo */
+  double *cost_mark, out_mark, *spent;
+  size_t *split_lo;
+  long moves_tried; /* GRANSIM_TEST_MOVE_COMPARTMENTS only */
 } comps_t;
+
+/* tests only: a move at every decision (see decide) */
+static int test_moves(void) {
+  const char *e = getenv("GRANSIM_TEST_MOVE_COMPARTMENTS");
+  return e && strcmp(e, "0") != 0;
+}
 
 static int comps_create(gs_run *run, void **self, gs_error *err) {
   comps_t *s = gs_calloc(1, sizeof *s, err);
@@ -42,6 +55,14 @@ static int comps_create(gs_run *run, void **self, gs_error *err) {
   if (run->dist.size > 1) {
     rc = gs_run_agree(&run->dist, rc, err);
     if (!rc) rc = gs_comp_ranks_create(s->cs, &run->c->model, &run->dist, &s->ranks, err);
+    const size_t ncomp = run->c->model.grid.ncomp;
+    if (!rc && run->c->rebalance >= 0) {
+      s->cost_mark = gs_calloc(ncomp, sizeof(double), err);
+      s->spent = gs_calloc(ncomp + (size_t)run->dist.size, sizeof(double), err);
+      s->split_lo = gs_calloc((size_t)run->dist.size + 1, sizeof(size_t), err);
+      if (!s->cost_mark || !s->spent || !s->split_lo) rc = GS_ENOMEM;
+    }
+    rc = gs_run_agree(&run->dist, rc, err);
   }
   return rc;
 }
@@ -82,7 +103,7 @@ static int cut_stretches(comps_t *s, gs_error *err) {
 static int stretch_done(void *ctx, size_t k, double t, const double *Y, gs_error *err) {
   comps_t *s = ctx;
   gs_run *run = s->run;
-  if (!s->is_output[k]) return GS_OK;
+  if (!s->is_output[s->base + k]) return GS_OK;
   const double start = gs_run_now();
   memcpy(run->resume_state, gs_comp_steps_marks(s->cs, k), run->view.nresume * sizeof(double));
   int rc = gs_run_output_time(run, t, Y, err);
@@ -110,6 +131,83 @@ static void total_stats(comps_t *s, const gs_run *run) {
   s->have_total = 1;
 }
 
+/* Where the piece of the run that starts at stretch `from` ends: on ranks
+ * that rebalance, at the first output time at or after 1/16, 1/8, 1/4 and
+ * 1/2 of the stretches, when there are at least CUT_MIN_STRETCHES.  Every
+ * cut drains the ranks' pipeline (a rank starts a stretch about when the
+ * rank before has finished it, so at a cut each waits about one stretch of
+ * the other's work), so the cuts are few and only where a stretch is a
+ * small part of the run; costs change fastest early (filling, the spray's
+ * onset), and a doubling schedule follows a change at any time within a
+ * doubling. */
+#define CUT_MIN_STRETCHES 64
+static size_t piece_end(const comps_t *s, size_t from) {
+  if (!s->spent || (s->nst < CUT_MIN_STRETCHES && !test_moves())) return s->nst;
+  size_t target = s->nst; /* the smallest of the fractions past from */
+  for (size_t f = 16; f >= 2 && target == s->nst; f /= 2)
+    if (s->nst / f > from) target = s->nst / f;
+  if (test_moves()) target = from + 1; /* tests: every output time */
+  for (size_t k = target - 1; k + 1 < s->nst; k++)
+    if (s->is_output[k]) return k + 1;
+  return s->nst;
+}
+
+/* Between two pieces of the run, on every rank (collective): each rank's
+ * task seconds per compartment since the last decision (waits excluded) and
+ * rank 0's output seconds, summed over the ranks; when the contiguous split
+ * whose slowest rank is cheapest for those costs (gs_dist_best_split)
+ * beats the measured slowest rank by solver.rebalance, the ranks take it.
+ * The piece ended at an output time, where rank 0 holds the whole state
+ * and every compartment's integrator mark: both go to every rank, and a
+ * compartment a rank takes over resumes from its mark, as a run resumed
+ * there would; its steps are those of one process. */
+static void rebalance(comps_t *s, gs_run *run) {
+  if (!s->spent) return;
+  gs_dist *d = &run->dist;
+  const gs_model *m = &run->c->model;
+  const size_t ncomp = m->grid.ncomp, nr = (size_t)d->size;
+  const size_t lo = d->lo[d->rank], hi = d->lo[d->rank + 1];
+  memset(s->spent, 0, (ncomp + nr) * sizeof(double));
+  for (size_t j = lo; j < hi; j++) {
+    double rates, tasks;
+    gs_comp_steps_comp_seconds(s->cs, j, &rates, &tasks);
+    s->spent[j] = tasks - s->cost_mark[j];
+    s->cost_mark[j] = tasks;
+  }
+  const double out = gs_comp_steps_output_seconds(s->cs);
+  s->spent[ncomp + (size_t)d->rank] = out - s->out_mark;
+  s->out_mark = out;
+  gs_parallel_sum(s->spent, ncomp + nr); /* zeros elsewhere: exact */
+  double slowest = 0;
+  for (size_t r = 0; r < nr; r++) {
+    double block = s->spent[ncomp + r];
+    for (size_t j = d->lo[r]; j < d->lo[r + 1]; j++) block += s->spent[j];
+    slowest = fmax(slowest, block);
+  }
+  const double largest = gs_dist_best_split(d, s->spent, s->spent + ncomp, s->split_lo);
+  if (test_moves()) {
+    /* tests only: one block boundary moved at every decision, whatever the
+     * costs, so that tests can check that moves change no result */
+    size_t *nlo = s->split_lo;
+    memcpy(nlo, d->lo, (nr + 1) * sizeof *nlo);
+    const size_t b = 1 + (size_t)(s->moves_tried++ % (long)(nr - 1));
+    if (nlo[b] - nlo[b - 1] > 1) nlo[b]--;
+    else if (nlo[b + 1] - nlo[b] > 1) nlo[b]++;
+  } else if (!(largest < (1 - run->c->rebalance) * slowest)) {
+    return;
+  }
+  if (!memcmp(s->split_lo, d->lo, (nr + 1) * sizeof *d->lo)) return;
+  gs_parallel_broadcast(run->Y, m->nstate + m->nledger);
+  gs_parallel_broadcast(run->resume_state, run->view.nresume);
+  gs_dist_resplit(d, s->split_lo);
+  gs_comp_ranks_resplit(s->ranks, d->lo);
+  const size_t nlo = d->lo[d->rank], nhi = d->lo[d->rank + 1];
+  /* the compartments this rank takes over, before and after its old block */
+  if (nlo < lo) gs_comp_steps_resume_comps(s->cs, run->resume_state, nlo, lo < nhi ? lo : nhi);
+  if (nhi > hi) gs_comp_steps_resume_comps(s->cs, run->resume_state, hi > nlo ? hi : nlo, nhi);
+  run->rep->rebalanced++;
+}
+
 static int comps_advance(void *self, gs_run *run, gs_error *err) {
   comps_t *s = self;
   int rc = cut_stretches(s, err);
@@ -119,7 +217,13 @@ static int comps_advance(void *self, gs_run *run, gs_error *err) {
   s->running = 1;
   /* on several ranks only rank 0 holds the whole state of an output time */
   const int observes = run->dist.rank == 0;
-  rc = gs_comp_steps_run(s->cs, s->st, s->nst, run->Y, observes ? stretch_done : NULL, s, err);
+  for (size_t from = 0; !rc && from < s->nst;) {
+    const size_t to = piece_end(s, from);
+    s->base = from;
+    rc = gs_comp_steps_run(s->cs, s->st + from, to - from, run->Y, observes ? stretch_done : NULL, s, err);
+    if (!rc && to < s->nst) rebalance(s, run);
+    from = to;
+  }
   s->running = 0;
   if (s->ranks) {
     total_stats(s, run);
@@ -185,6 +289,9 @@ static void comps_free(void *self) {
   }
   gs_comp_steps_free(s->cs);
   gs_comp_ranks_free(s->ranks);
+  free(s->cost_mark);
+  free(s->spent);
+  free(s->split_lo);
   free(s->st);
   free(s->is_output);
   free(s);
