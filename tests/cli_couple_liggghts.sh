@@ -153,20 +153,31 @@ assert led[:, 0].max() == 0 and abs(S[-1] / S[0] - 1) < 1e-12
 assert N[-1].sum() < 0.9 * N[0].sum()  # the DEM's kernel aggregated
 PY
 
-# Killed with its LIGGGHTS (the whole process group, as a job's end kills it) once cycle 2's DEM
-# stage is running, then --resume through --launcher: cycle 2's stage runs again from its start
-# state and the run ends with the uninterrupted run's files (but dem_wall).
+# SIGKILL to gransim's process group (it, sh and mpirun) once cycle 2's DEM stage is running;
+# LIGGGHTS, in a process group of its own under Open MPI, ends when its input does, after the
+# chunk it was given: the test waits for every process working in the stage's folder to end.
+# Then --resume through --launcher: cycle 2's stage runs again from its start state and the run
+# ends with the uninterrupted run's files (but dem_wall).
 printf '#!/bin/sh\necho "$@" >> "%s/launched"\nexec env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun -np 1 "$@"\n' "$W" > "$W/launch"
 chmod +x "$W/launch"
 setsid "$BIN" couple "$W/tw.yaml" --out "$W/k1" --ranks 1 --threads 1 --quiet 2> "$W/k1.err" &
 pid=$!
-until [ -e "$W/k1/cycle-2.partial/liggghts/log.liggghts" ]; do
+until grep -qs "^gransim: chunk done" "$W/k1/cycle-2.partial/liggghts/log.liggghts"; do # mid-stage
   kill -0 "$pid" 2>/dev/null || fail "the run ended before it could be killed: $(cat "$W/k1.err")"
   sleep 0.01
 done
 kill -9 -- "-$pid" 2>/dev/null || true
 wait "$pid" 2>/dev/null || true
-while kill -0 -- "-$pid" 2>/dev/null; do sleep 0.05; done # its mpirun and LIGGGHTS gone too
+while kill -0 -- "-$pid" 2>/dev/null; do sleep 0.05; done
+stage=$(cd "$W/k1/cycle-2.partial/liggghts" && pwd -P)
+in_stage() { # a process whose working directory is the killed stage's LIGGGHTS folder
+  local p
+  for p in /proc/[0-9]*; do [ "$(readlink "$p/cwd" 2>/dev/null)" = "$stage" ] && return 0; done
+  return 1
+}
+for i in $(seq 600); do in_stage || break; sleep 0.1; done
+in_stage && fail "LIGGGHTS of the killed run still runs in $stage after 60 s"
+echo "cli_couple_liggghts: killed in cycle 2's DEM stage; its LIGGGHTS ended within $(((i - 1) / 10)).$(((i - 1) % 10)) s"
 [ -d "$W/k1/cycle-1" ] && [ -d "$W/k1/cycle-2.partial" ] && [ ! -e "$W/k1/cycle-2" ] || fail "not killed in cycle 2's DEM stage"
 "$BIN" couple "$W/tw.yaml" --out "$W/k1" --launcher "$W/launch" --threads 1 --resume 2> "$W/k1r.err" ||
   { cat "$W/k1r.err"; fail "the resumed run"; }
