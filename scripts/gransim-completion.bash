@@ -32,7 +32,7 @@ _gransim() {
     dem) opts="--out --check --quiet --threads --engine --ranks --launcher --dry-run --reduce --help" ;;
     dem-reduce) opts="--out --impacts --E --nu --rho --e --wall-E --wall-nu --contact-time --min-speed --edges --measure --prefix --contacts --help" ;;
     compartments) opts="--out --clusters --max-clusters --time-step --start --velocity-weight --seed --help" ;;
-    couple) opts="--out --check --resume --quiet --threads --help" ;;
+    couple) opts="--out --check --resume --quiet --threads --ranks --launcher --help" ;;
     geometry) opts="--out --help" ;;
     *) return ;;
   esac

@@ -12,7 +12,8 @@
 static void couple_usage(FILE *fp) {
   fprintf(fp,
           "usage: gransim couple CASE --out DIR [--resume] [--quiet] [--threads N]\n"
-          "       gransim couple --check CASE\n\n"
+          "                      [--ranks N] [--launcher CMD]\n"
+          "       gransim couple --check CASE [--ranks N] [--launcher CMD]\n\n"
           "Runs a coupled case (PBM keys, a `dem:` section and `coupling: {mode: one_way, ...}`):\n"
           "the DEM with size classes derived from the PBM grid until its steady-state detector\n"
           "fires, then the PBM with the DEM's tables as its `table` kernel and `dem_impact`\n"
@@ -22,19 +23,25 @@ static void couple_usage(FILE *fp) {
           "  result.h5, summary.csv  the PBM run\n"
           "--resume skips a complete DEM stage and resumes the PBM from its partial files.\n"
           "--check validates CASE (derived classes, DEM case, PBM case) without running it.\n"
-          "--threads sets the OpenMP threads of both stages (default: OMP_NUM_THREADS or all).\n");
+          "--threads sets the OpenMP threads of both stages (default: OMP_NUM_THREADS or all).\n"
+          "With `engine: liggghts` in the DEM section every DEM stage runs `mpirun -np N liggghts`\n"
+          "in its folder's liggghts/ (--ranks N, default the machine's cores; --launcher CMD\n"
+          "replaces `mpirun -np N`, e.g. \"srun -n 64\"), as `gransim dem` does; with the embedded\n"
+          "engine --ranks and --launcher are refused.\n");
 }
 
-int gs_cmd_couple_check(const char *path) {
+static int couple_check(const char *path, const gs_couple_options *opt) {
   gs_error err = {0};
   char desc[1024];
-  if (gs_couple_check(path, desc, sizeof desc, &err)) {
+  if (gs_couple_check_options(path, opt, desc, sizeof desc, &err)) {
     fprintf(stderr, "gransim: %s\n", err.msg);
     return 1;
   }
   printf("%s: valid. %s\n", path, desc);
   return 0;
 }
+
+int gs_cmd_couple_check(const char *path) { return couple_check(path, NULL); }
 
 int gs_cmd_couple(int argc, char **argv) {
   const char *path = NULL;
@@ -44,6 +51,7 @@ int gs_cmd_couple(int argc, char **argv) {
       {"help", no_argument, NULL, GS_CLI_HELP}, {"out", required_argument, NULL, 'o'},
       {"check", no_argument, NULL, 'c'},        {"resume", no_argument, NULL, 'r'},
       {"quiet", no_argument, NULL, 'q'},        {"threads", required_argument, NULL, 't'},
+      {"ranks", required_argument, NULL, 'n'},  {"launcher", required_argument, NULL, 'l'},
       {0}};
   gs_cli_begin();
   for (int o, n; (o = gs_cli_next(argc, argv, opts)) != -1;) switch (o) {
@@ -52,6 +60,10 @@ int gs_cmd_couple(int argc, char **argv) {
     case 'c': check = 1; break;
     case 'r': opt.resume = 1; break;
     case 'q': opt.progress = 0; break;
+    case 'l': opt.launcher = optarg; break;
+    case 'n':
+      if (gs_cli_positive("couple", "ranks", optarg, &opt.ranks)) return 2;
+      break;
     case 't':
       if (gs_cli_positive("couple", "threads", optarg, &n)) return 2;
       omp_set_num_threads(n);
@@ -69,7 +81,7 @@ int gs_cmd_couple(int argc, char **argv) {
     couple_usage(stderr);
     return 2;
   }
-  if (check) return gs_cmd_couple_check(path);
+  if (check) return couple_check(path, &opt);
   /* each rank would run its own DEM stage into the same folder */
   if (gs_parallel_size() > 1) {
     if (gs_parallel_rank() == 0)

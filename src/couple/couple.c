@@ -270,6 +270,26 @@ static int engine_check(const couple *k, const gs_dem_case *dc, const char *writ
   return gs_lig_check(dc, err) ? dem_error(k, written, err) : GS_OK;
 }
 
+/* --ranks and --launcher start LIGGGHTS: on the embedded engine they could
+ * not act, so they are refused (as `gransim dem` refuses --dry-run there),
+ * at the line of dem.engine, or of the DEM case's `dem` map without it. */
+static int engine_options(const couple *k, const gs_dem_case *dc, const gs_couple_options *opt, gs_error *err) {
+  if (!opt || (opt->ranks <= 0 && !opt->launcher) || gs_dem_case_engine(dc) == 1) return GS_OK;
+  gs_cfg_node *map = gs_cfg_kind_of(k->dem) == GS_CFG_MAP ? gs_cfg_get(k->dem, "dem") : NULL;
+  gs_cfg_node *eng = gs_cfg_kind_of(map) == GS_CFG_MAP ? gs_cfg_get(map, "engine") : NULL;
+  const gs_cfg_node *at = eng ? eng : map;
+  char value[160] = "not given, so 'embedded'";
+  if (eng && gs_cfg_scalar(eng)) snprintf(value, sizeof value, "'%.120s'", gs_cfg_scalar(eng));
+  const int both = opt->ranks > 0 && opt->launcher;
+  return gs_error_set(err, GS_EINPUT,
+                      "%s:%d: dem: dem.engine is %s: %s%s%s %s for DEM stages on LIGGGHTS (its MPI ranks and how they "
+                      "start) and cannot act on the embedded engine, which runs on --threads; set dem.engine: liggghts "
+                      "or leave %s out",
+                      at ? gs_cfg_file(at) : k->path, at ? gs_cfg_line(at) : k->dem_line, value,
+                      opt->ranks > 0 ? "--ranks" : "", both ? " and " : "", opt->launcher ? "--launcher" : "",
+                      both ? "are" : "is", both ? "them" : "it");
+}
+
 /* Placeholder tables of the derived classes, for `check` (no DEM run). */
 int gs_couple_write_placeholders(const couple *k, const char *kernel, const char *impacts, gs_error *err) {
   FILE *a = fopen(kernel, "w"), *b = fopen(impacts, "w");
@@ -296,6 +316,10 @@ int gs_couple_write_placeholders(const couple *k, const char *kernel, const char
 }
 
 int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
+  return gs_couple_check_options(path, NULL, desc, n, err);
+}
+
+int gs_couple_check_options(const char *path, const gs_couple_options *opt, char *desc, size_t n, gs_error *err) {
   couple k;
   int rc = gs_couple_load(path, &k, 0, err);
   char tmp[] = "/tmp/gransim-couple-XXXXXX", dcase[64], kt[64], it[64];
@@ -312,7 +336,8 @@ int gs_couple_check(const char *path, char *desc, size_t n, gs_error *err) {
   if (!rc) {
     gs_dem_case *dc = gs_dem_case_load(dcase, err);
     if (!dc) rc = dem_error(&k, dcase, err);
-    else if (!(rc = engine_check(&k, dc, dcase, err))) gs_dem_case_describe(dc, dd, sizeof dd);
+    else if (!(rc = engine_check(&k, dc, dcase, err)) && !(rc = engine_options(&k, dc, opt, err)))
+      gs_dem_case_describe(dc, dd, sizeof dd);
     gs_dem_case_free(dc);
   }
   if (!rc) rc = gs_couple_write_placeholders(&k, kt, it, err);
@@ -403,8 +428,9 @@ int gs_couple_exists(const char *dir, const char *name) {
  * class fractions by number, NULL for the case's own), classes.csv, the run
  * stopped steady.collect after the detector fired, the case rewritten as run
  * and steady.csv.  rec: what the cycle table records. */
-int gs_couple_dem_stage(couple *k, const char *part, const double *fractions, int progress,
+int gs_couple_dem_stage(couple *k, const char *part, const double *fractions, const gs_couple_options *opt,
                         gs_couple_dem_record *rec, gs_error *err) {
+  const int progress = opt->progress;
   char dcase[4400];
   int rc = GS_OK;
   memset(rec, 0, sizeof *rec);
@@ -422,7 +448,7 @@ int gs_couple_dem_stage(couple *k, const char *part, const double *fractions, in
               k->s.max_time, k->s.collect, part);
     gs_dem_observer ob = {.sample = stop_when_collected, .user = &ss};
     gs_dem_case_set_observer(dc, &ob);
-    const gs_lig_options lig = {.progress = progress};
+    const gs_lig_options lig = {.progress = progress, .ranks = opt->ranks, .launcher = opt->launcher};
     rc = gs_dem_case_engine(dc) == 1 ? gs_lig_case_run(dc, part, &lig, err) : gs_dem_case_run(dc, part, progress, err);
     rec->steps = ss.steps;
     rec->e = k->s.e_now;
@@ -450,7 +476,7 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
   char desc[1024];
   couple k;
   memset(&k, 0, sizeof k);
-  int rc = gs_couple_check(path, desc, sizeof desc, err);
+  int rc = gs_couple_check_options(path, opt, desc, sizeof desc, err);
   if (rc) return rc;
   rc = gs_couple_load(path, &k, opt->progress, err);
   if (!rc && k.s.two_way) rc = gs_couple_two_way(&k, path, opt, err);
@@ -472,7 +498,7 @@ int gs_couple_run(const char *path, const gs_couple_options *opt, gs_error *err)
     nftw(dem, gs_couple_rm_entry, 16, FTW_DEPTH | FTW_PHYS);
     if (mkdir(part, 0777)) rc = gs_error_set(err, GS_EIO, "%s: cannot create: %s", part, strerror(errno));
     gs_couple_dem_record rec;
-    if (!rc) rc = gs_couple_dem_stage(&k, part, NULL, opt->progress, &rec, err);
+    if (!rc) rc = gs_couple_dem_stage(&k, part, NULL, opt, &rec, err);
     if (!rc && opt->progress) fprintf(stderr, "gransim couple: DEM steady at t = %g s; tables in %s\n", rec.t_steady, dem);
     /* the stage is complete only once renamed: a kill before leaves dem.partial */
     if (!rc && rename(part, dem)) rc = gs_error_set(err, GS_EIO, "%s: cannot rename to %s: %s", part, dem, strerror(errno));

@@ -84,7 +84,9 @@ typedef struct {
 
 int gs_couple_load(const char *path, couple *k, int progress, gs_error *err);
 void gs_couple_free(couple *k);
-int gs_couple_dem_stage(couple *k, const char *part, const double *fractions, int progress,
+struct gs_couple_options;
+/* opt: progress, and the ranks and launcher of a LIGGGHTS stage */
+int gs_couple_dem_stage(couple *k, const char *part, const double *fractions, const struct gs_couple_options *opt,
                         gs_couple_dem_record *rec, gs_error *err);
 int gs_couple_point_at_tables(gs_cfg_node *root, const char *kernel, const char *impacts, gs_error *err);
 int gs_couple_write_classes(const couple *k, const char *dir, gs_error *err);
@@ -97,7 +99,6 @@ double gs_couple_now(void);
 int gs_couple_write_placeholders(const couple *k, const char *kernel, const char *impacts, gs_error *err);
 
 /* twoway.c: coupling.trigger, and the bi-directional loop into opt->out_dir. */
-struct gs_couple_options;
 int gs_couple_read_trigger(gs_cfg_node *coupling, gs_couple_settings *s, gs_error *err);
 /* Refuses a trigger that cannot fire within the process time [t0, t1] (cp: the coupling section). */
 int gs_couple_check_trigger(gs_cfg_node *cp, const gs_couple_settings *s, double t0, double t1, gs_error *err);

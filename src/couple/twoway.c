@@ -506,7 +506,7 @@ int gs_couple_two_way(couple *k, const char *path, const gs_couple_options *opt,
       if (!rc && opt->progress && !isnan(k->s.e_now))
         fprintf(stderr, "gransim couple: restitution of %s: %.4g (volume-weighted over the components)\n",
                 k->s.material, k->s.e_now);
-      if (!rc) rc = gs_couple_dem_stage(k, part, fr, opt->progress, &rec, err);
+      if (!rc) rc = gs_couple_dem_stage(k, part, fr, opt, &rec, err);
       rec.l = k->s.scale_n ? cbrt(total_number(k, Y) / (double)k->s.scale_n) : 1;
       rec.geom = k->s.geom_now;
       if (!rc && k->s.scale_n) {
