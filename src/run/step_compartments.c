@@ -137,15 +137,18 @@ static void total_stats(comps_t *s, const gs_run *run) {
  * cut drains the ranks' pipeline (a rank starts a stretch about when the
  * rank before has finished it, so at a cut each waits about one stretch of
  * the other's work), so the cuts are few and only where a stretch is a
- * small part of the run; costs change fastest early (filling, the spray's
- * onset), and a doubling schedule follows a change at any time within a
- * doubling. */
+ * small part of the run.  A decision applies the last piece's costs to the
+ * next, so it lags costs that move (the filling of a long chain, where
+ * cutting every 1/8 gained no more than its cuts cost); it is exact once
+ * they settle, and the doubling schedule keeps deciding on ever longer,
+ * steadier windows. */
 #define CUT_MIN_STRETCHES 64
+static const size_t cut_at[] = {1, 2, 4, 8}; /* sixteenths of the run */
 static size_t piece_end(const comps_t *s, size_t from) {
   if (!s->spent || (s->nst < CUT_MIN_STRETCHES && !test_moves())) return s->nst;
-  size_t target = s->nst; /* the smallest of the fractions past from */
-  for (size_t f = 16; f >= 2 && target == s->nst; f /= 2)
-    if (s->nst / f > from) target = s->nst / f;
+  size_t target = s->nst; /* the first of the fractions past from */
+  for (size_t i = 0; i < sizeof cut_at / sizeof *cut_at && target == s->nst; i++)
+    if (s->nst * cut_at[i] / 16 > from) target = s->nst * cut_at[i] / 16;
   if (test_moves()) target = from + 1; /* tests: every output time */
   for (size_t k = target - 1; k + 1 < s->nst; k++)
     if (s->is_output[k]) return k + 1;
