@@ -1,6 +1,6 @@
 # aggregation method fft with rank_tolerance: the run log and result.h5 say
 # the rank the tolerance chose (a continuum Brownian kernel is exactly rank
-# 3); a run whose kernel has an exact form says nothing of ranks; gransim
+# 3) and how the form was built (cross approximation, error over every entry); a run whose kernel has an exact form says nothing of ranks; gransim
 # check refuses rank_tolerance with method pairs at its line.
 source "$(dirname "$0")/cli-lib.sh" "$@"
 
@@ -11,7 +11,8 @@ mechanisms:
      kernel: {type: brownian, beta0: 0.05}}
 output: {end: 1}")
 run_rc 0 "$BIN" run "$lowrank" --out "$WORK/out" --threads 1
-stderr_has "mechanisms[0] (aggregation): method fft with a low-rank kernel form of rank 3"
+stderr_has "mechanisms[0] (aggregation): method fft with a low-rank kernel form of rank 3" \
+  "adaptive cross approximation of" "error over all entries"
 h5dump -a /mechanism_notes "$WORK/out/result.h5" | grep -qF "low-rank kernel form of rank 3" ||
   fail "result.h5 has no attribute mechanism_notes naming rank 3"
 
