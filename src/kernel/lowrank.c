@@ -23,11 +23,11 @@
  * decides: the achieved error of every truncation q_1..q_r is measured
  * against the kernel's rows (all n^2 entries up to GS_LOWRANK_EXACT_MAX_CELLS
  * cells, O(n^2 k) flops and no O(n^3); above, GS_LOWRANK_SAMPLE_ROWS random
- * rows), and the fewest terms within tol are kept.  Where even all terms
- * miss tol the cross approximation goes on with eps / 10 (and more steps in
- * a row); where it reaches GS_LOWRANK_MAX_TERMS first, the dense
- * eigendecomposition (lowrank_dense.c) takes over on grids it can hold,
- * else the form is refused. */
+ * rows), and the fewest terms within tol are kept.  Where all terms together
+ * miss tol / GS_ACA_MARGIN, the cross approximation goes on with eps / 10
+ * (and twice the steps in a row) and is checked again; where it reaches
+ * aca_terms_cap first, the dense eigendecomposition (lowrank_dense.c) takes
+ * over on grids it can hold, else the form is refused. */
 #include <gsl/gsl_randist.h>
 #include <gsl/gsl_rng.h>
 #include <math.h>
