@@ -56,13 +56,14 @@ typedef struct {
   double *col;
 } sym_t;
 
-/* rows a0 .. a0 + m - 1 of S into out (m x n), m <= BLOCK */
-static int sym_rows(const sym_t *s, size_t a0, size_t m, double *out, gs_error *err) {
+/* rows a0 .. a0 + m - 1 of S, columns c0 .. n - 1, into out (m x n; the
+ * columns below c0 left alone), m <= BLOCK */
+static int sym_rows(const sym_t *s, size_t a0, size_t m, size_t c0, double *out, gs_error *err) {
   const size_t n = s->n;
-  for (size_t i = 0; i < m; i++) s->k->type->row(s->k->self, s->comp, a0 + i, 0, n, out + i * n);
-  for (size_t b = 0; b < n; b++) s->k->type->row(s->k->self, s->comp, b, a0, a0 + m, s->col + b * m);
+  for (size_t i = 0; i < m; i++) s->k->type->row(s->k->self, s->comp, a0 + i, c0, n, out + i * n + c0);
+  for (size_t b = c0; b < n; b++) s->k->type->row(s->k->self, s->comp, b, a0, a0 + m, s->col + b * m);
   for (size_t i = 0; i < m; i++)
-    for (size_t b = 0; b < n; b++) {
+    for (size_t b = c0; b < n; b++) {
       const double v = 0.5 * (out[i * n + b] + s->col[b * m + i]);
       if (!isfinite(v))
         return gs_error_set(err, GS_ENUMERIC, "the kernel is not finite between cells %zu and %zu", a0 + i, b);
@@ -144,7 +145,7 @@ static int aca_run(aca_t *A, const sym_t *s, double eps, int hits, int *converge
   *converged = 0;
   while (!rc && A->nused < n && A->k < A->max_terms) {
     const size_t i = A->next;
-    if ((rc = sym_rows(s, i, 1, A->r, err))) break;
+    if ((rc = sym_rows(s, i, 1, 0, A->r, err))) break;
     for (size_t b = 0; b < n; b++) A->scale = fmax(A->scale, fabs(A->r[b]));
     for (int l = 0; l < A->k; l++) {
       const double f = A->U[(size_t)l * n + i], *v = A->V + (size_t)l * n;
@@ -161,7 +162,7 @@ static int aca_run(aca_t *A, const sym_t *s, double eps, int hits, int *converge
       if (A->nused < n) A->next = random_unused(A);
       continue;
     }
-    if ((rc = sym_rows(s, j, 1, A->c, err)) || (rc = aca_grow(A, err))) break;
+    if ((rc = sym_rows(s, j, 1, 0, A->c, err)) || (rc = aca_grow(A, err))) break;
     for (int l = 0; l < A->k; l++) {
       const double f = A->V[(size_t)l * n + j], *u = A->U + (size_t)l * n;
       for (size_t b = 0; b < n; b++) A->c[b] -= f * u[b];
@@ -265,7 +266,9 @@ static int recompress(const aca_t *A, double **mu_out, double **q_out, int *p_ou
 }
 
 /* err2[r], r = 0..p: the squared Frobenius norm of S - sum_{t<r} mu_t q_t
- * q_t^T over the rows `rows` (NULL: all n rows); blk: BLOCK x n scratch */
+ * q_t^T over the rows `rows` (NULL: all n rows, each residual symmetric, so
+ * its upper triangle counted twice: half the kernel evaluations); blk:
+ * BLOCK x n scratch */
 static int residual_norms(const sym_t *s, const double *mu, const double *q, int p, const size_t *rows, size_t nrows,
                           double *blk, double *err2, gs_error *err) {
   const size_t n = s->n;
@@ -273,19 +276,24 @@ static int residual_norms(const sym_t *s, const double *mu, const double *q, int
   const size_t total = rows ? nrows : n;
   for (size_t i0 = 0; i0 < total;) {
     const size_t a0 = rows ? rows[i0] : i0, m = rows ? 1 : (total - i0 < BLOCK ? total - i0 : BLOCK);
-    int rc = sym_rows(s, a0, m, blk, err);
+    int rc = sym_rows(s, a0, m, rows ? 0 : a0, blk, err);
     if (rc) return rc;
     for (size_t i = 0; i < m; i++) {
-      double *res = blk + i * n;
-      err2[0] += dot(res, res, n);
+      /* whole row: entries from 0, weight 1; upper triangle: the diagonal
+       * apart (weight 1), the rest from a + 1 (weight 2) */
+      const size_t a = a0 + i, b0 = rows ? 0 : a + 1;
+      const double w = rows ? 1 : 2;
+      double *res = blk + i * n, diag = rows ? 0 : res[a];
+      err2[0] += w * dot(res + b0, res + b0, n - b0) + diag * diag;
       for (int t = 0; t < p; t++) {
-        const double f = mu[t] * q[(size_t)t * n + a0 + i], *qt = q + (size_t)t * n;
+        const double f = mu[t] * q[(size_t)t * n + a], *qt = q + (size_t)t * n;
         double e = 0;
-        for (size_t b = 0; b < n; b++) {
+        for (size_t b = b0; b < n; b++) {
           res[b] -= f * qt[b];
           e += res[b] * res[b];
         }
-        err2[t + 1] += e;
+        diag -= f * qt[a];
+        err2[t + 1] += w * e + (rows ? 0 : diag * diag);
       }
     }
     i0 += m;
