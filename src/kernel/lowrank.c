@@ -357,7 +357,7 @@ int gs_kernel_lowrank_build(const gs_kernel *k, size_t ncells, size_t comp, doub
     out->lambda = gs_malloc((size_t)(found ? found : 1) * sizeof(double), err);
     out->vec = gs_malloc((size_t)(found ? found : 1) * n * sizeof(double), err);
     if (!out->lambda || !out->vec) rc = GS_ENOMEM;
-    if (!rc) {
+    if (!rc && found > 0) {
       memcpy(out->lambda, mu, (size_t)found * sizeof(double));
       memcpy(out->vec, q, (size_t)found * n * sizeof(double));
     }

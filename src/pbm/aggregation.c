@@ -874,7 +874,7 @@ static int agg_describe(void *self, char *msg, size_t n) {
   if (!rank) return 0;
   char how[160];
   gs_agg_fft_rank_how(A->fft, how, sizeof how);
-  snprintf(msg, n, "method fft with a low-rank kernel form of rank %d (truncation error %.2g of the kernel matrix, "
+  snprintf(msg, n, "method fft with a low-rank kernel form of rank %d (achieved error %.2g of the kernel matrix, "
            "Frobenius; %s)", rank, e, how);
   return 1;
 }
