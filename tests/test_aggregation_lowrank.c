@@ -458,6 +458,23 @@ static void test_large(void) {
              lr.cross_terms, o.rel_err, o.diff, o.nerr, o.verr);
       fprintf(stderr, "%s on 6400 cells: form built in %.3g s, error from %d sampled rows\n", cases[i].name, t_build,
               lr.sampled_rows);
+      /* the estimate against the error over every entry (n^2), and as a
+       * statistic: 16 other samples of 256 rows, their mean within 4
+       * standard errors of the truth */
+      double exact = NAN, est[16], mean = 0, var = 0;
+      CHECK(gs_kernel_lowrank_error(&f.k, f.c.model.grid.ncells, 0, &lr, 0, 0, &exact, &err) == 0);
+      for (int r = 0; r < 16; r++) {
+        CHECK(gs_kernel_lowrank_error(&f.k, f.c.model.grid.ncells, 0, &lr, GS_LOWRANK_SAMPLE_ROWS, 1000 + (unsigned)r,
+                                      &est[r], &err) == 0);
+        mean += est[r] / 16;
+      }
+      for (int r = 0; r < 16; r++) var += (est[r] - mean) * (est[r] - mean) / 15;
+      const double se = sqrt(var / 16);
+      fprintf(stderr, "  error over every entry %.4e; the build's estimate %.4e; 16 other samples: mean %.4e, sd %.2e\n",
+              exact, lr.rel_err, mean, sqrt(var));
+      CHECK(exact <= cases[i].tol);
+      CHECK(fabs(lr.rel_err - exact) <= 0.5 * exact);
+      CHECK(fabs(mean - exact) <= 4 * se + 1e-3 * exact);
       CHECK(o.rank == lr.rank && o.rank > 0 && !lr.dense);
       CHECK(lr.sampled_rows == GS_LOWRANK_SAMPLE_ROWS);
       CHECK(o.rel_err <= cases[i].tol);

@@ -49,6 +49,11 @@ int gs_kernel_lowrank_build(const gs_kernel *k, size_t ncells, size_t comp, doub
 int gs_kernel_lowrank_build_dense(const gs_kernel *k, size_t ncells, size_t comp, double tol,
                                   gs_kernel_lowrank *out, gs_error *err);
 void gs_kernel_lowrank_free(gs_kernel_lowrank *lr);
+/* The achieved relative Frobenius error of lr for compartment comp of k,
+ * over every entry (nrows 0) or estimated over nrows whole rows drawn at
+ * random with the seed (the build's own measure; for tests). */
+int gs_kernel_lowrank_error(const gs_kernel *k, size_t ncells, size_t comp, const gs_kernel_lowrank *lr, int nrows,
+                            unsigned long seed, double *rel_err, gs_error *err);
 
 /* Shared by both builds: all eigenpairs of the symmetric n x n matrix A
  * (destroyed; LAPACK dsyevr), w ascending, z column-major; and the indices
