@@ -8,7 +8,9 @@
  * The pair scheme keeps per axis a table of where each sum of two pivots
  * lands (n^2 entries): in 1-D it runs up to 4096 cells only (128 MB).
  * Then low-rank kernel forms (rank_tolerance 1e-8) against the pairs in 2-D:
- * Brownian (free molecular) and Madec, with the set-up time and the rank.
+ * Brownian (free molecular) and Madec, 256 to 16 384 cells, with the set-up
+ * time, the rank, and the form's build by cross approximation against the
+ * dense eigendecomposition (up to 4 096 cells) in the same run.
  * Then non-uniform grids (the near/far split, src/pbm/aggregation_split.c):
  * geometric grids in 1-, 2- and 3-D with the constant kernel and a dense
  * state, and the 3-D n = 26 Madec case (bench/cases/madec-3d-26.yaml) at its
@@ -24,6 +26,7 @@
 
 #include "gransim/case.h"
 #include "gransim/run.h"
+#include "kernel/lowrank.h"
 
 static double now(void) {
   struct timespec ts;
@@ -121,12 +124,15 @@ static void series(int dim, const int *ns, int count, size_t max_pairs) {
 }
 
 /* Low-rank forms (rank_tolerance 1e-8) of kernels without an exact one, 2-D,
- * against the pair loop: the rank decides whether the FFT pays; the set-up
- * (the kernel matrix's eigendecomposition, O(cells^3)) is timed apart. */
+ * against the pair loop: the rank decides whether the FFT pays.  The set-up
+ * (building the case) is timed apart, and the form itself built again twice
+ * on the case's grid: by cross approximation (kernel/lowrank.c, what the case
+ * uses) and by the dense eigendecomposition (lowrank_dense.c, O(cells^3),
+ * up to 4 096 cells). */
 static void lowrank_series(const char *name, const char *kernel, const int *ns, int count) {
   printf("2-D, %s, fixed pivot, rank_tolerance 1e-8, one right-hand side:\n", name);
-  printf("  %8s %8s %12s %12s %9s %10s %12s %6s\n", "n/axis", "cells", "pairs [s]", "fft [s]", "pairs/fft",
-         "difference", "set-up [s]", "rank");
+  printf("  %8s %8s %12s %12s %9s %10s %12s %6s %10s %10s %10s %9s\n", "n/axis", "cells", "pairs [s]", "fft [s]",
+         "pairs/fft", "difference", "set-up [s]", "rank", "ACA [s]", "dense [s]", "dense/ACA", "ACA error");
   for (int i = 0; i < count; i++) {
     const int n = ns[i];
     const size_t cells = (size_t)n * (size_t)n;
@@ -148,9 +154,28 @@ static void lowrank_series(const char *name, const char *kernel, const int *ns, 
     memset(&c, 0, sizeof c);
     char notes[1024] = "";
     int rank = -1;
+    double t_aca = NAN, t_dense = NAN, e_aca = NAN;
     if (cfg && !gs_case_from_cfg(cfg, &c, &err)) {
       const char *r = gs_model_notes(&c.model, notes, sizeof notes) ? strstr(notes, "of rank ") : NULL;
       if (r) rank = atoi(r + 8);
+      gs_cfg *kcfg = gs_cfg_load_string(kernel, "kernel", &err);
+      gs_kernel k;
+      if (kcfg && !gs_kernel_create(gs_cfg_root(kcfg), &c.model.grid, ".", &k, &err)) {
+        gs_kernel_lowrank lr;
+        double t = now();
+        if (!gs_kernel_lowrank_build(&k, cells, 0, 1e-8, &lr, &err)) {
+          t_aca = now() - t;
+          e_aca = lr.rel_err;
+          gs_kernel_lowrank_free(&lr);
+        }
+        t = now();
+        if (cells <= GS_LOWRANK_DENSE_MAX_CELLS && !gs_kernel_lowrank_build_dense(&k, cells, 0, 1e-8, &lr, &err)) {
+          t_dense = now() - t;
+          gs_kernel_lowrank_free(&lr);
+        }
+        gs_kernel_free(&k);
+      }
+      gs_cfg_free(kcfg);
       gs_case_free(&c);
     }
     double scale = 0, diff = 0;
@@ -158,7 +183,8 @@ static void lowrank_series(const char *name, const char *kernel, const int *ns, 
       scale = fmax(scale, fabs(d[0][k]));
       diff = fmax(diff, fabs(d[1][k] - d[0][k]));
     }
-    printf("  %8d %8zu %12.4g %12.4g %9.3g %10.2g %12.4g %6d\n", n, cells, t0, t1, t0 / t1, diff / scale, setup, rank);
+    printf("  %8d %8zu %12.4g %12.4g %9.3g %10.2g %12.4g %6d %10.4g %10.4g %10.3g %9.2g\n", n, cells, t0, t1, t0 / t1,
+           diff / scale, setup, rank, t_aca, t_dense, t_dense / t_aca, e_aca);
     free(d[0]);
     free(d[1]);
   }
@@ -303,9 +329,12 @@ int main(int argc, char **argv) {
     series(1, n1, 10, max_pairs);
     printf("exp: cost exponent in n against the size above (n^d log n: a little above d for the FFT)\n");
   }
-  const int nl[] = {16, 32}; /* the set-up is O(cells^3): 2 304 cells take minutes on a loaded VM */
-  lowrank_series("brownian free_molecular", "{type: brownian, regime: free_molecular, beta0: 1}", nl, 2);
+  /* the dense decomposition is O(cells^3): timed at 256 and 1 024 cells only
+   * (2 304 take minutes on a loaded VM); 80 x 80 and 128 x 128 are above its
+   * 4 096-cell limit */
+  const int nl[] = {16, 32, 80, 128};
+  lowrank_series("brownian free_molecular", "{type: brownian, regime: free_molecular, beta0: 1}", nl, 4);
   lowrank_series("madec alpha 0.8 delta 1.5", "{type: madec, beta0: 1, alpha: 0.8, delta: 1.5, liquid_content: fraction, liquid_axis: l}",
-                 nl, 2);
+                 nl, 4);
   return 0;
 }

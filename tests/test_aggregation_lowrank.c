@@ -1,6 +1,15 @@
-/* Low-rank kernel forms through the FFT (src/kernel/lowrank.c,
+/* Low-rank kernel forms through the FFT (src/kernel/lowrank.c: adaptive
+ * cross approximation; lowrank_dense.c: the dense eigendecomposition;
  * src/pbm/aggregation_fft.c) against the pair scheme on the same grid.
  *
+ *  - the cross approximation against the dense decomposition at every
+ *    tolerance of the table: the same rank, errors equal to 2 % of the
+ *    tolerance; exact ranks recovered exactly and without the fallback; the
+ *    semi-mechanistic kernel's Stokes cut (high rank) takes the fallback;
+ *  - above the dense limit (2-D 80 x 80 = 6 400 cells): accepted, rates
+ *    against the pair loop on every cell within 10 tol, error estimated from
+ *    256 sampled rows within tol, conservation to round-off; a form of more
+ *    than 512 terms on 4 913 cells refused at its key (method auto: pairs);
  *  - exact ranks: the product and constant kernels are rank 1 and the sum
  *    kernel rank 2 (the truncated form rebuilds the matrix to 1e-13), the
  *    continuum Brownian kernel 2 + r + 1/r is rank 3 on any grid, and its
@@ -18,13 +27,20 @@
  *  - method auto takes the low-rank FFT while rank <= cells / 64, else pairs;
  *  - (compartments with their own beta0, one decomposition each, under two
  *    threads: test_aggregation_fft.c, test_compartments_threads);
- *  - refusals: rank_tolerance with method pairs, out of range, grid too large. */
+ *  - refusals: rank_tolerance with method pairs, out of range, rank above the cap. */
 #include <gsl/gsl_eigen.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "kernel/lowrank.h"
 #include "pbm/aggregation_fft.h"
 #include "pbm_testlib.h"
+
+static double tl_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 /* A case with method pairs and the kernel of kyaml on a linear grid of n
  * cells per axis (dim 1: volume; dim 2: solid and liquid), its state fixed-
@@ -73,9 +89,9 @@ static char *table_kernel(int nclass, int rank1, const char *path) {
   return tl_fmt("{type: table, file: %s, beta0: 1.5}", path);
 }
 
-static int fix_make(int dim, int n, const char *kyaml, fix *f) {
+static int fix_make_m(int dim, int n, const char *kyaml, const char *method, fix *f) {
   memset(f, 0, sizeof *f);
-  char *yaml = case_yaml(dim, n, kyaml, "method: pairs");
+  char *yaml = case_yaml(dim, n, kyaml, method);
   int rc = tl_case(yaml, &f->c);
   free(yaml);
   if (rc) return rc;
@@ -93,6 +109,8 @@ static int fix_make(int dim, int n, const char *kyaml, fix *f) {
   f->ok = 1;
   return 0;
 }
+
+static int fix_make(int dim, int n, const char *kyaml, fix *f) { return fix_make_m(dim, n, kyaml, "method: pairs", f); }
 
 static void fix_free(fix *f) {
   if (!f->ok) return;
@@ -192,10 +210,14 @@ static void test_exact_ranks(void) {
       /* cells take their class's entries: the rank of C */
       {tables[0], 1, 1, 1},
       {tables[1], 1, 5, 1},
+      /* below the Stokes cut (viscosity 0.1: every pair's Stokes number under
+       * the critical one) the product of the wet-area fractions: rank 1 */
+      {"{type: semi_mechanistic, beta0: 5.0e-9, velocity: 0.5, viscosity: 0.1, contact_angle: 60,"
+       " solid_density: 1500, critical_saturation: 0.05}", 3, 1, 1},
   };
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     fix f;
-    if (fix_make(cases[i].dim, cases[i].dim == 1 ? 200 : 16, cases[i].kernel, &f)) continue;
+    if (fix_make(cases[i].dim, cases[i].dim == 1 ? 200 : cases[i].dim == 2 ? 16 : 8, cases[i].kernel, &f)) continue;
     const size_t n = f.c.model.grid.ncells;
     gs_kernel_lowrank lr;
     gs_error err;
@@ -205,6 +227,7 @@ static void test_exact_ranks(void) {
            cases[i].kernel, cases[i].dim, n, lr.rank, cases[i].rank, e);
     CHECK(lr.rank == cases[i].rank);
     CHECK(e <= 1e-13);
+    CHECK(!lr.dense && lr.sampled_rows == 0); /* the cross approximation, its error over every entry */
     gs_kernel_lowrank_free(&lr);
     if (cases[i].lowrank) {
       /* the kernels without an exact form through the FFT: no truncation, so round-off alone */
@@ -290,6 +313,8 @@ static void test_tolerances(void) {
    * value, a few hundred of them) would decide the rank */
   const double tols[] = {1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-8};
   const int ntol = (int)(sizeof tols / sizeof tols[0]);
+  static char aca_rows[8192]; /* the cross approximation against the dense decomposition, printed after */
+  size_t used = 0;
   printf("\n| kernel, grid | rank_tolerance | rank | truncation error (Frobenius) | FFT - pairs, largest rate "
          "| number conservation | volume conservation |\n|---|---|---|---|---|---|---|\n");
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -311,11 +336,30 @@ static void test_tolerances(void) {
       if (tols[t] == 1e-8) CHECK(o.diff <= 1e-7);
       CHECK(o.nerr <= 1e-12);
       CHECK(o.verr <= 1e-12);
+      /* the cross approximation against the dense eigendecomposition:
+       * the same rank, errors equal to a small part of the tolerance */
+      gs_kernel_lowrank d;
+      gs_error err;
+      CHECK(gs_kernel_lowrank_build_dense(&f.k, f.c.model.grid.ncells, 0, tols[t], &d, &err) == 0);
+      gs_kernel_lowrank a;
+      CHECK(gs_kernel_lowrank_build(&f.k, f.c.model.grid.ncells, 0, tols[t], &a, &err) == 0);
+      if (used < sizeof aca_rows)
+        used += (size_t)snprintf(aca_rows + used, sizeof aca_rows - used,
+                                 "| %s | %.0e | %d | %d (%s) | %.3e | %d | %.3e |\n", cases[i].name, tols[t], a.rank,
+                                 a.cross_terms, a.dense ? "dense fallback" : "converged", a.rel_err, d.rank, d.rel_err);
+      /* the Stokes cut's step needs more cross terms than cells / 8: the
+       * dense decomposition takes over (lowrank.c, aca_terms_cap) */
+      CHECK(a.rank == d.rank);
+      CHECK(a.dense == (cases[i].dim == 3));
+      CHECK(fabs(a.rel_err - d.rel_err) <= 0.02 * tols[t]);
+      gs_kernel_lowrank_free(&a);
+      gs_kernel_lowrank_free(&d);
       last = o.rank;
     }
     fix_free(&f);
   }
-  printf("\n");
+  printf("\n| kernel, grid | rank_tolerance | rank | cross terms | error (measured) | dense: rank | dense: error "
+         "|\n|---|---|---|---|---|---|---|\n%s\n", aca_rows);
 }
 
 /* A whole run: Madec (alpha 0.8, delta 1.5) on 2-D 16 x 16 cells with
@@ -384,6 +428,65 @@ static void test_auto(void) {
   }
 }
 
+/* Above the dense limit (4 096 cells): 2-D 80 x 80 = 6 400 cells, the
+ * cross approximation's form through the FFT against the pair loop on every
+ * cell (the kernel's rows evaluated as needed: table_limit_mb 0), its error
+ * estimated from the sampled rows, conservation to round-off. */
+static void test_large(void) {
+  static const struct {
+    const char *name, *kernel;
+    double tol;
+  } cases[] = {
+      {"madec alpha 0.8 delta 1.5", "{type: madec, beta0: 1, alpha: 0.8, delta: 1.5, liquid_content: fraction}", 1e-8},
+      {"brownian free_molecular", "{type: brownian, regime: free_molecular, beta0: 1}", 1e-6},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    fix f;
+    if (fix_make_m(2, 80, cases[i].kernel, "method: pairs, table_limit_mb: 0", &f)) continue;
+    const double t0 = tl_now();
+    gs_kernel_lowrank lr;
+    gs_error err;
+    CHECK(gs_kernel_lowrank_build(&f.k, f.c.model.grid.ncells, 0, cases[i].tol, &lr, &err) == 0);
+    const double t_build = tl_now() - t0;
+    cmp_t o;
+    if (!compare(&f, cases[i].tol, &o)) {
+      if (i == 0)
+        printf("\n| kernel, 2-D 80 x 80 = 6 400 cells | rank_tolerance | rank | cross terms | error (256 rows) "
+               "| FFT - pairs, largest rate | number conservation | volume conservation |\n"
+               "|---|---|---|---|---|---|---|---|\n");
+      printf("| %s | %.0e | %d | %d | %.2e | %.2e | %.1e | %.1e |\n", cases[i].name, cases[i].tol, o.rank,
+             lr.cross_terms, o.rel_err, o.diff, o.nerr, o.verr);
+      fprintf(stderr, "%s on 6400 cells: form built in %.3g s, error from %d sampled rows\n", cases[i].name, t_build,
+              lr.sampled_rows);
+      /* the estimate against the error over every entry (n^2), and as a
+       * statistic: 16 other samples of 256 rows, their mean within 4
+       * standard errors of the truth */
+      double exact = NAN, est[16], mean = 0, var = 0;
+      CHECK(gs_kernel_lowrank_error(&f.k, f.c.model.grid.ncells, 0, &lr, 0, 0, &exact, &err) == 0);
+      for (int r = 0; r < 16; r++) {
+        CHECK(gs_kernel_lowrank_error(&f.k, f.c.model.grid.ncells, 0, &lr, GS_LOWRANK_SAMPLE_ROWS, 1000 + (unsigned)r,
+                                      &est[r], &err) == 0);
+        mean += est[r] / 16;
+      }
+      for (int r = 0; r < 16; r++) var += (est[r] - mean) * (est[r] - mean) / 15;
+      const double se = sqrt(var / 16);
+      fprintf(stderr, "  error over every entry %.4e; the build's estimate %.4e; 16 other samples: mean %.4e, sd %.2e\n",
+              exact, lr.rel_err, mean, sqrt(var));
+      CHECK(exact <= cases[i].tol);
+      CHECK(fabs(lr.rel_err - exact) <= 0.5 * exact);
+      CHECK(fabs(mean - exact) <= 4 * se + 1e-3 * exact);
+      CHECK(o.rank == lr.rank && o.rank > 0 && !lr.dense);
+      CHECK(lr.sampled_rows == GS_LOWRANK_SAMPLE_ROWS);
+      CHECK(o.rel_err <= cases[i].tol);
+      CHECK(o.diff <= 10 * cases[i].tol);
+      CHECK(o.nerr <= 1e-12);
+      CHECK(o.verr <= 1e-12);
+    }
+    gs_kernel_lowrank_free(&lr);
+    fix_free(&f);
+  }
+}
+
 static void test_refusals(void) {
   EXPECT_INPUT("grid: {axes: [{name: v, type: linear, min: 0.5, max: 1, cells: 8}]}\n"
                "initial: {type: cell, number: 1, index: [1]}\n"
@@ -397,12 +500,29 @@ static void test_refusals(void) {
                " kernel: {type: brownian, beta0: 1}}\n"
                "output: {end: 1}\n",
                "rank_tolerance");
-  EXPECT_INPUT("grid: {axes: [{name: v, type: linear, min: 0.5, max: 1, cells: 5000}]}\n"
-               "initial: {type: cell, number: 1, index: [1]}\n"
-               "mechanisms:\n  - {type: aggregation, redistribution: fixed_pivot, method: fft, rank_tolerance: 1.0e-6,"
-               " kernel: {type: brownian, beta0: 1}}\n"
-               "output: {end: 1}\n",
-               "method", "at most 4096 cells");
+  /* above 4 096 cells a form of more than 512 terms is refused: the
+   * semi-mechanistic kernel's Stokes cut (a step in beta) on 17^3 cells */
+  char *yaml = case_yaml(3, 17,
+                         "{type: semi_mechanistic, beta0: 5.0e-9, velocity: 0.5, viscosity: 0.01, contact_angle: 60,"
+                         " solid_density: 1500, critical_saturation: 0.05}",
+                         "method: fft, rank_tolerance: 1.0e-6");
+  const double t0 = tl_now();
+  EXPECT_INPUT(yaml, "bad.yaml:4", "rank_tolerance", "1e-06 needs more than 512 terms on 4913 cells", "MiB",
+               "method: pairs");
+  printf("refusal of a rank above 512 on 4913 cells after %.3g s\n", tl_now() - t0);
+  free(yaml);
+  /* method auto takes the pairs there instead of refusing */
+  yaml = case_yaml(3, 17,
+                   "{type: semi_mechanistic, beta0: 5.0e-9, velocity: 0.5, viscosity: 0.01, contact_angle: 60,"
+                   " solid_density: 1500, critical_saturation: 0.05}",
+                   "method: auto, rank_tolerance: 1.0e-6");
+  gs_case c;
+  if (tl_case(yaml, &c) == 0) {
+    char notes[512] = "";
+    CHECK(!gs_model_notes(&c.model, notes, sizeof notes)); /* no low-rank form noted */
+    gs_case_free(&c);
+  }
+  free(yaml);
 }
 
 int main(void) {
@@ -410,6 +530,7 @@ int main(void) {
   test_tolerances();
   test_run();
   test_auto();
+  test_large();
   test_refusals();
   TEST_EXIT();
 }

@@ -267,6 +267,12 @@ static int choose_method(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_erro
   }
   if (why || (method == METHOD_AUTO && m->grid.ncells < FFT_MIN_CELLS)) return GS_OK;
   rc = gs_agg_fft_create(&m->grid, &A->kernel, tol, m->nslots, &A->fft, err);
+  if (rc == GS_EINPUT && method == METHOD_AUTO) return GS_OK; /* no low-rank form within the term cap: the pairs */
+  if (rc == GS_EINPUT) { /* that refusal, at the key that asked for the form */
+    char why_form[sizeof err->msg];
+    snprintf(why_form, sizeof why_form, "%s", err->msg);
+    return gs_cfg_fail(gs_cfg_get(node, "rank_tolerance"), err, "%s", why_form);
+  }
   const double split = rc ? 0 : gs_agg_fft_split_work(A->fft), cells = (double)m->grid.ncells;
   if (!rc && method == METHOD_AUTO &&
       (gs_agg_fft_rank(A->fft, NULL) > (int)(m->grid.ncells / LOWRANK_CELLS_PER_TERM) ||
@@ -866,8 +872,10 @@ static int agg_describe(void *self, char *msg, size_t n) {
   double e = 0;
   const int rank = A->fft ? gs_agg_fft_rank(A->fft, &e) : 0;
   if (!rank) return 0;
-  snprintf(msg, n, "method fft with a low-rank kernel form of rank %d (truncation error %.2g of the kernel matrix, "
-           "Frobenius)", rank, e);
+  char how[160];
+  gs_agg_fft_rank_how(A->fft, how, sizeof how);
+  snprintf(msg, n, "method fft with a low-rank kernel form of rank %d (achieved error %.2g of the kernel matrix, "
+           "Frobenius; %s)", rank, e, how);
   return 1;
 }
 

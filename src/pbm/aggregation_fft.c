@@ -69,7 +69,8 @@ typedef struct {
   int nphi, nterm;
   double *phi;             /* nphi x ncells */
   term *t;
-  double rel_err;          /* low rank: Frobenius error of the terms dropped */
+  double rel_err;          /* low rank: achieved Frobenius error (kernel/lowrank.h) */
+  int sampled_rows, cross_terms, dense; /* low rank: how it was built (kernel/lowrank.h) */
 } form_set;
 
 struct gs_agg_fft {
@@ -126,8 +127,9 @@ const char *gs_agg_fft_unusable(const gs_grid *g, const gs_kernel *k, double ran
   if (nt != 0) return NULL; /* out of memory (< 0) shows at create */
   if (!(rank_tolerance > 0))
     return "needs a kernel of separable form (constant, sum or product) or rank_tolerance for a low-rank form";
-  if (g->ncells > GS_LOWRANK_MAX_CELLS)
-    return "with a low-rank kernel form needs at most " GS_LOWRANK_MAX_CELLS_TEXT " cells per compartment";
+  /* any number of cells: the cross approximation holds cells x rank; a form
+   * of more than GS_LOWRANK_MAX_TERMS terms is refused at create, naming
+   * the cells and the memory */
   return NULL;
 }
 
@@ -147,6 +149,27 @@ double gs_agg_fft_split_work(const gs_agg_fft *F) {
   int terms = 0;
   for (int s = 0; s < F->nset; s++) terms = F->set[s].nterm > terms ? F->set[s].nterm : terms;
   return gs_agg_split_tuples(F->split) * terms;
+}
+
+void gs_agg_fft_rank_how(const gs_agg_fft *F, char *msg, size_t n) {
+  int sampled = 0, terms = 0, dense = 0;
+  for (int s = 0; F->lowrank && s < F->nset; s++) {
+    sampled = sampled > F->set[s].sampled_rows ? sampled : F->set[s].sampled_rows;
+    terms = terms > F->set[s].cross_terms ? terms : F->set[s].cross_terms;
+    dense |= F->set[s].dense;
+  }
+  if (!F->lowrank || n == 0) {
+    if (n) msg[0] = 0;
+    return;
+  }
+  char where[96];
+  if (sampled) snprintf(where, sizeof where, "error estimated from %d random rows", sampled);
+  else snprintf(where, sizeof where, "error over all entries");
+  if (dense)
+    snprintf(msg, n, "dense eigendecomposition (the cross approximation did not converge in %d terms); %s", terms,
+             where);
+  else
+    snprintf(msg, n, "adaptive cross approximation of %d terms; %s", terms, where);
 }
 
 void gs_agg_fft_free(gs_agg_fft *F) {
@@ -256,8 +279,9 @@ static int build_terms(gs_agg_fft *F, gs_kernel_terms *kt, gs_error *err) {
   return GS_OK;
 }
 
-/* The truncated eigendecomposition of the kernel matrix (kernel/lowrank.c)
- * per set of compartments: terms lambda_r v_r(a) v_r(b), beta0 inside. */
+/* The low-rank form of the kernel matrix (kernel/lowrank.c: cross
+ * approximation, recompressed and truncated) per set of compartments:
+ * terms lambda_r v_r(a) v_r(b), beta0 inside. */
 static int build_lowrank(gs_agg_fft *F, const gs_grid *g, const gs_kernel *k, double tol,
                          gs_error *err) {
   if (!(F->own_coef = gs_malloc(g->ncomp * sizeof(double), err))) return GS_ENOMEM;
@@ -270,6 +294,9 @@ static int build_lowrank(gs_agg_fft *F, const gs_grid *g, const gs_kernel *k, do
     form_set *S = &F->set[s];
     S->nphi = S->nterm = lr.rank;
     S->rel_err = lr.rel_err;
+    S->sampled_rows = lr.sampled_rows;
+    S->cross_terms = lr.cross_terms;
+    S->dense = lr.dense;
     S->phi = lr.vec; /* taken over */
     S->t = gs_malloc((size_t)(lr.rank ? lr.rank : 1) * sizeof(term), err);
     for (int r = 0; S->t && r < lr.rank; r++) S->t[r] = (term){lr.lambda[r], r, r};

@@ -25,6 +25,10 @@ int gs_agg_fft_create(const gs_grid *g, const gs_kernel *k, double rank_toleranc
  * for an exact form) and in *rel_err (NULL: not wanted) the largest
  * relative Frobenius error of its truncation. */
 int gs_agg_fft_rank(const gs_agg_fft *F, double *rel_err);
+/* How the low-rank form was built and its error measured, as a phrase into
+ * msg (n bytes), e.g. "adaptive cross approximation of 21 terms; error over
+ * all entries"; "" for an exact form. */
+void gs_agg_fft_rank_how(const gs_agg_fft *F, char *msg, size_t n);
 void gs_agg_fft_free(gs_agg_fft *F);
 
 /* Pivots not equally spaced: the near/far split's work per evaluation on a
