@@ -12,25 +12,7 @@
 # Usage: bash cli_couple_liggghts.sh GRANSIM_BINARY SOURCE_DIR
 source "$(dirname "$0")/liggghts-lib.sh" cli_couple_liggghts "$@"
 command -v h5diff >/dev/null || fail "h5diff (hdf5-tools) is needed"
-# a blade in the plane y = 0, x from -8 to 8 mm, z from 11 to 18.5 mm (as cli_liggghts_steady's)
-cat > "$W/blade.stl" <<'STL'
-solid blade
- facet normal 0 1 0
-  outer loop
-   vertex -8 0 11
-   vertex 8 0 11
-   vertex 8 0 18.5
-  endloop
- endfacet
- facet normal 0 1 0
-  outer loop
-   vertex -8 0 11
-   vertex 8 0 18.5
-   vertex -8 0 18.5
-  endloop
- endfacet
-endsolid blade
-STL
+blade_stl
 # The blade turns about the x axis at 600 rpm from 0.05 s (the bed settles first); the detector
 # (kinetic energy and collision rate, the two-way default) looks at samples after it.  Liquid at
 # a volume ratio 0.05 to the solid is sprayed over [0, 6) s; the grid is large enough that

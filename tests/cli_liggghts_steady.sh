@@ -4,26 +4,7 @@
 # Usage: bash cli_liggghts_steady.sh GRANSIM_BINARY SOURCE_DIR
 source "$(dirname "$0")/liggghts-lib.sh" cli_liggghts_steady "$@"
 
-# a blade in the plane y = 0, x from -8 to 8 mm, z from 11 to 18.5 mm, in millimetres (scale
-# 1e-3), beside liggghts-lib.sh's box.stl
-cat > "$W/blade.stl" <<'STL'
-solid blade
- facet normal 0 1 0
-  outer loop
-   vertex -8 0 11
-   vertex 8 0 11
-   vertex 8 0 18.5
-  endloop
- endfacet
- facet normal 0 1 0
-  outer loop
-   vertex -8 0 11
-   vertex 8 0 18.5
-   vertex -8 0 18.5
-  endloop
- endfacet
-endsolid blade
-STL
+blade_stl
 # blade_yaml ENGINE ROTATION_START STATISTICS DURATION OUTPUT: about 100 spheres settle on the
 # floor of the box; the blade turns about the x axis through z = 10 mm at 600 rpm: pointing up
 # at rest it is clear of the bed, and it sweeps down to z = 1.5 mm half a turn (0.05 s) after

@@ -52,3 +52,26 @@ statistics: $3
 output: $4
 YAML
 }
+
+# blade_stl: $W/blade.stl, a blade in the plane y = 0, x from -8 to 8 mm, z from 11 to 18.5 mm,
+# in millimetres (scale 1e-3), beside box.stl
+blade_stl() {
+  cat > "$W/blade.stl" <<'STL'
+solid blade
+ facet normal 0 1 0
+  outer loop
+   vertex -8 0 11
+   vertex 8 0 11
+   vertex 8 0 18.5
+  endloop
+ endfacet
+ facet normal 0 1 0
+  outer loop
+   vertex -8 0 11
+   vertex 8 0 18.5
+   vertex -8 0 18.5
+  endloop
+ endfacet
+endsolid blade
+STL
+}
