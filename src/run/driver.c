@@ -17,6 +17,11 @@ double gs_run_now(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+int gs_run_test_moves(void) {
+  const char *e = getenv("GRANSIM_TEST_MOVE_COMPARTMENTS");
+  return e && strcmp(e, "0") != 0;
+}
+
 void gs_run_describe_cell(const gs_model *m, size_t comp, size_t cell, char *buf, size_t len) {
   const gs_grid *g = &m->grid;
   size_t idx[GS_MAX_DIM];

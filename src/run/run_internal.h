@@ -88,6 +88,10 @@ int gs_run_rate_failure(const gs_model *m, double t, size_t index, gs_error *err
 /* Index of the first non-finite entry of f (n entries), or n. */
 size_t gs_run_first_nonfinite(const double *f, size_t n);
 double gs_run_now(void);
+/* Tests only: GRANSIM_TEST_MOVE_COMPARTMENTS set and not "0" makes the
+ * strategies on MPI ranks move a block boundary at every decision, whatever
+ * the costs, so that tests can check that moves change no result. */
+int gs_run_test_moves(void);
 /* Every rank leaves together: when another rank failed, say so here. */
 int gs_run_agree(gs_dist *d, int rc, gs_error *err);
 

@@ -39,11 +39,6 @@ typedef struct {
   long moves_tried; /* GRANSIM_TEST_MOVE_COMPARTMENTS only */
 } comps_t;
 
-/* tests only: a move at every decision (see decide) */
-static int test_moves(void) {
-  const char *e = getenv("GRANSIM_TEST_MOVE_COMPARTMENTS");
-  return e && strcmp(e, "0") != 0;
-}
 
 static int comps_create(gs_run *run, void **self, gs_error *err) {
   comps_t *s = gs_calloc(1, sizeof *s, err);
@@ -145,11 +140,11 @@ static void total_stats(comps_t *s, const gs_run *run) {
 #define CUT_MIN_STRETCHES 64
 static const size_t cut_at[] = {1, 2, 4, 8}; /* sixteenths of the run */
 static size_t piece_end(const comps_t *s, size_t from) {
-  if (!s->spent || (s->nst < CUT_MIN_STRETCHES && !test_moves())) return s->nst;
+  if (!s->spent || (s->nst < CUT_MIN_STRETCHES && !gs_run_test_moves())) return s->nst;
   size_t target = s->nst; /* the first of the fractions past from */
   for (size_t i = 0; i < sizeof cut_at / sizeof *cut_at && target == s->nst; i++)
     if (s->nst * cut_at[i] / 16 > from) target = s->nst * cut_at[i] / 16;
-  if (test_moves()) target = from + 1; /* tests: every output time */
+  if (gs_run_test_moves()) target = from + 1; /* tests: every output time */
   for (size_t k = target - 1; k + 1 < s->nst; k++)
     if (s->is_output[k]) return k + 1;
   return s->nst;
@@ -188,7 +183,7 @@ static void rebalance(comps_t *s, gs_run *run) {
     slowest = fmax(slowest, block);
   }
   const double largest = gs_dist_best_split(d, s->spent, s->spent + ncomp, s->split_lo);
-  if (test_moves()) {
+  if (gs_run_test_moves()) {
     /* tests only: one block boundary moved at every decision, whatever the
      * costs, so that tests can check that moves change no result */
     size_t *nlo = s->split_lo;

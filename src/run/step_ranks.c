@@ -215,7 +215,7 @@ static int rebalance_decide(ranks_t *g) {
   const double evals = slowest > 0 ? WINDOW_SECONDS * (double)g->window_evals / slowest : MAX_EVALS;
   g->evals_needed = evals < MIN_EVALS ? MIN_EVALS : evals > MAX_EVALS ? MAX_EVALS : (long)evals;
   double largest = gs_dist_best_split(d, g->spent, g->spent + ncomp, lo);
-  if (getenv("GRANSIM_TEST_MOVE_COMPARTMENTS")) {
+  if (gs_run_test_moves()) {
     /* tests only: a move at every decision whatever the costs, one block
      * boundary after the other, so that tests/mpi_sectional.sh can check
      * that moves change no result without depending on timings */
@@ -249,7 +249,7 @@ static int between_steps(void *ctx) {
     return 1;
   if (!g->spent) return 0; /* no rebalancing */
   if (!g->dist->sum_pending) {
-    if (getenv("GRANSIM_TEST_MOVE_COMPARTMENTS") || g->rhs_calls - g->calls_mark >= g->evals_needed) {
+    if (gs_run_test_moves() || g->rhs_calls - g->calls_mark >= g->evals_needed) {
       g->t_advance_now = g->t_advance + (gs_run_now() - g->advance_start);
       rebalance_measure(g);
       g->posted_at = g->steps_seen;
