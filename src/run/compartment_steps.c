@@ -133,7 +133,7 @@ struct gs_comp_steps {
   comp_t *comp;
   worker_t *workers;
   int nworkers;
-  int nworkers_made; /* the threads it was made for (a rank's block may shrink and grow again) */
+  int nworkers_made; /* the workers made (and freed): a rank's block may shrink below them and grow again */
   /* the run of gs_comp_steps_run in progress: its stretches and the full
    * states at their ends (RING of them, until written) */
   const gs_stretch *st;
@@ -1163,8 +1163,8 @@ int gs_comp_steps_threads(const gs_comp_steps *s) { return s->nworkers; }
 
 double gs_comp_steps_rhs_seconds(const gs_comp_steps *s) {
   double sum = 0;
-  for (int i = 0; i < s->nworkers; i++) sum += s->workers[i].t_rhs;
-  return sum / s->nworkers;
+  for (int i = 0; i < s->nworkers_made; i++) sum += s->workers[i].t_rhs;
+  return sum / s->nworkers_made;
 }
 
 int gs_comp_steps_bad_rate(const gs_comp_steps *s, double *t, size_t *full) {
@@ -1190,7 +1190,7 @@ void gs_comp_steps_free(gs_comp_steps *s) {
       for (size_t p = 0; p < DIR_PAGES && L->dir[p]; p++) free(L->dir[p]); /* blocks: the pool's */
     }
   }
-  for (int i = 0; s->workers && i < s->nworkers; i++) {
+  for (int i = 0; s->workers && i < s->nworkers_made; i++) {
     worker_t *w = &s->workers[i];
     double *bufs[] = {w->p0, w->p1, w->d0, w->d1, w->s0, w->s1, w->halo, w->nprime, w->scratch, w->ytmp};
     for (size_t j = 0; j < sizeof bufs / sizeof *bufs; j++) free(bufs[j]);
@@ -1218,12 +1218,12 @@ void gs_comp_steps_free(gs_comp_steps *s) {
 
 double gs_comp_steps_wait_seconds(const gs_comp_steps *s) {
   double sum = 0;
-  for (int i = 0; i < s->nworkers; i++) sum += s->workers[i].t_wait;
+  for (int i = 0; i < s->nworkers_made; i++) sum += s->workers[i].t_wait;
   return sum;
 }
 
 void gs_comp_steps_print_threads(const gs_comp_steps *s, FILE *f) {
-  for (int i = 0; i < s->nworkers; i++) {
+  for (int i = 0; i < s->nworkers_made; i++) {
     const worker_t *w = &s->workers[i];
     fprintf(f, "  thread %d: compartments %.4f s (rates %.4f, waiting for the one before %.4f), "
                "outputs %.4f, without a task %.4f\n",
