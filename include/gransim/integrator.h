@@ -89,7 +89,16 @@ typedef struct gs_ode {
   size_t ndecay;
   double decay;
   double *decayed;
+  /* Optional (rk's `outflow: exponential` follows it): after trying(ctx,
+   * t0, h), the part of f over that step that is a known polynomial in
+   * time for the ndecay decaying components (a compartment's inflow):
+   * f_i(t) = sum_m c[m * ndecay + i] ((t - t0) / h)^m + the rest, m <
+   * GS_ODE_FORCING_TERMS, or NULL when there is none for this step.  The
+   * integrator then steps that part exactly with the decay, so that a
+   * compartment which only passes its inflow on sets no bound on the step. */
+  const double *(*forcing)(void *ctx);
 } gs_ode;
+#define GS_ODE_FORCING_TERMS 5 /* a quartic */
 
 typedef struct gs_integrator_stats {
   long steps;      /* accepted steps */

@@ -58,11 +58,19 @@ typedef struct gs_rk_outflow {
   const char *name;
   const char *summary;
   int exponential; /* 1: by the integrating factor e^{k (t - s)}; 0: with f, explicitly */
+  int follow;      /* exponential: the frame also follows the system's forcing (gs_ode.forcing) */
 } gs_rk_outflow;
 
 static const gs_rk_outflow gs_rk_outflow_exponential = {
     .name = "exponential",
-    .summary = "integrating factor: the outflow stepped exactly, no stability bound from it",
+    .summary = "the outflow and the inflow's curve stepped exactly: neither bounds the step",
+    .exponential = 1,
+    .follow = 1,
+};
+static const gs_rk_outflow gs_rk_outflow_held = {
+    .name = "integrating_factor",
+    .summary = "the outflow stepped exactly with the rates held at the step's start; a changing "
+               "inflow bounds the step near k h ~ 1",
     .exponential = 1,
 };
 static const gs_rk_outflow gs_rk_outflow_explicit = {
@@ -70,8 +78,8 @@ static const gs_rk_outflow gs_rk_outflow_explicit = {
     .summary = "the outflow a rate like any other (stable while k h < 3.7 with rkck)",
     .exponential = 0,
 };
-static const gs_rk_outflow *const gs_rk_outflows[] = {&gs_rk_outflow_exponential,
-                                                      &gs_rk_outflow_explicit, NULL};
+static const gs_rk_outflow *const gs_rk_outflows[] = {
+    &gs_rk_outflow_exponential, &gs_rk_outflow_held, &gs_rk_outflow_explicit, NULL};
 
 typedef struct {
   size_t n;
@@ -87,6 +95,10 @@ typedef struct {
    * f - k y in the state as it is (the first step's size estimate) */
   double *g0;
   int g0_pending, plain;
+  /* exponential with follow: the forcing of the step tried (gs_ode.forcing,
+   * NULL: none) and the step it was given for */
+  const double *fc;
+  double fh;
   double rtol, atol;
   double h_min, h_max;
   long max_steps;
@@ -137,20 +149,115 @@ static double gs_rk_psi(const gs_rk *self, double t) {
   return gs_rk_expo(self) ? -expm1(-self->k * (t - self->try_t0)) / self->k : 0.0;
 }
 
+/* phi_0 .. phi_T (T = GS_ODE_FORCING_TERMS) at z <= 0: phi_0 = e^z and
+ * phi_{j+1}(z) = (phi_j(z) - 1/j!) / z, by their series sum_i z^i / (i + j)!
+ * where that recurrence would cancel (|z| < 1). */
+static void gs_rk_phis(double z, double *ph) {
+  if (fabs(z) < 1.0) {
+    double inv_fact = 1.0; /* 1 / j! */
+    for (int j = 0; j <= GS_ODE_FORCING_TERMS; j++) {
+      double term = inv_fact, sum = 0.0;
+      for (int i = 0; i < 40 && fabs(term) > 1e-20 * fabs(sum); i++) {
+        sum += term;
+        term *= z / (double)(i + j + 1);
+      }
+      ph[j] = sum;
+      inv_fact /= (double)(j + 1);
+    }
+    return;
+  }
+  ph[0] = exp(z);
+  double fact = 1.0; /* j! */
+  for (int j = 0; j < GS_ODE_FORCING_TERMS; j++) {
+    ph[j + 1] = (ph[j] - 1.0 / fact) / z;
+    fact *= (double)(j + 1);
+  }
+}
+
+/* The frame at t of the step tried from s: y = phi u + psi g0 + the response
+ * to the forcing's terms of degree >= 1 (c_m theta^m, theta = (t - s) / h:
+ * tau m! theta^m phi_{m+1}(-k tau), tau = t - s, weights ws), so that u' =
+ * (f - g0 - sum_m c_m theta^m) / phi (weights wq) vanishes where f is g0
+ * plus the forcing's change: a compartment whose inflow only passes
+ * through.  Without a forcing: phi and psi alone. */
+typedef struct {
+  double phi, psi;
+  int on;
+  double ws[GS_ODE_FORCING_TERMS], wq[GS_ODE_FORCING_TERMS];
+} gs_rk_frame;
+
+static void gs_rk_frame_at(const gs_rk *self, double t, gs_rk_frame *fr) {
+  fr->phi = gs_rk_phi(self, t);
+  fr->psi = gs_rk_psi(self, t);
+  fr->on = gs_rk_expo(self) && self->fc;
+  if (!fr->on) return;
+  const double tau = t - self->try_t0, th = tau / self->fh;
+  double ph[GS_ODE_FORCING_TERMS + 1], thm = 1.0, fact = 1.0;
+  gs_rk_phis(-self->k * tau, ph);
+  for (int m = 1; m < GS_ODE_FORCING_TERMS; m++) {
+    thm *= th;
+    fact *= (double)m;
+    fr->wq[m] = thm;
+    fr->ws[m] = tau * fact * thm * ph[m + 1];
+  }
+}
+
+/* Decaying component i of the caller's state from GSL's u in frame fr. */
+static double gs_rk_frame_y(const gs_rk *self, const gs_rk_frame *fr, size_t i, double u) {
+  double y = fr->phi * u + fr->psi * self->g0[i];
+  if (fr->on)
+    for (int m = 1; m < GS_ODE_FORCING_TERMS; m++) y += fr->ws[m] * self->fc[(size_t)m * self->nd + i];
+  return y;
+}
+
+/* With a forcing: the correction to the transient's amplitude A in the
+ * record's bound (gs_rk_control_hadjust).  There the rates' change over the
+ * step, (g1 - g0) / h, stands for f' in the slow solution g / k - g' / k^2
+ * + ...; the forcing's part of it is a known quartic, whose slow solution
+ * is exact: sum_j (-1)^j g^(j)(0) / k^(j+1), g^(j)(0) = j! c_j / h^j.  So
+ * the forcing's terms leave the slope and enter by all their derivatives
+ * (a sharp front, where the first derivative alone misses much). */
+static double gs_rk_forced_transient(const gs_rk *self, size_t i, double kh) {
+  const size_t nd = self->nd;
+  const double k = self->k, *c = self->fc;
+  double sum = 0.0;
+  for (int m = 1; m < GS_ODE_FORCING_TERMS; m++) sum += c[(size_t)m * nd + i];
+  /* the forcing's change left the slope term: -sum / (k * kh); its exact
+   * slow solution at 0 enters: + c1 / (k kh) - 2 c2 / (k (kh)^2) + 6 c3 / (k (kh)^3) - 24 c4 / (k (kh)^4) */
+  double exact = 0.0, fact = 1.0, p = 1.0;
+  for (int m = 1; m < GS_ODE_FORCING_TERMS; m++) {
+    fact *= (double)m;
+    p *= kh;
+    exact += ((m & 1) ? 1.0 : -1.0) * fact * c[(size_t)m * nd + i] / p;
+  }
+  return (exact - sum / kh) / k;
+}
+
+/* The step about to be tried (gs_ode.trying), and the forcing f has over it. */
+static void gs_rk_announce(gs_rk *self, double t0, double h) {
+  const gs_ode *ode = self->ode;
+  if (ode->trying) ode->trying(ode->ctx, t0, h);
+  self->fc = self->nd && self->outflow->follow && ode->forcing && h > 0 ? ode->forcing(ode->ctx) : NULL;
+  self->fh = h;
+}
+
 /* The rates of GSL's state from f's (without the decay) of the state nbuf:
  * u' = (f - g0) / phi (exponential) or f - k y (explicit) for the decaying
  * components, and W' = f. */
-static void gs_rk_decay_rates(gs_rk *self, double phi, double *dydt) {
+static void gs_rk_decay_rates(gs_rk *self, const gs_rk_frame *fr, double *dydt) {
   const size_t n = self->n, nd = self->nd;
-  const double k = self->k;
+  const double k = self->k, phi = fr->phi;
   if (gs_rk_expo(self)) {
     if (self->g0_pending) { /* the step's first evaluation, at its start */
       memcpy(self->g0, dydt, nd * sizeof *dydt);
       self->g0_pending = 0;
     }
     for (size_t i = 0; i < nd; i++) {
+      double g = self->g0[i];
+      if (fr->on)
+        for (int m = 1; m < GS_ODE_FORCING_TERMS; m++) g += fr->wq[m] * self->fc[(size_t)m * nd + i];
       dydt[n + i] = dydt[i];
-      dydt[i] = (dydt[i] - self->g0[i]) / phi;
+      dydt[i] = (dydt[i] - g) / phi;
     }
   } else {
     for (size_t i = 0; i < nd; i++) {
@@ -169,16 +276,15 @@ static int gs_rk_rhs(double t, const double y[], double dydt[], void *params) {
   self->stats.rhs_evals++;
   self->fail_t = t;
   const double *state = y;
-  double phi = 1.0;
+  gs_rk_frame fr = {.phi = 1.0};
   if (self->nd) { /* the decaying components as f sees them */
-    phi = gs_rk_phi(self, t);
-    const double psi = gs_rk_psi(self, t);
-    for (size_t i = 0; i < self->nd; i++) self->nbuf[i] = phi * y[i] + psi * self->g0[i];
+    gs_rk_frame_at(self, t, &fr);
+    for (size_t i = 0; i < self->nd; i++) self->nbuf[i] = gs_rk_frame_y(self, &fr, i, y[i]);
     memcpy(self->nbuf + self->nd, y + self->nd, (self->n - self->nd) * sizeof *y);
     state = self->nbuf;
   }
   if (ode->f(ode->ctx, t, state, dydt)) self->rhs_failed = 1;
-  if (self->nd && !self->rhs_failed) gs_rk_decay_rates(self, phi, dydt);
+  if (self->nd && !self->rhs_failed) gs_rk_decay_rates(self, &fr, dydt);
   for (size_t i = 0; !self->rhs_failed && !ode->rates_checked && i < self->n; i++) {
     if (!isfinite(dydt[i])) {
       self->rhs_failed = 2;
@@ -251,15 +357,17 @@ static int gs_rk_control_hadjust(void *state, size_t dim, unsigned int ord, cons
    * slow as f, and the curve misses it by at most |A| (k h)^6 / (6! 2^6)
    * (A, not y0 - g0 / k: a compartment that follows its inflow lags it by
    * f' / k^2, which is no exponential) */
-  const double phi = rk->nd ? gs_rk_phi(rk, rk->try_t0 + h_old) : 1.0;
-  const double psi = rk->nd ? gs_rk_psi(rk, rk->try_t0 + h_old) : 0.0;
+  gs_rk_frame fr = {.phi = 1.0};
+  if (rk->nd) gs_rk_frame_at(rk, rk->try_t0 + h_old, &fr);
+  const double phi = fr.phi;
   const double kh = rk->k * h_old, hermite = gs_rk_expo(rk) ? pow(kh, 6) / 46080.0 : 0.0;
   const double *y0 = rk->evolve->y0, *g1 = rk->evolve->dydt_out + rk->n, k = rk->k;
   double rmax = DBL_MIN;
   for (size_t i = 0; i < dim; i++) {
     const int d = i < rk->nd;
-    const double v = d ? phi * y[i] + psi * rk->g0[i] : y[i];
-    const double A = d ? y0[i] - rk->g0[i] / k + (g1[i] - rk->g0[i]) / (k * kh) : 0.0;
+    const double v = d ? gs_rk_frame_y(rk, &fr, i, y[i]) : y[i];
+    double A = d ? y0[i] - rk->g0[i] / k + (g1[i] - rk->g0[i]) / (k * kh) : 0.0;
+    if (d && fr.on && kh > 1e-2) A += gs_rk_forced_transient(rk, i, kh); /* below, (k h)^6 leaves nothing */
     const double e = d ? phi * fabs(yerr[i]) + hermite * fabs(A) : fabs(yerr[i]);
     double r = e / (c->rtol * fabs(v) + c->atol * c->scale[i]);
     if (r > rmax) rmax = r;
@@ -283,8 +391,7 @@ static int gs_rk_control_hadjust(void *state, size_t dim, unsigned int ord, cons
     rk->rejected_error = rmax;
     /* GSL's evolve retries from the same start with this h, unless it would
      * not move t by an ulp (then it keeps the step as it is) */
-    if (ode->trying && *h < h_old && rk->try_t0 + *h != rk->try_t0)
-      ode->trying(ode->ctx, rk->try_t0, *h);
+    if (*h < h_old && rk->try_t0 + *h != rk->try_t0) gs_rk_announce(rk, rk->try_t0, *h);
     return GSL_ODEIV_HADJ_DEC;
   }
   /* A step that needed a retry is not followed by a larger one when the
@@ -590,10 +697,11 @@ static void gs_rk_rebase(gs_rk *self, double t0, double *y) {
   const size_t n = self->n, nd = self->nd;
   double *Y = self->yx, *dydt = self->evolve->dydt_out, *out = self->ode->decayed;
   const double *y0 = self->evolve->y0;
-  const double te = t0 + self->evolve->last_step, phi = gs_rk_phi(self, te), psi = gs_rk_psi(self, te);
+  gs_rk_frame fr;
+  gs_rk_frame_at(self, t0 + self->evolve->last_step, &fr);
   const int expo = gs_rk_expo(self);
   for (size_t i = 0; i < nd; i++) {
-    const double y1 = phi * Y[i] + psi * self->g0[i];
+    const double y1 = gs_rk_frame_y(self, &fr, i, Y[i]);
     out[i] = (y0[i] + Y[n + i]) - y1;
     Y[i] = y1;
     Y[n + i] = 0;
@@ -642,7 +750,7 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
     /* evolve shortens the step that would pass t_out and then sets t = t_out
      * exactly; it leaves h at the controller's proposal for later calls. */
     self->try_t0 = t0;
-    if (ode->trying) ode->trying(ode->ctx, t0, fmin(h, t_out - t0));
+    gs_rk_announce(self, t0, fmin(h, t_out - t0));
     /* GSL evaluates f at the start only after a reset (otherwise it reuses
      * the end of the last step): g0 comes from that evaluation */
     self->g0_pending = self->nd && self->evolve->count == 0;

@@ -105,6 +105,10 @@ typedef struct worker {
   double try_s, try_h;
   double *p0, *p1, *d0, *d1, *s0, *s1, *halo;
   double at0, at1; /* the times p0, d0, s0 and p1, d1, s1 hold (NAN: none) */
+  /* the inflow k P'(t) over the step tried as a quartic in (t - t0) / h
+   * (gs_ode.forcing), GS_ODE_FORCING_TERMS x nflow; valid while fc_ok */
+  double *fc;
+  int fc_ok;
   size_t key;       /* task_key of its task */
   int stop;         /* its task comes after a failure: it stops */
   const node_list *up; /* the record of the compartment before, or NULL */
@@ -341,6 +345,38 @@ static size_t wait_for(struct gs_comp_steps *s, const node_list *up, double t, s
   }
 }
 
+/* The rate k of the compartment before cp (which feeds it). */
+static double s_k_up(const comp_t *cp) { return cp->s->k[cp->comp - 1]; }
+
+/* The inflow k P'(t) over the step tried, [t0, t0 + h], as the quartic sum_m
+ * e_m theta^m, theta = (t - t0) / h, into w->fc: P is the quintic through
+ * P, P', P'' at both ends (p, d, s), P(theta) = p0 + d0 h theta + s0 h^2
+ * theta^2 / 2 + A theta^3 + B theta^4 + C theta^5.  The same curve as
+ * inflow_state's, in the form gs_ode.forcing takes. */
+static void inflow_curve(worker_t *w, double k) {
+  const double h = w->try_h;
+  const size_t nflow = w->s->nflow;
+  double *e = w->fc;
+  for (size_t i = 0; i < nflow; i++) {
+    const double d0 = w->d0[i], s0 = w->s0[i];
+    const double D0 = w->p1[i] - w->p0[i] - d0 * h - 0.5 * s0 * h * h;
+    const double D1 = (w->d1[i] - d0 - s0 * h) * h, D2 = (w->s1[i] - s0) * h * h;
+    const double A = 10 * D0 - 4 * D1 + 0.5 * D2, B = -15 * D0 + 7 * D1 - D2, C = 6 * D0 - 3 * D1 + 0.5 * D2;
+    e[i] = k * d0;
+    e[nflow + i] = k * s0 * h;
+    e[2 * nflow + i] = k * 3 * A / h;
+    e[3 * nflow + i] = k * 4 * B / h;
+    e[4 * nflow + i] = k * 5 * C / h;
+  }
+  w->fc_ok = 1;
+}
+
+/* gs_ode.forcing: the inflow's curve over the step tried, if it has one. */
+static const double *comp_forcing(void *ctx) {
+  const comp_t *cp = ctx;
+  return cp->w->fc_ok ? cp->w->fc : NULL;
+}
+
 /* gs_ode.trying: the step about to be tried; for a compartment fed by
  * another, Z_H and its derivatives at the step's ends (once the compartment
  * before has got that far). */
@@ -350,6 +386,7 @@ static void comp_trying(void *ctx, double t0, double h) {
   const size_t nflow = cp->s->nflow;
   cp->try_s = t0;
   cp->try_h = h;
+  w->fc_ok = 0;
   if (stopped(cp->s, w->key)) w->stop = 1; /* comp_rhs fails */
   if (!cp->comp || w->stop) return;
   w->try_s = t0;
@@ -376,6 +413,7 @@ static void comp_trying(void *ctx, double t0, double h) {
   nodes_eval(w->up, w->up_count, nflow, t0 + h, w->p1, w->d1, w->s1);
   w->at0 = t0;
   w->at1 = t0 + h;
+  if (h > 0) inflow_curve(w, s_k_up(cp));
 }
 
 /* The upstream numbers and totals whose flow k P'(t) enters at t: P' of the
@@ -597,6 +635,7 @@ static int worker_init(struct gs_comp_steps *s, worker_t *w, gs_error *err) {
   double **bufs[] = {&w->p0, &w->p1, &w->d0, &w->d1, &w->s0, &w->s1, &w->halo, &w->nprime};
   for (size_t i = 0; i < sizeof bufs / sizeof *bufs; i++)
     if (!(*bufs[i] = gs_calloc_apart(s->nflow * sizeof(double), err))) return GS_ENOMEM;
+  if (!(w->fc = gs_calloc_apart(GS_ODE_FORCING_TERMS * s->nflow * sizeof(double), err))) return GS_ENOMEM;
   if (!(w->scratch = gs_calloc_apart((s->off_z + s->nflow) * sizeof(double), err)) ||
       !(w->ytmp = gs_calloc_apart((s->off_z + s->nflow) * sizeof(double), err)))
     return GS_ENOMEM;
@@ -707,6 +746,7 @@ int gs_comp_steps_create(gs_case *c, gs_comp_steps **out, gs_error *err) {
                        .rates_checked = 1,
                        .between_steps = comp_step_done,
                        .trying = comp_trying,
+                       .forcing = comp_forcing,
                        .ndecay = cp->decayed ? s->nflow : 0,
                        .decay = s->k[comp],
                        .decayed = cp->decayed};
@@ -1192,7 +1232,7 @@ void gs_comp_steps_free(gs_comp_steps *s) {
   }
   for (int i = 0; s->workers && i < s->nworkers_made; i++) {
     worker_t *w = &s->workers[i];
-    double *bufs[] = {w->p0, w->p1, w->d0, w->d1, w->s0, w->s1, w->halo, w->nprime, w->scratch, w->ytmp};
+    double *bufs[] = {w->p0, w->p1, w->d0, w->d1, w->s0, w->s1, w->halo, w->nprime, w->scratch, w->ytmp, w->fc};
     for (size_t j = 0; j < sizeof bufs / sizeof *bufs; j++) free(bufs[j]);
   }
   free(s->workers);
