@@ -5,12 +5,17 @@
 # check refuses rank_tolerance with method pairs at its line.
 source "$(dirname "$0")/cli-lib.sh" "$@"
 
-lowrank=$(write_case lowrank.yaml "grid: {axes: [{name: v, type: linear, min: 0.5, max: 40, cells: 80}]}
+# brownian_case NAME CELLS: a continuum Brownian kernel through its low-rank form
+brownian_case() {
+  write_case "$1.yaml" "grid: {axes: [{name: v, type: linear, min: 0.5, max: 40, cells: $2}]}
 initial: {type: cell, number: 1, index: [2]}
 mechanisms:
   - {type: aggregation, redistribution: fixed_pivot, method: fft, rank_tolerance: 1.0e-8,
      kernel: {type: brownian, beta0: 0.05}}
-output: {end: 1}")
+output: {end: 1}"
+}
+
+lowrank=$(brownian_case lowrank 80)
 run_rc 0 "$BIN" run "$lowrank" --out "$WORK/out" --threads 1
 stderr_has "mechanisms[0] (aggregation): method fft with a low-rank kernel form of rank 3" \
   "adaptive cross approximation of" "error over all entries"
@@ -19,12 +24,7 @@ h5dump -a /mechanism_notes "$WORK/out/result.h5" | grep -qF "low-rank kernel for
 
 # above the dense decomposition's 4096 cells: accepted, the error estimated
 # from sampled rows
-large=$(write_case large.yaml "grid: {axes: [{name: v, type: linear, min: 0.5, max: 40, cells: 8192}]}
-initial: {type: cell, number: 1, index: [2]}
-mechanisms:
-  - {type: aggregation, redistribution: fixed_pivot, method: fft, rank_tolerance: 1.0e-8,
-     kernel: {type: brownian, beta0: 0.05}}
-output: {end: 1}")
+large=$(brownian_case large 8192)
 run_rc 0 "$BIN" run "$large" --out "$WORK/out3" --threads 1
 stderr_has "low-rank kernel form of rank 3" "error estimated from 256 random rows"
 
