@@ -60,14 +60,17 @@ typedef struct gs_mech_type {
   void (*number_rates)(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
                        const double *y, double *birth, double *death);
   void (*free)(void *self);
-  /* Optional: apply in place to compartment comp's numbers of z an
-   * approximate inverse of (I - gamma J_m), J_m the Jacobian of this
-   * mechanism's rate at (t, y).  Mechanisms whose rates are stiff and cheap
-   * to invert (growth along an axis: a bidiagonal J_m) provide it; the model
-   * composes them into the preconditioner of implicit integrators.  NULL:
+  /* Optional: apply in place to compartment comp's numbers of z, and to its
+   * ledger entries zledger (laid out as in rates), an approximate inverse of
+   * (I - gamma J_m), J_m the Jacobian of this mechanism's rate at (t, y).
+   * Mechanisms whose rates are stiff and cheap to invert (growth along an
+   * axis: a bidiagonal J_m) provide it; the model composes them into the
+   * preconditioner of implicit integrators.  The ledger rows must be solved
+   * with the numbers' (an inverse that conserves volume as the rates do):
+   * otherwise each inexact Krylov solve breaks the volume balance.  NULL:
    * treated as identity. */
   void (*precondition)(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
-                       const double *y, double gamma, double *z);
+                       const double *y, double gamma, double *z, double *zledger);
   /* Optional: the first time > t at which this mechanism's rate jumps (the
    * start or end of a time window), or INFINITY.  The run stops there. */
   double (*next_switch)(void *self, double t);
@@ -358,7 +361,7 @@ int gs_window_on(const gs_eval *ev, double start, double end, double t);
 int gs_model_has_preconditioner(const gs_model *m);
 /* Approximate solution of (I - gamma J) z = r over the numbers and the
  * ledger (n = nstate + nledger, full layout): the product of the
- * mechanisms' inverses, identity on the ledger. */
+ * mechanisms' inverses, each conserving volume (ledger rows included). */
 void gs_model_precondition(const gs_model *m, const gs_eval *ev, double t, const double *y,
                            double gamma, const double *r, double *z);
 

@@ -218,11 +218,13 @@ static void grow_rates(void *self, const gs_model *m, const gs_eval *ev, size_t 
  * rates frozen at y (the spray's dependence on the total solid volume, a
  * rank-one term, is left to the Krylov iterations). */
 static void grow_precondition(void *self, const gs_model *m, const gs_eval *ev, size_t comp,
-                              double t, const double *y, double gamma, double *z) {
+                              double t, const double *y, double gamma, double *z, double *zledger) {
   grow_t *G = self;
   if (!active(G, ev, t)) return;
   const double *rates = compartment_rates(G, m, ev, comp, t, gs_eval_numbers_c(m, ev, y, comp));
-  if (rates) gs_growth_solve(&m->grid, G->axis, rates, gamma, gs_eval_numbers(m, ev, z, comp), G->work);
+  if (rates)
+    gs_growth_solve(&m->grid, G->axis, rates, gamma, gs_eval_numbers(m, ev, z, comp), zledger,
+                    zledger + m->nvol, G->work);
 }
 
 static double grow_switch(void *self, double t) {

@@ -16,21 +16,25 @@ void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *
     if (rate > 0) {
       if (i + 1 < n) {
         double r = rate * num / (ax->pivots[i + 1] - ax->pivots[i]);
-        d[c] -= r;
-        d[c + stride] += r;
+        if (d) {
+          d[c] -= r;
+          d[c + stride] += r;
+        }
         ext += rate * num;
       } else if (n > 1) { /* leaves the grid through the top */
         double step = ax->pivots[i] - ax->pivots[i - 1];
         double r = rate * num / step;
-        d[c] -= r;
+        if (d) d[c] -= r;
         ext += rate * num;
         for (int k = 0; k < dim; k++)
           lost[k] += r * (g->x[c * (size_t)dim + (size_t)k] + (k == axis ? step : 0.0));
       }
     } else if (i > 0) {
       double r = -rate * num / (ax->pivots[i] - ax->pivots[i - 1]);
-      d[c] -= r;
-      d[c - stride] += r;
+      if (d) {
+        d[c] -= r;
+        d[c - stride] += r;
+      }
       ext += rate * num;
     }
   }
@@ -52,7 +56,7 @@ static double transfer_coefficient(const gs_axis *ax, size_t i, double rate) {
 }
 
 void gs_growth_solve(const gs_grid *g, int axis, const double *G, double gamma, double *z,
-                     double *work) {
+                     double *zexchanged, double *zlost, double *work) {
   const gs_axis *ax = &g->axis[axis];
   const size_t n = ax->n, stride = g->stride[axis];
   double *cp = work, *k = work + n; /* Thomas: modified super-diagonal; coefficients */
@@ -76,6 +80,17 @@ void gs_growth_solve(const gs_grid *g, int axis, const double *G, double gamma, 
       const size_t c = base + i * stride;
       z[c] -= cp[i] * z[c + stride];
     }
+  }
+  /* the ledger's rows of I - gamma J: its entries are linear in the numbers
+   * (frozen rates), so z_ledger = r_ledger + gamma * ledger rate of z.  Left
+   * as identity, the preconditioner would not conserve volume, and every
+   * inexact Krylov solve would move the volume balance off round-off. */
+  if (!zexchanged && !zlost) return;
+  double ext[GS_MAX_DIM] = {0}, lost[GS_MAX_DIM] = {0};
+  gs_growth_apply(g, axis, G, z, NULL, ext, lost);
+  for (int k = 0; k < g->dim; k++) {
+    if (zexchanged) zexchanged[k] += gamma * ext[k];
+    if (zlost) zlost[k] += gamma * lost[k];
   }
 }
 

@@ -12,7 +12,8 @@
 #include "gransim/grid.h"
 
 /* N, d: one compartment; G: rate per cell (NULL entries not allowed);
- * exchanged, lost: this compartment's ledger entries per axis (may be NULL). */
+ * exchanged, lost: this compartment's ledger entries per axis (may be NULL).
+ * d NULL: only the ledger's rates. */
 void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *N, double *d,
                      double *exchanged, double *lost);
 
@@ -20,9 +21,12 @@ void gs_growth_apply(const gs_grid *g, int axis, const double *G, const double *
  * gs_growth_apply with these rates G: a tridiagonal system along each line
  * of the axis (bidiagonal when G has one sign), solved exactly by the Thomas
  * algorithm, which is stable here because I - gamma J is column diagonally
- * dominant.  work: 2 * (cells along the axis) doubles. */
+ * dominant.  zexchanged, zlost (per axis, may be NULL): this compartment's
+ * ledger entries of z, solved too (their rows of J are the ledger's rates), so
+ * that the solve conserves volume as the growth does.  work: 2 * (cells along
+ * the axis) doubles. */
 void gs_growth_solve(const gs_grid *g, int axis, const double *G, double gamma, double *z,
-                     double *work);
+                     double *zexchanged, double *zlost, double *work);
 
 /* Helpers of the mechanisms that grow along an axis (growth.c, layering.c,
  * nucleation.c).  The grid axis named by key (default def; NULL: required)

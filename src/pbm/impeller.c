@@ -139,10 +139,10 @@ static void impeller_number_rates(void *self, const gs_model *m, const gs_eval *
 }
 
 static void impeller_precondition(void *self, const gs_model *m, const gs_eval *ev, size_t comp, double t,
-                                  const double *y, double gamma, double *z) {
+                                  const double *y, double gamma, double *z, double *zledger) {
   const impeller_t *I = self;
   void *in = on(I, ev, t);
-  if (in && I->inner->precondition) I->inner->precondition(in, m, ev, comp, t, y, gamma, z);
+  if (in && I->inner->precondition) I->inner->precondition(in, m, ev, comp, t, y, gamma, z, zledger);
 }
 
 static double impeller_switch(void *self, double t) {

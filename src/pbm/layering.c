@@ -145,12 +145,14 @@ static void layer_rhs(void *self, const gs_model *m, const gs_eval *ev, size_t c
  * sink and the Monod factor's dependence on y are left to the Krylov
  * iterations). */
 static void layer_precondition(void *self, const gs_model *m, const gs_eval *ev, size_t comp,
-                               double t, const double *y, double gamma, double *z) {
+                               double t, const double *y, double gamma, double *z, double *zledger) {
   layer_t *L = self;
   if (!gs_window_on(ev, L->start, L->end, t)) return;
   double take;
   const double *G = layer_rates(L, m, ev, gs_eval_numbers_c(m, ev, y, comp), &take);
-  if (G) gs_growth_solve(&m->grid, L->axis, G, gamma, gs_eval_numbers(m, ev, z, comp), L->work);
+  if (G)
+    gs_growth_solve(&m->grid, L->axis, G, gamma, gs_eval_numbers(m, ev, z, comp), zledger,
+                    zledger + m->nvol, L->work);
 }
 
 static double layer_switch(void *self, double t) {

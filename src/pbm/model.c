@@ -253,7 +253,8 @@ void gs_model_precondition(const gs_model *m, const gs_eval *ev, double t, const
   for (size_t i = 0; i < m->nmech; i++)
     if (m->mech[i].type->precondition)
       for (size_t comp = ev->comp_lo; comp < ev->comp_hi; comp++)
-        m->mech[i].type->precondition(m->mech[i].self, m, ev, comp, t, y, gamma, z);
+        m->mech[i].type->precondition(m->mech[i].self, m, ev, comp, t, y, gamma, z,
+                                      gs_eval_ledger(m, ev, z + m->nstate, comp));
 }
 
 double gs_model_seconds(void) {
