@@ -131,7 +131,9 @@ lost = np.abs(led[:, 2:]).max() / S[0]
 print("cli_couple_liggghts: ledger: solid %.2g, liquid %.2g (relative), liquid in vs sprayed %.2g, lost %.2g; granules %g -> %g"
       % (err_s, err_l, err_q, lost, N[0].sum(), N[-1].sum()))
 assert err_s < 1e-12 and err_l < 1e-12 and err_q < 1e-12 and lost < 1e-12
-assert led[:, 0].max() == 0 and abs(S[-1] / S[0] - 1) < 1e-12
+# no solid brought in: under CVODE the exchanged entry carries the Newton iterations' error,
+# as the held solid does (measured 1.2e-13 of it), so that their balance holds to round-off
+assert np.abs(led[:, 0]).max() < 1e-11 * S[0] and abs(S[-1] / S[0] - 1) < 1e-11
 assert N[-1].sum() < 0.9 * N[0].sum()  # the DEM's kernel aggregated
 PY
 

@@ -141,7 +141,7 @@ static void test_rk_first_step(const char *variant) {
   char yaml[160];
   snprintf(yaml, sizeof yaml, "solver:\n  method: rk\n  variant: %s\n  rtol: 1e-6\n  atol: 1\n", variant);
   double q = 1e9;
-  gs_ode ode = {2, fill_f, &q, NULL, 2, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {2, fill_f, &q, NULL, 2, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -157,7 +157,7 @@ static void test_rk_first_step(const char *variant) {
 
   snprintf(yaml, sizeof yaml, "solver:\n  method: rk\n  variant: %s\n  rtol: 1e-9\n  atol: 1e-12\n", variant);
   decay_ctx c = {1.3, 0, HUGE_VAL};
-  gs_ode dec = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode dec = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   if (make_ok(yaml, &dec, &it)) return;
   t = 0;
   y[0] = 1;
@@ -173,7 +173,7 @@ static void test_rk_first_step(const char *variant) {
 /* y' = -k y over 50 outputs at t = 0.1 i (none representable exactly). */
 static void test_decay(const char *yaml, double tol, double y0) {
   decay_ctx c = {1.3, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -201,7 +201,7 @@ static double euler_error(double h) {
   snprintf(yaml, sizeof yaml,
            "solver:\n  method: euler\n  initial_step: %.17g\n  max_step: %.17g\n", h, h);
   decay_ctx c = {1.0, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return NAN;
   gs_error err = {0};
@@ -226,7 +226,7 @@ static void test_euler_order(void) {
 static void test_invariants(const char *yaml, double tol) {
   double k[2] = {2.0, 0.7};
   const double scale[4] = {1, 1, 1, 0};
-  gs_ode ode = {4, chain_f, k, scale, 3, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {4, chain_f, k, scale, 3, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -249,7 +249,7 @@ static void test_invariants(const char *yaml, double tol) {
 /* ---- stiffness -------------------------------------------------------------- */
 
 static long stiff_evals(const char *yaml) {
-  gs_ode ode = {2, stiff_f, NULL, NULL, 2, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {2, stiff_f, NULL, NULL, 2, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return -1;
   gs_error err = {0};
@@ -277,7 +277,7 @@ static void test_stiff(void) {
 
 static void diffusion_run(const char *yaml, double *y, size_t n) {
   diffusion_ctx c = {n, 400.0, 0.5};
-  gs_ode ode = {n, diffusion_f, &c, NULL, n, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {n, diffusion_f, &c, NULL, n, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   for (size_t i = 0; i < n; i++) y[i] = i < n / 3 ? 1.0 : 0.01;
@@ -302,7 +302,7 @@ static void test_gmres_matches_dense(void) {
 /* n > 1000 picks GMRES under `auto`; still accurate. */
 static void test_cvode_auto_large(void) {
   size_t n = 1200;
-  gs_ode ode = {n, decays_f, &n, NULL, n, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {n, decays_f, &n, NULL, n, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok("solver:\n  method: cvode\n  rtol: 1e-8\n", &ode, &it)) return;
   double *y = malloc(n * sizeof *y), t = 0, worst = 0;
@@ -322,7 +322,7 @@ static void test_cvode_auto_large(void) {
  * changed between calls must restart the integration from that state. */
 static void test_cvode_restart(void) {
   decay_ctx c = {1.0, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok("solver:\n  method: cvode\n  rtol: 1e-9\n", &ode, &it)) return;
   gs_error err = {0};
@@ -364,8 +364,8 @@ static int interrupt_between(void *vctx) {
  * of compartments does): the very steps and state of an uninterrupted run. */
 static void test_between_steps(const char *yaml, int every, int rebuild) {
   interrupt_ctx plain = {{3.0, 0.5}, 1, 0}, cut = {{3.0, 0.5}, every, 0};
-  gs_ode ode = {4, interrupt_f, &plain, NULL, 3, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
-  gs_ode ode_cut = {4, interrupt_f, &cut, NULL, 3, NULL, NULL, NULL, 0, interrupt_between, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {4, interrupt_f, &plain, NULL, 3, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
+  gs_ode ode_cut = {4, interrupt_f, &cut, NULL, 3, NULL, NULL, NULL, 0, interrupt_between, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator a, b;
   if (make_ok(yaml, &ode, &a) || make_ok(yaml, &ode_cut, &b)) return;
   gs_error err = {0};
@@ -431,7 +431,7 @@ static int phase_f(void *vctx, double t, const double *y, double *dydt) {
 static void test_jump(const char *yaml, int rk) {
   for (int jumped = rk ? 0 : 1; jumped <= 1; jumped++) {
     double rate = 0;
-    gs_ode ode = {1, phase_f, &rate, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+    gs_ode ode = {1, phase_f, &rate, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
     gs_integrator it;
     if (make_ok(yaml, &ode, &it)) return;
     gs_error err = {0};
@@ -484,7 +484,7 @@ static int steps_jump_f(void *vctx, double t, const double *y, double *dydt) {
 static int grown_after_retry(int (*f)(void *, double, const double *, double *), const char *yaml,
                              double exact, double tol) {
   steps_ctx c = {NULL, 0, {0}, {0}};
-  gs_ode ode = {1, f, &c, NULL, 1, NULL, NULL, NULL, 0, record_step, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {1, f, &c, NULL, 1, NULL, NULL, NULL, 0, record_step, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return -1;
   c.it = &it;
@@ -520,7 +520,7 @@ static void test_growth_after_rejection(void) {
 
 static void test_rhs_failure(const char *yaml) {
   decay_ctx c = {1.0, 0, 0.5};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -537,7 +537,7 @@ static void test_rhs_failure(const char *yaml) {
 
 /* NaN must surface as an error, not as a NaN state at t_out. */
 static void test_nan(const char *yaml) {
-  gs_ode ode = {1, nan_f, NULL, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {1, nan_f, NULL, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -549,7 +549,7 @@ static void test_nan(const char *yaml) {
 
 /* GSL has no step floor of its own; min_step is enforced by the wrapper. */
 static void test_rk_min_step(void) {
-  gs_ode ode = {2, stiff_f, NULL, NULL, 2, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {2, stiff_f, NULL, NULL, 2, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok("solver:\n  method: rk\n  min_step: 1e-3\n", &ode, &it)) return;
   gs_error err = {0};
@@ -560,7 +560,7 @@ static void test_rk_min_step(void) {
 }
 
 static void test_euler_negative(void) {
-  gs_ode ode = {1, drain_f, NULL, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {1, drain_f, NULL, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok("solver:\n  method: euler\n  initial_step: 0.01\n", &ode, &it)) return;
   gs_error err = {0};
@@ -577,7 +577,7 @@ static void test_max_steps(const char *method) {
   char yaml[128];
   snprintf(yaml, sizeof yaml, "solver:\n  method: %s\n  max_steps_per_output: 5\n", method);
   decay_ctx c = {1.0, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   if (make_ok(yaml, &ode, &it)) return;
   gs_error err = {0};
@@ -592,7 +592,7 @@ static void test_max_steps(const char *method) {
 
 static void expect_input_error(const char *yaml, const char *part1, const char *part2) {
   decay_ctx c = {1.0, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it = {NULL, NULL};
   gs_error err = {0};
   int rc = make(yaml, &ode, &it, &err);
@@ -651,12 +651,12 @@ static void test_registry(void) {
   /* capabilities the run driver and case reader consult instead of names */
   const gs_integrator_type *rk = gs_integrator_lookup("rk"), *cv = gs_integrator_lookup("cvode"),
                            *eu = gs_integrator_lookup("euler");
-  CHECK(rk->ranks && rk->per_compartment && rk->exact_invariants && rk->carry);
-  CHECK(eu->ranks && !eu->per_compartment && eu->exact_invariants && eu->carry);
-  CHECK(!cv->ranks && !cv->per_compartment && !cv->exact_invariants && !cv->carry);
+  CHECK(rk->ranks && rk->per_compartment && rk->carry);
+  CHECK(eu->ranks && !eu->per_compartment && eu->carry);
+  CHECK(!cv->ranks && !cv->per_compartment && !cv->carry);
   /* No solver map at all: auto with default settings. */
   decay_ctx c = {1.0, 0, HUGE_VAL};
-  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   gs_integrator it;
   gs_error err = {0};
   gs_integrator_setup setup;
@@ -668,7 +668,7 @@ static void test_registry(void) {
   CHECK_REL(y, exp(-1.0), 1e-5);
   gs_integrator_free(&it);
   gs_integrator_free(&it); /* idempotent */
-  gs_ode bad = {2, decay_f, &c, NULL, 3, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL};
+  gs_ode bad = {2, decay_f, &c, NULL, 3, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};
   CHECK(gs_integrator_create(&setup, &bad, &it, &err) == GS_EINPUT);
   gs_integrator_setup_free(&setup);
 }

@@ -97,6 +97,13 @@ typedef struct gs_ode {
    * integrator then steps that part exactly with the decay, so that a
    * compartment which only passes its inflow on sets no bound on the step. */
   const double *(*forcing)(void *ctx);
+  /* Optional (cvode's dense Jacobian calls it): restore in v, a direction of
+   * the state (a column of a difference-quotient Jacobian), the linear
+   * invariants that f keeps (the volume ledger), by recomputing the entries
+   * that follow from the others.  Differences of f carry its round-off
+   * divided by the increment, ~1e-8 of a column; a Newton system built from
+   * them would move the invariants by that much at every step. */
+  void (*conserve)(void *ctx, double *v);
 } gs_ode;
 #define GS_ODE_FORCING_TERMS 5 /* a quartic */
 
@@ -159,8 +166,8 @@ typedef struct gs_integrator_type {
   int ranks;            /* 1: integrates a state spread over MPI ranks (gs_ode.reduce_max) */
   int per_compartment;  /* 1: serves per-compartment steps (calls gs_ode.trying; its steps
                          * integrate a quartic forcing exactly; serves gs_ode.ndecay) */
-  int exact_invariants; /* 1: linear invariants such as the volume ledger hold to round-off
-                         * (0: implicit, Newton systems solved to a tolerance) */
+  /* Every integrator keeps linear invariants such as the volume ledger to
+   * round-off (cvode through gs_ode.conserve and conserving psolve). */
 } gs_integrator_type;
 
 const gs_integrator_type *gs_integrator_lookup(const char *name);

@@ -357,6 +357,11 @@ double gs_window_next_switch(double start, double end, double t);
  * t itself, or, while an interval ev->switch_lo..switch_hi is set, at its
  * midpoint. */
 int gs_window_on(const gs_eval *ev, double start, double end, double t);
+/* Make v (full layout, nstate + nledger; a derivative direction of the
+ * state) keep the volume balance of every compartment and coordinate: its
+ * exchanged entries become the held volume's change plus the lost entries
+ * (held - exchanged + lost is constant along every solution). */
+void gs_model_conserve(const gs_model *m, double *v);
 /* 1 if some mechanism provides a preconditioner. */
 int gs_model_has_preconditioner(const gs_model *m);
 /* Approximate solution of (I - gamma J) z = r over the numbers and the

@@ -296,6 +296,11 @@ static int model_psolve(void *ctx, double t, const double *y, double gamma, cons
   return 0;
 }
 
+static void model_conserve(void *ctx, double *v) {
+  gs_case *c = ctx;
+  gs_model_conserve(&c->model, v);
+}
+
 static void model_hold(void *ctx, int on) {
   gs_case *c = ctx;
   c->eval.hold = on;
@@ -445,7 +450,8 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, const double *accuracy, gs_e
                     .abs_scale = c->abs_scale,
                     .npositive = m->scalar_at, /* scalars may be of either sign */
                     .psolve = gs_model_has_preconditioner(m) ? model_psolve : NULL,
-                    .hold = model_hold};
+                    .hold = model_hold,
+                    .conserve = model_conserve};
   gs_cfg_node *solver = gs_cfg_get(root, "solver");
   if (solver && gs_cfg_require_kind(solver, GS_CFG_MAP, err)) return GS_EINPUT;
   static const char *const steps[] = {"shared", "per_compartment", NULL};
@@ -480,22 +486,6 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, const double *accuracy, gs_e
                        "relies on the exact quadrature of its Runge-Kutta steps), not %s",
                        c->integrator.type->name);
   return rc;
-}
-
-/* An implicit (BDF) integrator solves its Newton systems only to a tolerance
- * tied to rtol, so linear invariants such as the volume balance hold to
- * that tolerance rather than to round-off.  Unless the case sets
- * checks.mass_tolerance, use max(1e-9, rtol) for cvode: it still catches any
- * mechanism that leaks mass faster than the solver tolerance. */
-static void implicit_mass_tolerance(gs_cfg_node *root, gs_case *c) {
-  gs_cfg_node *checks = gs_cfg_get(root, "checks");
-  if (c->integrator.type->exact_invariants || (checks && gs_cfg_get(checks, "mass_tolerance")))
-    return;
-  gs_cfg_node *solver = gs_cfg_get(root, "solver");
-  gs_cfg_node *rn = solver ? gs_cfg_get(solver, "rtol") : NULL;
-  double rtol = 1e-6;
-  if (rn) gs_cfg_node_double(rn, &rtol, NULL);
-  c->checks.mass_tolerance = fmax(1e-9, rtol);
 }
 
 /* Numbers are controlled to an absolute accuracy atol (in the RMS norm of the
@@ -547,7 +537,6 @@ int gs_case_from_cfg(gs_cfg *cfg, gs_case *c, gs_error *err) {
   if (!rc) rc = initial_scalars(c, &accuracy, err);
   if (!rc) rc = setup_ode(root, c, accuracy, err);
   free(accuracy);
-  if (!rc) implicit_mass_tolerance(root, c);
   if (!rc) negative_floor(c);
   if (!rc) rc = gs_cfg_check_unused(root, err);
   return rc;

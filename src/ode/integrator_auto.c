@@ -123,6 +123,11 @@ static int gs_auto_psolve(void *ctx, double t, const double *y, double gamma, co
   return self->ode->psolve(self->ode->ctx, t, y, gamma, r, z);
 }
 
+static void gs_auto_conserve(void *ctx, double *v) {
+  const gs_auto *self = ctx;
+  self->ode->conserve(self->ode->ctx, v);
+}
+
 static int gs_auto_create(const void *settings, const gs_ode *ode, void **out, gs_error *err) {
   const gs_auto_settings *set = settings;
   gs_auto *self = gs_calloc(1, sizeof *self, err);
@@ -244,6 +249,7 @@ static int gs_auto_advance(void *vself, const gs_ode *ode, double *t, double t_o
   self->wrapped.f = gs_auto_f;
   self->wrapped.hold = ode->hold ? gs_auto_hold : NULL;
   self->wrapped.psolve = ode->psolve ? gs_auto_psolve : NULL;
+  self->wrapped.conserve = ode->conserve ? gs_auto_conserve : NULL;
   self->wrapped.between_steps = gs_auto_between;
   self->steps_in_advance = 0;
   self->check_at = GS_AUTO_CHECK_EVERY;
@@ -339,5 +345,4 @@ const gs_integrator_type gs_integrator_auto = {
     .describe = gs_auto_describe,
     .ranks = 1,
     .per_compartment = 1,
-    .exact_invariants = 0,
 };

@@ -15,9 +15,15 @@
  * the difference-quotient Jacobian perturbs them by amounts scaled with the
  * tolerance (the mass ledger, which nothing reads, is the intended use).
  *
+ * The Newton iterations keep the system's linear invariants (the volume
+ * ledger) to round-off however loosely they converge, provided every operator
+ * they apply keeps them: the Jacobians pass through gs_ode.conserve
+ * (gs_cvode_dense_jac, gs_cvode_jtimes), and psolve must conserve as well.
+ *
  * CVODE is set up once in create() with a zero initial state and
  * re-initialised whenever advance() is called with a state other than the one
  * it last returned, so consecutive calls keep the BDF history. */
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -47,7 +53,7 @@ typedef struct {
   double rtol, atol, h_init, h_min, h_max;
   long max_steps, max_order;
   int gmres, precondition;
-  long jtimes_evals; /* f evaluations of our Jacobian-vector products (all runs) */
+  long jtimes_evals; /* f evaluations of our Jacobian-vector products and dense Jacobians (all runs) */
   SUNContext sunctx;
   void *mem;
   N_Vector y;      /* the state CVODE last returned (compared to detect restarts) */
@@ -171,7 +177,8 @@ static int gs_cvode_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector r, N
 /* Jacobian-vector product by a forward difference, as CVODE's own (the
  * perturbation 1 / ||v|| in the weighted RMS norm), but with the system's
  * discrete choices held at the linearisation point (gs_ode.hold): a state
- * perturbed by tolerance-sized noise must not switch cells on. */
+ * perturbed by tolerance-sized noise must not switch cells on.  The product
+ * keeps the system's linear invariants (gs_ode.conserve), as J does. */
 static int gs_cvode_jtimes(N_Vector v, N_Vector Jv, sunrealtype t, N_Vector y, N_Vector fy,
                            void *data, N_Vector tmp) {
   gs_cvode *self = data;
@@ -190,7 +197,44 @@ static int gs_cvode_jtimes(N_Vector v, N_Vector Jv, sunrealtype t, N_Vector y, N
   self->jtimes_evals++;
   if (rc) return rc;
   N_VLinearSum(1.0 / sig, Jv, -1.0 / sig, fy, Jv);
+  if (self->ode->conserve) self->ode->conserve(self->ode->ctx, N_VGetArrayPointer(Jv));
   return 0;
+}
+
+/* Dense Jacobian by forward differences, column by column with CVODE's own
+ * increments (cvLsDenseDQJac: sqrt(uround) |y_j|, at least 1000 |h| uround n
+ * ||f|| / ewt_j), but with the system's discrete choices held (as in
+ * gs_cvode_jtimes) and each column made to keep the system's linear
+ * invariants (gs_ode.conserve): a column's differences carry f's round-off
+ * over the increment, ~1e-8 of it, and the Newton corrections would move
+ * the volume balance by as much at every step. */
+static int gs_cvode_dense_jac(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *data,
+                              N_Vector tmp1, N_Vector tmp2, N_Vector tmp3) {
+  (void)tmp3;
+  gs_cvode *self = data;
+  const gs_ode *ode = self->ode;
+  const size_t n = self->n;
+  sunrealtype h = 0;
+  if (CVodeGetErrWeights(self->mem, tmp1) != CV_SUCCESS || CVodeGetCurrentStep(self->mem, &h) != CV_SUCCESS)
+    return -1;
+  const double *ewt = N_VGetArrayPointer(tmp1), *f0 = N_VGetArrayPointer(fy);
+  const double fnorm = N_VWrmsNorm(fy, tmp1), srur = sqrt(DBL_EPSILON);
+  const double min_inc = fnorm != 0 ? 1000 * fabs(h) * DBL_EPSILON * (double)n * fnorm : 1.0;
+  double *yd = N_VGetArrayPointer(y), *fj = N_VGetArrayPointer(tmp2);
+  int rc = 0;
+  if (ode->hold) ode->hold(ode->ctx, 1);
+  for (size_t j = 0; j < n && !rc; j++) {
+    const double saved = yd[j], inc = fmax(srur * fabs(saved), min_inc / ewt[j]);
+    yd[j] += inc;
+    rc = gs_cvode_rhs(t, y, tmp2, self);
+    yd[j] = saved;
+    self->jtimes_evals++;
+    double *col = SM_COLUMN_D(J, j);
+    for (size_t i = 0; i < n; i++) col[i] = (fj[i] - f0[i]) / inc;
+    if (ode->conserve) ode->conserve(ode->ctx, col);
+  }
+  if (ode->hold) ode->hold(ode->ctx, 0);
+  return rc;
 }
 
 static int gs_cvode_linear_solver(gs_cvode *self, const gs_ode *ode, gs_error *err) {
@@ -217,8 +261,11 @@ static int gs_cvode_linear_solver(gs_cvode *self, const gs_ode *ode, gs_error *e
   if (!self->ls)
     return gs_error_set(err, GS_ENOMEM, "integrator cvode: cannot allocate the %s linear solver",
                         self->gmres ? "gmres" : "dense");
-  return gs_cvode_flag(self, CVodeSetLinearSolver(self->mem, self->ls, self->jac),
-                       "CVodeSetLinearSolver", err);
+  int rc = gs_cvode_flag(self, CVodeSetLinearSolver(self->mem, self->ls, self->jac),
+                         "CVodeSetLinearSolver", err);
+  if (!rc && !self->gmres && (ode->conserve || ode->hold))
+    rc = gs_cvode_flag(self, CVodeSetJacFn(self->mem, gs_cvode_dense_jac), "CVodeSetJacFn", err);
+  return rc;
 }
 
 static int gs_cvode_options(gs_cvode *self, gs_error *err) {

@@ -221,6 +221,13 @@ int gs_model_couples_all(const gs_model *m) {
   return 0;
 }
 
+void gs_model_conserve(const gs_model *m, double *v) {
+  for (size_t comp = 0; comp < m->grid.ncomp; comp++) {
+    double *led = v + m->nstate + comp * 2 * (size_t)m->nvol;
+    for (int k = 0; k < m->nvol; k++) led[k] = gs_model_held(m, v, comp, k) + led[m->nvol + k];
+  }
+}
+
 int gs_model_has_preconditioner(const gs_model *m) {
   for (size_t i = 0; i < m->nmech; i++)
     if (m->mech[i].type->precondition) return 1;

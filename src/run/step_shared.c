@@ -53,6 +53,11 @@ static void shared_hold(void *ctx, int on) {
   s->run->ev.hold = on;
 }
 
+static void shared_conserve(void *ctx, double *v) {
+  shared_t *s = ctx;
+  gs_model_conserve(&s->run->c->model, v);
+}
+
 static int shared_create(gs_run *run, void **self, gs_error *err) {
   gs_case *c = run->c;
   shared_t *s = gs_calloc(1, sizeof *s, err);
@@ -65,6 +70,7 @@ static int shared_create(gs_run *run, void **self, gs_error *err) {
   s->ode.rates_checked = 1; /* shared_rhs checks every rate */
   if (s->ode.psolve) s->ode.psolve = shared_psolve;
   if (s->ode.hold) s->ode.hold = shared_hold;
+  if (s->ode.conserve) s->ode.conserve = shared_conserve;
   /* --timings: each compartment's rates, for the bound on what a split over
    * ranks could gain */
   if (run->opt->timings && c->model.grid.ncomp > 1 &&
