@@ -651,9 +651,9 @@ static void test_registry(void) {
   /* capabilities the run driver and case reader consult instead of names */
   const gs_integrator_type *rk = gs_integrator_lookup("rk"), *cv = gs_integrator_lookup("cvode"),
                            *eu = gs_integrator_lookup("euler");
-  CHECK(rk->ranks && rk->per_compartment && rk->carry);
-  CHECK(eu->ranks && !eu->per_compartment && eu->carry);
-  CHECK(!cv->ranks && !cv->per_compartment && !cv->carry);
+  CHECK(rk->ranks && rk->per_compartment && rk->exact_invariants && rk->carry);
+  CHECK(eu->ranks && !eu->per_compartment && eu->exact_invariants && eu->carry);
+  CHECK(!cv->ranks && !cv->per_compartment && !cv->exact_invariants && !cv->carry);
   /* No solver map at all: auto with default settings. */
   decay_ctx c = {1.0, 0, HUGE_VAL};
   gs_ode ode = {1, decay_f, &c, NULL, 1, NULL, NULL, NULL, 0, NULL, 0, NULL, 0, 0, NULL, NULL, NULL};

@@ -166,8 +166,10 @@ typedef struct gs_integrator_type {
   int ranks;            /* 1: integrates a state spread over MPI ranks (gs_ode.reduce_max) */
   int per_compartment;  /* 1: serves per-compartment steps (calls gs_ode.trying; its steps
                          * integrate a quartic forcing exactly; serves gs_ode.ndecay) */
-  /* Every integrator keeps linear invariants such as the volume ledger to
-   * round-off (cvode through gs_ode.conserve and conserving psolve). */
+  int exact_invariants; /* 1: linear invariants such as the volume ledger hold to round-off
+                         * (0: implicit; its Newton systems keep them, through gs_ode.conserve
+                         * and a conserving psolve, but round-off in its iterations can
+                         * move them to ~1e-10) */
 } gs_integrator_type;
 
 const gs_integrator_type *gs_integrator_lookup(const char *name);

@@ -345,4 +345,5 @@ const gs_integrator_type gs_integrator_auto = {
     .describe = gs_auto_describe,
     .ranks = 1,
     .per_compartment = 1,
+    .exact_invariants = 0,
 };

@@ -232,4 +232,5 @@ const gs_integrator_type gs_integrator_euler = {
     .mark = gs_euler_mark,
     .resume = gs_euler_resume,
     .ranks = 1,
+    .exact_invariants = 1,
 };

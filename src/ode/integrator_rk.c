@@ -827,4 +827,5 @@ const gs_integrator_type gs_integrator_rk = {
     .resume = gs_rk_resume,
     .ranks = 1,
     .per_compartment = 1,
+    .exact_invariants = 1,
 };
