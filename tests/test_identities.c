@@ -192,12 +192,14 @@ static long ref_cell(const gs_grid *g, const double *v) {
 
 /* Aggregation, one compartment: d += rates; lost += volume lost.  A product
  * beyond the last edge of any axis is lost whole; otherwise it is placed
- * (fixed pivot) or pooled in its cell (cell average) and placed by ref_place. */
+ * (fixed pivot) or pooled in its cell (cell average; pairs with a negative
+ * rate in a pool of their own) and placed by ref_place. */
 static void ref_aggregation(const gs_grid *g, int kern, int fp, const double *N, double *d,
                             double *lost) {
   const size_t n = g->ncells;
   const int dim = g->dim;
-  double *B = calloc(n, sizeof(double)), *V = calloc(n * (size_t)dim, sizeof(double));
+  /* pools: [0, n) positive rates, [n, 2n) negative */
+  double *B = calloc(2 * n, sizeof(double)), *V = calloc(2 * n * (size_t)dim, sizeof(double));
   for (size_t a = 0; a < n; a++)
     for (size_t b = a; b < n; b++) {
       double w = beta_of(kern, g, a, b) * N[a] * N[b] * (a == b ? 0.5 : 1.0);
@@ -215,10 +217,11 @@ static void ref_aggregation(const gs_grid *g, int kern, int fp, const double *N,
         ref_place(g, s, w, d, lost);
         continue;
       }
+      if (w < 0) t += (long)n;
       B[t] += w;
       for (int k = 0; k < dim; k++) V[(size_t)t * (size_t)dim + (size_t)k] += w * s[k];
     }
-  for (size_t t = 0; !fp && t < n; t++) {
+  for (size_t t = 0; !fp && t < 2 * n; t++) {
     if (B[t] == 0) continue;
     double vbar[3];
     for (int k = 0; k < dim; k++) vbar[k] = V[t * (size_t)dim + (size_t)k] / B[t];
@@ -483,9 +486,11 @@ static void ref_breakage_1d(const gs_grid *g, const daughter_spec *ds, int fp, c
   const gs_axis *ax = &g->axis[0];
   const double *x = ax->pivots, *e = ax->edges;
   const size_t n = ax->n;
-  double *B = calloc(n, sizeof(double)), *V = calloc(n, sizeof(double));
+  /* pools: [0, n) from parents of positive count, [n, 2n) negative */
+  double *B = calloc(2 * n, sizeof(double)), *V = calloc(2 * n, sizeof(double));
   for (size_t k = 0; k < n; k++) {
     double r = S[k] * N[k], u = x[k];
+    const size_t pool = r < 0 ? n : 0;
     if (r == 0) continue;
     d[k] -= r;
     for (size_t i = 0; fp && i < n; i++) {
@@ -499,11 +504,11 @@ static void ref_breakage_1d(const gs_grid *g, const daughter_spec *ds, int fp, c
       d[i] += r * nik;
     }
     for (size_t t = 0; !fp && t < n && e[t] < u; t++) {
-      B[t] += r * qint(ds, u, e[t], e[t + 1], 1, 0);
-      V[t] += r * qint(ds, u, e[t], e[t + 1], 0, 1);
+      B[pool + t] += r * qint(ds, u, e[t], e[t + 1], 1, 0);
+      V[pool + t] += r * qint(ds, u, e[t], e[t + 1], 0, 1);
     }
   }
-  for (size_t t = 0; !fp && t < n; t++) {
+  for (size_t t = 0; !fp && t < 2 * n; t++) {
     if (B[t] == 0) continue;
     double v = V[t] / B[t];
     ref_place(g, &v, B[t], d, lost);

@@ -283,6 +283,8 @@ static int choose_method(gs_cfg_node *node, const gs_model *m, agg_t *A, gs_erro
   return rc;
 }
 
+static size_t summed_arrays(const agg_t *A);
+
 static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_error *err) {
   static const char *const schemes[] = {"cell_average", "fixed_pivot", NULL};
   const gs_grid *g = &m->grid;
@@ -344,7 +346,7 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     A->span_len = gs_doubles_apart(2 * A->nrows); /* size_t: 8 bytes, as a double */
     A->span = gs_calloc_apart(A->span_len * A->ncomp * sizeof(size_t), err);
     if (!A->span) rc = GS_ENOMEM;
-    A->work_len = gs_doubles_apart((size_t)(7 + A->nc) * A->ncells + A->n[2]);
+    A->work_len = gs_doubles_apart((summed_arrays(A) + 1) * A->ncells + A->n[2]);
     A->work = gs_calloc_apart((size_t)A->nthreads * A->work_len * sizeof(double), err);
     A->dirty = gs_calloc_apart((size_t)A->nthreads * sizeof(dirty_range), err);
     if (!A->work || !A->dirty) rc = gs_error_set(err, GS_ENOMEM, "out of memory");
@@ -365,6 +367,10 @@ static int agg_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
 typedef struct {
   double *death, *births, *vol[3], *fp, *row, *wrow;
   double *cvol[GS_MAX_CARRIED]; /* pooled carried loads per target cell */
+  /* cell average: the pool of the pairs with a negative rate (a partner's
+   * count below zero: integration noise), kept apart from births, vol and
+   * cvol so that each pool's mean lies in its target cell (see pairs_generic) */
+  double *nbirths, *nvol[3], *ncvol[GS_MAX_CARRIED];
   const double *pcar;           /* loads per particle of the compartment (read only) */
   double lost_n, lost_v[3], lost_c[GS_MAX_CARRIED];
   /* [lo, hi): the cells written in the summed arrays (deaths of the cells
@@ -374,9 +380,12 @@ typedef struct {
   size_t lo, hi;
 } acc_t;
 
-/* Per-thread work: death, births, vol[3], cvol[nc], fp (zeroed and summed
+/* Per-thread work: death, births, vol[3], cvol[nc], fp, and with cell
+ * average the negative pool nbirths, nvol[3], ncvol[nc] (zeroed and summed
  * over threads), then row and wrow (scratch). */
-static size_t summed_arrays(const agg_t *A) { return (size_t)(6 + A->nc); }
+static size_t summed_arrays(const agg_t *A) {
+  return (size_t)(6 + A->nc) + (A->scheme == FIXED_PIVOT ? 0 : (size_t)(4 + A->nc));
+}
 static size_t summed_len(const agg_t *A) { return summed_arrays(A) * A->ncells; }
 
 /* Zero the cells of thread tid's summed arrays that its last use wrote. */
@@ -405,8 +414,13 @@ static acc_t thread_acc(const agg_t *A, int tid) {
   for (int q = 0; q < 3; q++) acc.vol[q] = w + (2 + (size_t)q) * n;
   for (size_t q = 0; q < nc; q++) acc.cvol[q] = w + (5 + q) * n;
   acc.fp = w + (5 + nc) * n;
-  acc.row = w + (6 + nc) * n;
-  acc.wrow = w + (7 + nc) * n;
+  if (A->scheme != FIXED_PIVOT) {
+    acc.nbirths = w + (6 + nc) * n;
+    for (int q = 0; q < 3; q++) acc.nvol[q] = w + (7 + nc + (size_t)q) * n;
+    for (size_t q = 0; q < nc; q++) acc.ncvol[q] = w + (10 + nc + q) * n;
+  }
+  acc.row = w + summed_arrays(A) * n;
+  acc.wrow = w + (summed_arrays(A) + 1) * n;
   clear_dirty(A, tid);
   acc.lo = n;
   acc.hi = 0;
@@ -494,6 +508,21 @@ pairs_generic(const agg_t *A, size_t comp, const double *restrict N, size_t a, a
         if (w == 0.0) continue;
         if (!FP) {
           const size_t t = tbase + T2[i2];
+          if (t < ncells && w < 0.0) {
+            /* A partner's count below zero (integration noise): pooled
+             * with the positive births of t, the mean of a mixed-sign pool
+             * can lie far outside t, and the lever would carry the packet
+             * to the grid's far corners (where consolidation, say, is very
+             * stiff); pooled apart, each pool's mean lies in t. */
+            acc->nbirths[t] += w;
+            acc->nvol[off][t] += w * (xa0 + x0[b]);
+            if (DIM > 1) acc->nvol[off + 1][t] += w * (xa1 + x1[b]);
+            if (DIM > 2) acc->nvol[2][t] += w * (xa2 + x2[b]);
+            if (NC > 0) acc->ncvol[0][t] += w * (pa0 + p0[b]);
+            if (NC > 1) acc->ncvol[1][t] += w * (pa1 + p1[b]);
+            if (t + 1 > touched_hi) touched_hi = t + 1;
+            continue;
+          }
           if (t < ncells) {
             if (t != t_run) {
               if (t_run != (size_t)-1) {
@@ -695,6 +724,23 @@ static void compartment_pairs(agg_t *A, size_t comp, const double *N, acc_t *acc
 
 /* Redistribute pooled births (cell average) or copy fixed-pivot births into
  * dydt; returns the number placed.  Lost packets go to lost_n / lost_v. */
+/* Place the pool of B births in cell t (cell average), whose volumes and
+ * carried loads are vol[.][t] and cvol[.][t]; returns the number placed. */
+static double place_pool(const agg_t *A, const gs_grid *g, size_t t, double B, double *const *vol,
+                         double *const *cvol, double sign, double *dydt, double *const *qdst, acc_t *acc) {
+  if (B == 0.0) return 0.0;
+  double vbar[GS_MAX_DIM], excess[GS_MAX_DIM] = {0}, qtot[GS_MAX_CARRIED];
+  for (int k = 0; k < A->dim; k++) vbar[k] = vol[A->off + k][t] / B;
+  for (int q = 0; q < A->nc; q++) qtot[q] = sign * cvol[q][t];
+  gs_lever_place_carried(g, t, vbar, sign * B, dydt, excess, qdst ? A->nc : 0, qtot, qdst);
+  /* excess carries the packet's sign already, and pass() books lost_v
+   * times sign: unsigned here, like the pairs' losses (with the sign
+   * twice, the dry pass of wet "either" had booked its clamped volume
+   * with the wrong sign) */
+  for (int k = 0; k < A->dim; k++) acc->lost_v[A->off + k] += sign * excess[k];
+  return sign * B;
+}
+
 static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double sign,
                            double *dydt, double *const *qdst) {
   double placed = 0;
@@ -706,18 +752,8 @@ static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double 
     return placed;
   }
   for (size_t t = acc->lo; t < acc->hi; t++) {
-    double B = acc->births[t];
-    if (B == 0.0) continue;
-    double vbar[GS_MAX_DIM], excess[GS_MAX_DIM] = {0}, qtot[GS_MAX_CARRIED];
-    for (int k = 0; k < A->dim; k++) vbar[k] = acc->vol[A->off + k][t] / B;
-    for (int q = 0; q < A->nc; q++) qtot[q] = sign * acc->cvol[q][t];
-    gs_lever_place_carried(g, t, vbar, sign * B, dydt, excess, qdst ? A->nc : 0, qtot, qdst);
-    placed += sign * B;
-    /* excess carries the packet's sign already, and pass() books lost_v
-     * times sign: unsigned here, like the pairs' losses (with the sign
-     * twice, the dry pass of wet "either" had booked its clamped volume
-     * with the wrong sign) */
-    for (int k = 0; k < A->dim; k++) acc->lost_v[A->off + k] += sign * excess[k];
+    placed += place_pool(A, g, t, acc->births[t], acc->vol, acc->cvol, sign, dydt, qdst, acc);
+    placed += place_pool(A, g, t, acc->nbirths[t], acc->nvol, acc->ncvol, sign, dydt, qdst, acc);
   }
   return placed;
 }

@@ -47,9 +47,13 @@ typedef struct {
   size_t *first;        /* ncells+1: packets of parent k are [first[k], first[k+1]) */
   packet_t *pk;
   double *excess;       /* FP: volume removed by clamping (lever.h), per parent and axis */
-  double *births, *vol; /* CA workspace per slot (gs_eval.slot): ncells and dim*ncells */
+  /* CA workspace per slot (gs_eval.slot), two pools each: from parents of
+   * positive count, then negative (integration noise; pooled together, the
+   * two can cancel in the count but not in the volume, and the pool's mean
+   * then lies anywhere on the grid) */
+  double *births, *vol; /* 2 ncells and 2 dim*ncells */
   int nc;               /* carried quantities */
-  double *cbirth;       /* CA workspace per slot: nc*ncells pooled loads */
+  double *cbirth;       /* 2 nc*ncells pooled loads */
   size_t births_len, vol_len, cbirth_len; /* per-slot strides, whole pages (GS_APART) */
 } brk_t;
 
@@ -199,9 +203,9 @@ static int brk_create(gs_cfg_node *node, const gs_model *m, void **self, gs_erro
     const size_t nslot = m->nslots > 0 ? (size_t)m->nslots : 1;
     /* per slot, on pages of their own: threads write them at once */
     B->nc = m->ncarried;
-    B->births_len = gs_doubles_apart(g->ncells);
-    B->vol_len = gs_doubles_apart(g->ncells * (size_t)g->dim);
-    B->cbirth_len = gs_doubles_apart((size_t)B->nc * g->ncells + 1);
+    B->births_len = gs_doubles_apart(2 * g->ncells);
+    B->vol_len = gs_doubles_apart(2 * g->ncells * (size_t)g->dim);
+    B->cbirth_len = gs_doubles_apart(2 * (size_t)B->nc * g->ncells + 1);
     B->births = gs_calloc_apart(nslot * B->births_len * sizeof(double), err);
     B->vol = gs_calloc_apart(nslot * B->vol_len * sizeof(double), err);
     B->cbirth = gs_calloc_apart(nslot * B->cbirth_len * sizeof(double), err);
@@ -239,9 +243,9 @@ static void brk_compartment(brk_t *B, const gs_model *m, const gs_eval *ev, size
     double *lost = dledger ? gs_eval_ledger(m, ev, dledger, comp) + m->nvol : NULL;
     double born = 0, dead = 0, excess[GS_MAX_DIM] = {0};
     if (B->scheme == CELL_AVERAGE) {
-      memset(births, 0, B->ncells * sizeof(double));
-      memset(vol, 0, B->ncells * (size_t)dim * sizeof(double));
-      memset(cbirth, 0, (size_t)B->nc * B->ncells * sizeof(double));
+      memset(births, 0, 2 * B->ncells * sizeof(double));
+      memset(vol, 0, 2 * B->ncells * (size_t)dim * sizeof(double));
+      memset(cbirth, 0, 2 * (size_t)B->nc * B->ncells * sizeof(double));
     }
     double *qdst[GS_MAX_CARRIED] = {NULL, NULL};
     for (int q = 0; d && q < B->nc; q++) qdst[q] = gs_eval_carried(m, ev, dydt, comp, q);
@@ -262,20 +266,21 @@ static void brk_compartment(brk_t *B, const gs_model *m, const gs_eval *ev, size
           born += r * pk->count;
           continue;
         }
-        births[pk->cell] += r * pk->count;
-        for (int q = 0; q < dim; q++) vol[pk->cell * (size_t)dim + (size_t)q] += r * pk->vol[q];
-        for (int q = 0; q < B->nc; q++) cbirth[(size_t)q * B->ncells + pk->cell] += r * pk->share * load[q];
+        const size_t t = pk->cell + (r < 0 ? B->ncells : 0); /* the pool of r's sign */
+        births[t] += r * pk->count;
+        for (int q = 0; q < dim; q++) vol[t * (size_t)dim + (size_t)q] += r * pk->vol[q];
+        for (int q = 0; q < B->nc; q++) cbirth[(size_t)q * 2 * B->ncells + t] += r * pk->share * load[q];
       }
       if (B->scheme == FIXED_PIVOT)
         for (int q = 0; q < dim; q++) excess[q] += r * B->excess[k * (size_t)dim + (size_t)q];
     }
-    for (size_t t = 0; B->scheme == CELL_AVERAGE && t < B->ncells; t++) {
+    for (size_t t = 0; B->scheme == CELL_AVERAGE && t < 2 * B->ncells; t++) {
       double b = births[t];
       if (b == 0.0) continue;
       double vbar[GS_MAX_DIM], qtot[GS_MAX_CARRIED];
       for (int q = 0; q < dim; q++) vbar[q] = vol[t * (size_t)dim + (size_t)q] / b;
-      for (int q = 0; q < B->nc; q++) qtot[q] = cbirth[(size_t)q * B->ncells + t];
-      if (d) gs_lever_place_carried(g, t, vbar, b, d, excess, B->nc, qtot, qdst);
+      for (int q = 0; q < B->nc; q++) qtot[q] = cbirth[(size_t)q * 2 * B->ncells + t];
+      if (d) gs_lever_place_carried(g, t % B->ncells, vbar, b, d, excess, B->nc, qtot, qdst);
       born += b;
     }
     if (lost)
