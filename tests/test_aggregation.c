@@ -437,7 +437,7 @@ static void test_edge_sums(void) {
 /* Integration noise leaves counts slightly below zero.  With cell average,
  * the births a cell receives from pairs with a negative partner (a negative
  * rate) were pooled with its positive births: such a pool's mean volume can
- * lie far outside the cell (here -45 against pivots 1, 2, 4, ...), and the
+ * lie far outside the cell (here -58 against pivots 1, 2, 4, ...), and the
  * lever carried the packet to the first or last pivot, where it was clamped
  * and its excess booked as lost (in the 26^3 Madec benchmark all of its
  * 7.1e-10 "loss through the grid boundaries" was such noise).  Each pair's

@@ -722,8 +722,6 @@ static void compartment_pairs(agg_t *A, size_t comp, const double *N, acc_t *acc
   mark_dirty(A, 0, acc[0].lo, acc[0].hi); /* the others' sums added into thread 0's */
 }
 
-/* Redistribute pooled births (cell average) or copy fixed-pivot births into
- * dydt; returns the number placed.  Lost packets go to lost_n / lost_v. */
 /* Place the pool of B births in cell t (cell average), whose volumes and
  * carried loads are vol[.][t] and cvol[.][t]; returns the number placed. */
 static double place_pool(const agg_t *A, const gs_grid *g, size_t t, double B, double *const *vol,
@@ -741,6 +739,8 @@ static double place_pool(const agg_t *A, const gs_grid *g, size_t t, double B, d
   return sign * B;
 }
 
+/* Redistribute pooled births (cell average) or copy fixed-pivot births into
+ * dydt; returns the number placed.  Lost packets go to lost_n / lost_v. */
 static double place_births(const agg_t *A, const gs_grid *g, acc_t *acc, double sign,
                            double *dydt, double *const *qdst) {
   double placed = 0;
