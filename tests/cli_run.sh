@@ -146,4 +146,31 @@ balance=$(sed -n 's/.*largest volume-balance error \([0-9.e+-]*\),.*/\1/p' "$WOR
 awk -v b="$balance" 'BEGIN { exit !(b < 1e-13) }' ||
   fail "the example with partners: either kept its volume balance to $balance, expected < 1e-13"
 
+# ---- rk held by its stability limit says so, once, and names the way out:
+# constant growth through a fine geometric grid (the smallest occupied
+# cell's transfer rate G / width ~ 1e4 /s holds rk's step at ~4e-4 s; CVODE
+# takes ~1 000 steps) -----------------------------------------------------
+stiff=$(write_case stiff.yaml "title: growth through a fine geometric grid
+grid:
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-3, ratio: 1.05, cells: 200}
+initial: {type: point, number: 1.0e6, at: [2.0e-3]}
+mechanisms:
+  - {type: growth, axis: solid, constant: 1.0}
+solver: {method: rk, rtol: 1.0e-6, atol: 1.0e-3}
+output: {end: 5, count: 2}")
+run_rc 0 "$BIN" run "$stiff" --out "$WORK/stiff-rk" --threads 1
+stderr_has "warning: solver rk: at t = " "are held by its stability limit" "method cvode (or auto) steps past it"
+[ "$(grep -c 'warning: solver rk' "$WORK/stderr")" = 1 ] || { show_output; fail "the rk warning is not said exactly once"; }
+steps=$(sed -n 's/.*(\([0-9]*\) steps,.*/\1/p' "$WORK/stderr")
+[ "${steps:-0}" -gt 8192 ] || { show_output; fail "rk took ${steps:-no} steps on the stiff case, expected > 8192 (is it still stiff?)"; }
+sed 's/method: rk/method: cvode/' "$stiff" >"$WORK/stiff-cvode.yaml"
+run_rc 0 "$BIN" run "$WORK/stiff-cvode.yaml" --out "$WORK/stiff-cvode" --threads 1
+stderr_lacks "warning: solver rk"
+# not stiff: the same grid with growth in proportion to size (rate 0.5 /
+# width 0.05 = 10 /s in every cell), rk's steps follow the accuracy
+sed 's/constant: 1.0/linear: 0.5/' "$stiff" >"$WORK/mild.yaml"
+run_rc 0 "$BIN" run "$WORK/mild.yaml" --out "$WORK/mild" --threads 1
+stderr_lacks "warning: solver rk"
+
 echo "cli_run: ok"

@@ -11,7 +11,8 @@
  *
  * The rule (docs/models.md, "Choosing the integrator"):
  *   - rho is estimated at (t, y) by a power iteration on difference
- *     quotients of f (GS_AUTO_POWER_ITERATIONS evaluations, the system's
+ *     quotients of f (src/ode/stiffness.c: GS_STIFFNESS_POWER_ITERATIONS + 1
+ *     evaluations, counted with rk's, the system's
  *     discrete choices held);
  *   - stiff means: rk's last step h is at its stability limit (1 <= h rho
  *     <= 2 beta) and the limit would cost rk more than GS_AUTO_STIFF_STEPS
@@ -36,6 +37,7 @@
 #include <string.h>
 
 #include "gransim/integrator.h"
+#include "ode/stiffness.h"
 
 int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
                               double *initial_step, double *min_step, double *max_step,
@@ -43,10 +45,8 @@ int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
 
 extern const gs_integrator_type gs_integrator_rk, gs_integrator_cvode;
 
-#define GS_AUTO_BETA 3.3               /* stability boundary of rk on the negative real axis */
-#define GS_AUTO_STIFF_STEPS 500.0      /* steps the stability limit may cost rk in one advance */
-#define GS_AUTO_CHECK_EVERY 50         /* rk steps between two estimates within an advance */
-#define GS_AUTO_POWER_ITERATIONS 10
+#define GS_AUTO_STIFF_STEPS 500.0 /* steps the stability limit may cost rk in one advance */
+#define GS_AUTO_CHECK_EVERY 50    /* rk steps between two estimates within an advance */
 
 typedef struct {
   void *rk_settings, *cvode_settings;
@@ -65,7 +65,8 @@ typedef struct {
   /* the decisions, for the message (describe) */
   long stiff_advances;
   double first_t, first_rho, first_cost; /* the first switch to CVODE */
-  double *f0, *v, *w, *yp; /* power iteration work (n each) */
+  gs_stiffness est;        /* the spectral radius's estimator */
+  long est_evals;          /* its evaluations of f */
   gs_integrator_stats done; /* rk's and cvode's counters are summed */
 } gs_auto;
 
@@ -74,10 +75,7 @@ static void gs_auto_free(void *vself) {
   if (!self) return;
   gs_integrator_free(&self->rk);
   gs_integrator_free(&self->cvode);
-  free(self->f0);
-  free(self->v);
-  free(self->w);
-  free(self->yp);
+  gs_stiffness_free(&self->est);
   free(self);
 }
 
@@ -140,11 +138,7 @@ static int gs_auto_create(const void *settings, const gs_ode *ode, void **out, g
   int rc = gs_integrator_create(&rk, ode, &self->rk, err);
   if (!rc && !ode->reduce_max && !ode->trying) {
     rc = gs_integrator_create(&cv, ode, &self->cvode, err);
-    self->f0 = gs_malloc(ode->n * sizeof(double), err);
-    self->v = gs_malloc(ode->n * sizeof(double), err);
-    self->w = gs_malloc(ode->n * sizeof(double), err);
-    self->yp = gs_malloc(ode->n * sizeof(double), err);
-    if (!rc && (!self->f0 || !self->v || !self->w || !self->yp)) rc = GS_ENOMEM;
+    if (!rc) rc = gs_stiffness_init(&self->est, ode->n, err);
   }
   if (rc) {
     gs_auto_free(self);
@@ -154,60 +148,21 @@ static int gs_auto_create(const void *settings, const gs_ode *ode, void **out, g
   return GS_OK;
 }
 
-/* RMS of w_i v_i over the components in the error control. */
-static double gs_auto_norm(const gs_auto *self, const double *v) {
-  double s = 0;
-  for (size_t i = 0; i < self->n; i++) s += (self->w[i] * v[i]) * (self->w[i] * v[i]);
-  return sqrt(s / (double)self->n);
-}
-
-/* The spectral radius of the Jacobian of f at (t, y), by a power iteration
- * on forward differences (J v ~ (f(y + s v) - f(y)) / s, s v one tolerance
- * unit in the RMS norm, as CVODE's own difference quotients), in the
- * tolerance-weighted norm, from an alternating vector (it holds the fast
- * modes of fine grids).  0 when it cannot be estimated (f failed): no
- * switch then. */
 static double gs_auto_spectral_radius(gs_auto *self, double t, const double *y) {
-  const gs_ode *ode = self->ode;
-  const size_t n = self->n;
-  for (size_t i = 0; i < n; i++) {
-    const double scale = ode->abs_scale ? ode->abs_scale[i] : 1.0;
-    self->w[i] = scale > 0 ? 1.0 / (self->atol * scale + self->rtol * fabs(y[i])) : 0.0;
-    self->v[i] = self->w[i] > 0 ? ((i & 1) ? -1.0 : 1.0) / self->w[i] : 0.0;
-  }
-  if (ode->hold) ode->hold(ode->ctx, 1);
-  int rc = ode->f(ode->ctx, t, y, self->f0);
-  double rho = 0;
-  for (int k = 0; !rc && k < GS_AUTO_POWER_ITERATIONS; k++) {
-    const double norm = gs_auto_norm(self, self->v);
-    if (!(norm > 0) || !isfinite(norm)) break;
-    const double s = 1.0 / norm;
-    for (size_t i = 0; i < n; i++) self->yp[i] = y[i] + s * self->v[i];
-    rc = ode->f(ode->ctx, t, self->yp, self->v); /* v = J v_old * s + f0 */
-    for (size_t i = 0; !rc && i < n; i++) self->v[i] = (self->v[i] - self->f0[i]) / s;
-    if (!rc) rho = gs_auto_norm(self, self->v) / (norm); /* ||J v|| / ||v|| */
-  }
-  if (ode->hold) ode->hold(ode->ctx, 0);
-  return rc || !isfinite(rho) ? 0.0 : rho;
+  return gs_stiffness_radius(&self->est, self->ode, self->rtol, self->atol, t, y,
+                             &self->est_evals);
 }
 
-/* Steps the stability limit alone costs rk from t to t_out. */
-static double gs_auto_cost(double rho, double t, double t_out) {
-  return (t_out - t) * rho / GS_AUTO_BETA;
-}
-
-/* Stiff: rk's last step h sits at its stability limit (1 <= h rho <= 2
- * beta; a step far beyond it that rk took without blowing up says that the
- * estimate of rho is not the Jacobian's, e.g. where f is not smooth at an
- * empty cell) and that limit would cost rk more than GS_AUTO_STIFF_STEPS
- * steps to the end of the advance.  h = 0 (rk has taken no step): not known,
+/* Stiff: rk's last step h sits at its stability limit (gs_stiffness_held)
+ * and that limit would cost rk more than GS_AUTO_STIFF_STEPS steps to the
+ * end of the advance.  h = 0 (rk has taken no step): not known,
  * rk starts. */
 static int gs_auto_stiff(const gs_auto *self, double rho, double cost) {
   gs_integrator_stats st;
   self->rk.type->get_stats(self->rk.self, &st);
   /* a resumed rk has taken no step yet: its last one is the marked one */
-  const double hr = (st.steps > 0 ? st.last_step : self->resumed_step) * rho;
-  return hr >= 1.0 && hr <= 2.0 * GS_AUTO_BETA && cost > GS_AUTO_STIFF_STEPS;
+  const double h = st.steps > 0 ? st.last_step : self->resumed_step;
+  return gs_stiffness_held(h, rho) && cost > GS_AUTO_STIFF_STEPS;
 }
 
 static void gs_auto_to_cvode(gs_auto *self, double t, double rho, double cost) {
@@ -237,7 +192,7 @@ static int gs_auto_advance(void *vself, const gs_ode *ode, double *t, double t_o
     return rk->type->advance(rk->self, ode, t, t_out, y, err);
   if (t_out <= *t) return rk->type->advance(rk->self, ode, t, t_out, y, err);
   self->ode = ode;
-  double rho = gs_auto_spectral_radius(self, *t, y), cost = gs_auto_cost(rho, *t, t_out);
+  double rho = gs_auto_spectral_radius(self, *t, y), cost = gs_stiffness_cost(rho, *t, t_out);
   self->using_cvode = 0;
   if (gs_auto_stiff(self, rho, cost)) {
     gs_auto_to_cvode(self, *t, rho, cost);
@@ -260,7 +215,7 @@ static int gs_auto_advance(void *vself, const gs_ode *ode, double *t, double t_o
     if (rc || *t >= t_out) return rc;
     self->check_at += GS_AUTO_CHECK_EVERY;
     rho = gs_auto_spectral_radius(self, *t, y);
-    cost = gs_auto_cost(rho, *t, t_out);
+    cost = gs_stiffness_cost(rho, *t, t_out);
     /* two looks in a row: rk's first steps, still growing, pass through the
      * stability limit once */
     stiff_looks = gs_auto_stiff(self, rho, cost) ? stiff_looks + 1 : 0;
@@ -275,6 +230,7 @@ static int gs_auto_advance(void *vself, const gs_ode *ode, double *t, double t_o
 static void gs_auto_stats(const void *vself, gs_integrator_stats *stats) {
   const gs_auto *self = vself;
   self->rk.type->get_stats(self->rk.self, stats);
+  stats->rhs_evals += self->est_evals;
   if (!self->cvode.self) return;
   gs_integrator_stats cv;
   self->cvode.type->get_stats(self->cvode.self, &cv);

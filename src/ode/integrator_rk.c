@@ -40,6 +40,7 @@
 #include "cfg/nearest.h"
 #include "gransim/integrator.h"
 #include "ode/integrator_interval.h"
+#include "ode/stiffness.h"
 
 int gs_integrator_common_keys(gs_cfg_node *solver, double *rtol, double *atol,
                               double *initial_step, double *min_step, double *max_step,
@@ -122,6 +123,8 @@ typedef struct {
   size_t fail_index;
   double fail_t, fail_value;
   gs_integrator_stats stats;
+  gs_stiffness est; /* allocated at the first look for stiffness */
+  int stiff_said;   /* the run was told that it is stiff */
 } gs_rk;
 
 static const char *const gs_rk_variants[] = {"rkf45", "rkck", "rk8pd", NULL};
@@ -474,6 +477,7 @@ static void gs_rk_release(void *vself) {
 static void gs_rk_free(void *vself) {
   if (!vself) return;
   gs_rk_release(vself);
+  gs_stiffness_free(&((gs_rk *)vself)->est);
   free(vself);
 }
 
@@ -713,6 +717,43 @@ static void gs_rk_rebase(gs_rk *self, double t0, double *y) {
   memcpy(y, Y, n * sizeof *y);
 }
 
+/* A case whose steps rk's stability limit holds down crawls without failing
+ * for a long time (max_steps_per_output is 1e7).  After GS_RK_STIFF_LOOK
+ * steps in one output interval, and at each doubling, the spectral radius
+ * is estimated (src/ode/stiffness.c); when it holds the step and would
+ * cost more than GS_RK_STIFF_LOOK further steps, the run is told once, with
+ * the methods that step past it.  Not under MPI or per-compartment steps,
+ * where f is not this process's or this integrator's alone, nor with the
+ * exponential outflow, whose steps the outflow's rate does not hold. */
+#define GS_RK_STIFF_LOOK 4096 /* a power of two */
+static int gs_rk_look_for_stiffness(gs_rk *self, const gs_ode *ode, double t, double t_out,
+                                    const double *y, gs_error *err) {
+  const long s = self->interval.steps + 1; /* this step included */
+  if (self->stiff_said || ode->reduce_max || ode->trying || self->nd || s < GS_RK_STIFF_LOOK ||
+      (s & (s - 1)))
+    return GS_OK;
+  if (!self->est.f0) {
+    int rc = gs_stiffness_init(&self->est, self->n, err);
+    if (rc) return rc;
+  }
+  const double rho =
+      gs_stiffness_radius(&self->est, ode, self->rtol, self->atol, t, y, &self->stats.rhs_evals);
+  const double h = self->stats.last_step, cost = gs_stiffness_cost(rho, t, t_out);
+  /* the band of gs_stiffness_held, twice as wide: the estimate is ||J v|| /
+   * ||v||, which for the upwind transfer of growth (a bidiagonal J) tends
+   * to up to twice its spectral radius; this costs a warning at most */
+  if (!(h * rho >= 1.0 && h * rho <= 4.0 * GS_STIFFNESS_BETA) || !(cost > GS_RK_STIFF_LOOK))
+    return GS_OK;
+  self->stiff_said = 1;
+  fprintf(stderr,
+          "gransim: warning: solver rk: at t = %.6g s its steps (%.3g s) are held by its "
+          "stability limit (Jacobian spectral radius %.3g /s): about %.3g more steps to t = "
+          "%.6g s for stability alone; the case is stiff here, and method cvode (or auto) "
+          "steps past it\n",
+          t, h, rho, cost, t_out);
+  return GS_OK;
+}
+
 static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out, double *y,
                          gs_error *err) {
   gs_rk *self = vself;
@@ -767,6 +808,8 @@ static int gs_rk_advance(void *vself, const gs_ode *ode, double *t, double t_out
     rc = gs_rk_check_min_step(self, *t, t_out, err);
     if (rc) return rc;
     if (self->nd) gs_rk_rebase(self, t0, y);
+    rc = gs_rk_look_for_stiffness(self, ode, *t, t_out, y, err);
+    if (rc) return rc;
     if (gs_interval_step_done(&self->interval, ode)) return GS_OK;
     if (self->nd) memcpy(Y, y, self->n * sizeof *y); /* as between_steps left it */
   }
@@ -790,6 +833,7 @@ static void gs_rk_carry(void *vto, const void *vfrom) {
   to->rejected_error = from->rejected_error;
   to->stats = from->stats;
   to->interval = from->interval;
+  to->stiff_said = from->stiff_said;
 }
 
 /* At an output time: the step size and the controller's memory of a
