@@ -366,4 +366,34 @@ run_rc 0 "$BIN" check "$f"
 stderr_has "edge-kernel.csv: 2 of 20 grid cells have their size on an edge between two classes" \
   "(the first: cell 1, 0.75) and take the class above it"
 
+# Magnitudes beyond what doubles hold, refused where they are written (the
+# fuzzed case files that had overflowed into an unnamed integrator error,
+# run with an empty state, or tried to allocate 320 GB).
+bad overflow-axis.yaml 3 "grid:
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-13, ratio: 2.5, cells: 1000}
+initial: {type: point, number: 1.0e6, at: [1.0e-12]}
+output: {end: 1}" "grid.axes[0]: axis 'solid': its last edge is inf, beyond 1e+100"
+bad overflow-number.yaml 4 "grid:
+  axes:
+    - {name: solid, type: geometric, min: 1.0e-13, ratio: 2, cells: 10}
+initial: {type: point, number: 1.0e308, at: [1.0e-12]}
+output: {end: 1}" "initial: the case's totals" "overflow the solver's error scales"
+# a gamma distribution whose every edge is infinitely many means above it:
+# GSL's CDF is NaN there, which the coverage test had let through
+bad gamma-far-below.yaml 4 "grid:
+  axes:
+    - {name: solid, type: geometric, min: 1.0e50, ratio: 2, cells: 10}
+initial: {type: gamma, number: 1.0e6, mean: [1.0e-270], shape: [8]}
+output: {end: 1}" "does not cover this distribution: 1 of its number and 1 of its volume lie outside"
+bad pair-tables.yaml 6 "grid:
+  axes:
+    - {name: solid, type: linear, min: 0, max: 1, cells: 20000}
+initial: {type: point, number: 1.0e6, at: [0.5]}
+mechanisms:
+  - {type: aggregation, kernel: {type: constant, beta0: 1.0e-9}}
+limits: {memory_gb: 1}
+output: {end: 1}" "mechanisms[0]: its tables over pairs of cells need 12.8 GB (axes of 20000 cells)" \
+  "limits.memory_gb = 1 GB"
+
 echo "cli_check: ok"

@@ -52,6 +52,10 @@ run_rc 0 "$BIN" run "$WORK/pbm.yaml" --out "$WORK/pbm" --quiet
 sed 's/compartments: 2/compartments: 3/' "$WORK/pbm.yaml" >"$WORK/pbm3.yaml"
 run_rc 1 "$BIN" check "$WORK/pbm3.yaml"
 stderr_has "two.yaml has 2 compartments, the grid 3" "grid.compartments"
+# a fragment that is not there is named at the line that names it
+sed 's/file: two.yaml/file: no-such.yaml/' "$WORK/pbm.yaml" >"$WORK/pbm-missing.yaml"
+run_rc 1 "$BIN" check "$WORK/pbm-missing.yaml"
+stderr_has "pbm-missing.yaml:3: mechanisms[0].file: fragment: cannot open" "no-such.yaml"
 
 # a real short DEM run: the bowl-and-impeller example, 150 particles for 0.3 s
 sed -e 's/duration: 0.8/duration: 0.3/; s/count: 400/count: 150/' "$SRC/examples/bowl-zones-dem.yaml" >"$WORK/bowl.yaml"

@@ -82,6 +82,10 @@ typedef struct gs_mech_type {
   /* Pages (GS_APART) it keeps per compartment, for the memory a case is
    * estimated to need before it is built (limits.memory_gb). */
   int pages_per_compartment;
+  /* Optional, for the same estimate: bytes it will hold for the grid as a
+   * whole (tables over pairs of cells), from its case node, before it is
+   * built.  NULL: none. */
+  double (*grid_bytes)(gs_cfg_node *node, const gs_grid *g);
   /* 1: its rates read the state of any compartment (an exchange network),
    * not only comp's and the one upstream, so it runs with shared steps on
    * one process (the other strategies pack compartments apart). */

@@ -384,7 +384,8 @@ static double default_atol(const gs_case *c, double rtol, const double V[GS_MAX_
 
 /* solver.atol, or the case's default (above), which the integrator gets as a
  * scale of its own default on every component (abs_scale). */
-static int case_atol(gs_cfg_node *solver, gs_case *c, double *atol, gs_error *err) {
+static int case_atol(gs_cfg_node *root, gs_cfg_node *solver, gs_case *c, double *atol,
+                     gs_error *err) {
   gs_cfg_node *an = solver ? gs_cfg_get(solver, "atol") : NULL;
   gs_cfg_node *rn = solver ? gs_cfg_get(solver, "rtol") : NULL;
   double rtol = 1e-6;
@@ -400,9 +401,19 @@ static int case_atol(gs_cfg_node *solver, gs_case *c, double *atol, gs_error *er
     if (*atol > 0 && isfinite(V[k]) && V[k] > 0)
       c->abs_scale[i] = fmax(c->abs_scale[i], LEDGER_SHARE * rtol * V[k] / *atol);
   }
-  if (an) return GS_OK;
-  const double factor = *atol / GS_INTEGRATOR_ATOL;
-  for (size_t i = 0; i < c->ode.n; i++) c->abs_scale[i] *= factor;
+  if (!an) {
+    const double factor = *atol / GS_INTEGRATOR_ATOL;
+    for (size_t i = 0; i < c->ode.n; i++) c->abs_scale[i] *= factor;
+  }
+  /* totals beyond what doubles hold (number: 1e308) overflow here first */
+  double vmax = 0;
+  for (int k = 0; k < m->nvol; k++) vmax = fmax(vmax, V[k]);
+  for (size_t i = 0; i < c->ode.n; i++)
+    if (!isfinite(c->abs_scale[i]))
+      return gs_cfg_fail(gs_cfg_get(root, "initial"), err,
+                         "the case's totals (up to %g of a coordinate's volume) overflow the "
+                         "solver's error scales: give numbers and sizes that doubles hold",
+                         vmax);
   return GS_OK;
 }
 
@@ -464,7 +475,7 @@ static int setup_ode(gs_cfg_node *root, gs_case *c, const double *accuracy, gs_e
   else if (rb && (gs_cfg_node_double(rb, &c->rebalance, err) || !(c->rebalance >= 0 && c->rebalance < 1)))
     return gs_cfg_fail(rb, err, "expected a fraction in [0, 1) or 'none'");
   int rc = gs_integrator_setup_read(solver, &c->integrator_setup, err);
-  if (!rc) rc = case_atol(solver, c, &c->atol, err);
+  if (!rc) rc = case_atol(root, solver, c, &c->atol, err);
   /* scalars to their own accuracy, whatever the numbers' atol: the
    * integrator's is solver.atol if given, else GS_INTEGRATOR_ATOL */
   const double base = solver && gs_cfg_get(solver, "atol") ? c->atol : GS_INTEGRATOR_ATOL;

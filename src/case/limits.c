@@ -2,6 +2,8 @@
 #include "case/limits.h"
 
 #include <math.h>
+#include <stdio.h>
+#include <string.h>
 #include <unistd.h>
 
 /* Vectors of the state (numbers, carried totals, ledger) a run holds at
@@ -54,6 +56,19 @@ int gs_limits_check_memory(const gs_limits *lim, gs_cfg_node *root, const gs_mod
     const char *type = gs_cfg_kind_of(item) == GS_CFG_MAP ? gs_cfg_scalar(gs_cfg_get(item, "type")) : NULL;
     const gs_mech_type *t = type ? gs_mech_lookup(type) : NULL;
     if (t) pages += t->pages_per_compartment;
+    /* a table over pairs of cells: refused at the mechanism that asks for it */
+    const double tables = t && t->grid_bytes ? t->grid_bytes(item, &m->grid) / 1e9 : 0;
+    if (!(tables + gs_limits_memory_bytes(m, 0) / 1e9 > lim->memory_gb)) continue;
+    char axes[96] = "";
+    for (int k = 0; k < m->grid.dim; k++)
+      snprintf(axes + strlen(axes), sizeof axes - strlen(axes), "%s%zu", k ? " x " : "",
+               m->grid.axis[k].n);
+    return gs_cfg_fail(item, err,
+                         "its tables over pairs of cells need %.3g GB (axes of %s cells), more than "
+                         "limits.memory_gb = %.3g GB%s: use fewer cells, another of its methods "
+                         "(docs/case-files.md, %s) or raise limits.memory_gb on a larger machine",
+                         tables, axes, lim->memory_gb,
+                         lim->node ? "" : " (80 % of this machine's memory)", type);
   }
   const double need = gs_limits_memory_bytes(m, pages) / 1e9;
   if (need <= lim->memory_gb) return GS_OK;

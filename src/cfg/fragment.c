@@ -16,7 +16,10 @@ gs_cfg *gs_cfg_fragment_load(gs_cfg_node *fn, const char *dir, size_t ncomp, gs_
   char path[4096];
   snprintf(path, sizeof path, "%s%s%s", name[0] == '/' ? "" : dir, name[0] == '/' ? "" : "/", name);
   gs_cfg *cfg = gs_cfg_load_file(path, err);
-  if (!cfg) return NULL;
+  if (!cfg) { /* say which line named it: the loader speaks of a case file */
+    gs_error_prefix(err, "%s:%d: %s: fragment: ", gs_cfg_file(fn), gs_cfg_line(fn), gs_cfg_path(fn));
+    return NULL;
+  }
   gs_cfg_node *root = gs_cfg_root(cfg);
   long n = 0;
   int rc = root ? gs_cfg_require_kind(root, GS_CFG_MAP, err) : gs_cfg_fail(fn, err, "%s is empty", path);

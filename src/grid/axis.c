@@ -27,6 +27,22 @@ static void set_midpoints(gs_axis *ax) {
   for (size_t i = 0; i < ax->n; i++) ax->pivots[i] = 0.5 * (ax->edges[i] + ax->edges[i + 1]);
 }
 
+/* Edges far beyond any particle's size overflow the moments (a volume's
+ * square in M2, a cell's volume times 1e20 particles) long before they
+ * overflow themselves: min * ratio^cells easily does (1e-13 * 2.5^1000). */
+#define GS_AXIS_LARGEST_EDGE 1e100
+
+static int check_largest_edge(gs_axis *ax, gs_error *err) {
+  const double top = ax->edges[ax->n];
+  if (top <= GS_AXIS_LARGEST_EDGE) return GS_OK;
+  int rc = gs_error_set(err, GS_EINPUT,
+                        "axis '%s': its last edge is %g, beyond %g (the moments would overflow); "
+                        "fewer cells, a smaller ratio or max",
+                        ax->name, top, GS_AXIS_LARGEST_EDGE);
+  gs_axis_free(ax);
+  return rc;
+}
+
 int gs_axis_linear(gs_axis *ax, const char *name, double lo, double hi, size_t n, gs_error *err) {
   if (!(lo >= 0) || !(hi > lo))
     return gs_error_set(err, GS_EINPUT, "axis '%s': linear grid needs 0 <= min < max (got %g, %g)",
@@ -35,7 +51,7 @@ int gs_axis_linear(gs_axis *ax, const char *name, double lo, double hi, size_t n
   if (rc) return rc;
   for (size_t i = 0; i <= n; i++) ax->edges[i] = lo + (hi - lo) * (double)i / (double)n;
   set_midpoints(ax);
-  return GS_OK;
+  return check_largest_edge(ax, err);
 }
 
 int gs_axis_geometric(gs_axis *ax, const char *name, double lo, double ratio, size_t n,
@@ -50,7 +66,7 @@ int gs_axis_geometric(gs_axis *ax, const char *name, double lo, double ratio, si
   if (zero_first) ax->edges[0] = 0.0;
   for (size_t k = 0; k <= n; k++) ax->edges[k + off] = lo * pow(ratio, (double)k);
   set_midpoints(ax);
-  return GS_OK;
+  return check_largest_edge(ax, err);
 }
 
 int gs_axis_from_edges(gs_axis *ax, const char *name, const double *edges, size_t n_edges,
@@ -70,6 +86,7 @@ int gs_axis_from_edges(gs_axis *ax, const char *name, const double *edges, size_
   int rc = axis_alloc(ax, name, n_edges - 1, err);
   if (rc) return rc;
   memcpy(ax->edges, edges, n_edges * sizeof(double));
+  if (check_largest_edge(ax, err)) return GS_EINPUT;
   if (!pivots) {
     set_midpoints(ax);
     return GS_OK;

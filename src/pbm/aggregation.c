@@ -145,7 +145,18 @@ static void agg_free(void *self) {
   free(A);
 }
 
-/* Per-axis tables of where the sum of two pivots lands. */
+/* Per-axis tables of where the sum of two pivots lands: four values of 8
+ * bytes per pair of an axis' cells.  The pairs' method alone builds them
+ * (fft never; auto only where it falls back on the pairs, which is not
+ * known before the kernel is built, so not counted here). */
+static double agg_grid_bytes(gs_cfg_node *node, const gs_grid *g) {
+  const char *method = gs_cfg_scalar(gs_cfg_get(node, "method"));
+  if (method && strcmp(method, "pairs")) return 0;
+  double bytes = 0;
+  for (int k = 0; k < g->dim; k++) bytes += 32.0 * (double)g->axis[k].n * (double)g->axis[k].n;
+  return bytes;
+}
+
 static int build_axis_maps(agg_t *A, const gs_grid *g, gs_error *err) {
   for (int q = 0; q < 3; q++) {
     size_t n = A->n[q];
@@ -929,4 +940,5 @@ const gs_mech_type gs_mech_aggregation = {
     .describe = agg_describe,
     .free = agg_free,
     .pages_per_compartment = 3, /* wet_ok, cs, span */
+    .grid_bytes = agg_grid_bytes,
 };

@@ -18,14 +18,19 @@ typedef struct {
   int exponential;
 } marginal_t;
 
+/* Beyond x / mean = inf (an edge of 1e300 against a mean of 1e-12) GSL's
+ * gamma CDF is NaN and the exponential's u e^-u is inf * 0: all of the
+ * distribution lies below such an edge. */
 static double cum_number(const marginal_t *m, double x) {
   if (x <= 0) return 0;
+  if (isinf(x / m->mean)) return 1;
   if (m->exponential) return -expm1(-x / m->mean);
   return gsl_cdf_gamma_P(x, m->shape, m->mean / m->shape);
 }
 
 static double cum_moment(const marginal_t *m, double x) {
   if (x <= 0) return 0;
+  if (isinf(x / m->mean)) return m->mean;
   if (m->exponential) {
     double u = x / m->mean;
     return m->mean * (-expm1(-u) - u * exp(-u));
@@ -42,8 +47,9 @@ static int marginal_weights(const marginal_t *m, const gs_axis *ax, double cover
   double below_n = cum_number(m, ax->edges[0]), below_m = cum_moment(m, ax->edges[0]);
   double above_n = 1 - cum_number(m, ax->edges[ax->n]);
   double above_m = m->mean - cum_moment(m, ax->edges[ax->n]);
-  if (below_n > coverage || above_n > coverage || above_m > coverage * m->mean ||
-      below_m > coverage * m->mean)
+  /* written so that a NaN fails */
+  if (!(below_n <= coverage && above_n <= coverage && above_m <= coverage * m->mean &&
+        below_m <= coverage * m->mean))
     return gs_cfg_fail(node, err,
                        "grid axis '%s' [%g, %g] does not cover this distribution: %.3g of its "
                        "number and %.3g of its volume lie outside (allowed: %g; widen the grid or "
@@ -195,6 +201,11 @@ static int add_cells(gs_cfg_node *node, const gs_grid *g, double number, double 
 }
 
 double gs_disc_error(const gs_disc_report *r) {
+  /* a quantity asked or held that is not finite is an infinite error (fmax
+   * below would drop a NaN) */
+  if (!isfinite(r->number[0]) || !isfinite(r->number[1])) return INFINITY;
+  for (int k = 0; k < r->dim; k++)
+    if (!isfinite(r->volume[k][0]) || !isfinite(r->volume[k][1])) return INFINITY;
   double e = r->number[0] > 0 ? fabs(r->number[1] / r->number[0] - 1) : 0;
   for (int k = 0; k < r->dim; k++) {
     const double *v = r->volume[k];
@@ -237,7 +248,7 @@ static int compare(gs_cfg_node *node, const gs_grid *g, const double *add, gs_di
   log->r = grown;
   log->r[log->n++] = *rep;
   const double e = gs_disc_error(rep);
-  if (!(e > log->tolerance)) return GS_OK;
+  if (e <= log->tolerance) return GS_OK;
   /* name the quantity with the largest error */
   char what[GS_NAME_LEN + 32] = "number";
   double asked = rep->number[0], held = rep->number[1], worst = fabs(held / asked - 1);
