@@ -1,7 +1,9 @@
 # gransim check / run with solver.method: swa: the result files have the
 # documented layout (summary.csv with ci_ columns, result.h5 datasets), the
-# same seed gives identical results with 1 and 2 threads, and bad SWA keys
-# are reported with file, line, key, value and expectation.
+# same seed gives identical results with 1 and 2 threads, bad SWA keys
+# are reported with file, line, key, value and expectation, and a run whose
+# jump rate diverges (a gelling kernel) or that spends solver.max_jumps_per_output
+# stops with exit 1, the reason and no result files.
 source "$(dirname "$0")/cli-lib.sh" "$@"
 
 ok=$(write_case swa.yaml "title: swa run
@@ -82,6 +84,14 @@ output: {end: 1}")
 run_rc 1 "$BIN" check "$bad"
 stderr_has "bad4.yaml:4: solver.contraction = 'shrink': expected one of: merge, drop"
 
+bad=$(write_case bad5.yaml "grid:
+  axes: [{name: solid, type: linear, min: 0, max: 10, cells: 10}]
+initial: {type: point, number: 10, at: 1}
+solver: {method: swa, max_jumps_per_output: 0}
+output: {end: 1}")
+run_rc 1 "$BIN" check "$bad"
+stderr_has "bad5.yaml:4: solver.max_jumps_per_output = '0': expected an integer >= 1"
+
 empty=$(write_case empty.yaml "grid:
   axes: [{name: solid, type: linear, min: 0, max: 10, cells: 10}]
 mechanisms:
@@ -107,5 +117,71 @@ done
 run_rc 1 bash -c 'trap "" XFSZ; ulimit -f 20; exec "$0" "$@"' "$BIN" run "$SRC/examples/twin-screw.yaml" --out "$WORK/full" --quiet
 stderr_has "cannot write $WORK/full/.result.h5.partial: file write failed: File too large"
 no_result_files "$WORK/full"
+
+# The product kernel gels (t_gel = 1/(beta0 M2(0)) = 0.5 here), after which the
+# swa scheme's largest particles grow ever faster: seed 1 reaches a total rate
+# of ~1e17/s at t = 0.479 after ~25 000 jumps, and the time then stands still.
+# The run had looped for ever; it now stops a million jumps later.
+gel() {
+  write_case gel.yaml "grid:
+  axes:
+    - {name: v, type: geometric, min: 1e-3, max: 1e3, cells: 30, zero_first: true}
+initial: {type: exponential, number: 1000, mean: 1}
+mechanisms:
+  - type: aggregation
+    kernel: {type: product, beta0: 1e-3}
+solver: {method: swa, particles: 128, runs: 1, seed: 1${1:-}}
+output: {end: 2, count: 2}"
+}
+run_rc 1 timeout 120 "$BIN" run "$(gel)" --out "$WORK/gel" --quiet
+stderr_has "gransim: run 1: the simulated time stands still at t = 0.4790444 after " \
+  " jumps of the output interval from t = 0 to 2: the jump rate diverges, and the last 1000000 jumps did not advance the time at all" \
+  "; mechanisms[0] (aggregation) with kernel product gives 100 % of the rate (compartment 1): a kernel of product form gels" \
+  "use a non-gelling kernel (constant or sum) or an end time before the gel point"
+stderr_lacks "max_jumps_per_output"
+no_result_files "$WORK/gel"
+# the same with a budget it spends first: the last tenth of the budget took
+# under a thousandth of the time of the first (a rate grown a thousandfold)
+run_rc 1 timeout 120 "$BIN" run "$(gel ", max_jumps_per_output: 20000")" --out "$WORK/gel" --quiet
+stderr_has "gransim: run 1: solver.max_jumps_per_output = 20000 jumps took the run from t = 0 only to t = 0.4790444" \
+  " on the way to the output time 2: the jump rate diverges, the simulated time advanced by only " \
+  " over the last 2000 jumps against " "(compartment 1): a kernel of product form gels" \
+  ", fewer solver.particles, or a larger solver.max_jumps_per_output"
+no_result_files "$WORK/gel"
+
+# The budget counts the jumps (accepted and fictitious, as the report's
+# total) of each output interval of each run: a case whose intervals take J1
+# and J2 jumps passes with max(J1, J2) and with J1 + J2 - 1 (the count
+# restarts at every output time), gives the same results, and fails with
+# max(J1, J2) - 1, saying that the rate does not diverge.
+budget() {
+  write_case budget.yaml "grid:
+  axes: [{name: solid, type: geometric, min: 1e-3, max: 1e3, cells: 24, zero_first: true}]
+initial: {type: exponential, number: 1000, mean: 1}
+mechanisms:
+  - type: aggregation
+    kernel: {type: constant, beta0: 1e-3, majorant_factor: 2}
+solver: {method: swa, particles: 256, runs: 1, seed: 5$2}
+output: {end: $1, count: $3}"
+}
+jumps() { sed -n 's/.* done to t = .* (\([0-9]*\) jumps, .*/\1/p' "$WORK/stderr"; }
+run_rc 0 "$BIN" run "$(budget 2 "" 2)" --out "$WORK/j1"
+j1=$(jumps)
+run_rc 0 "$BIN" run "$(budget 4 "" 3)" --out "$WORK/j"
+j=$(jumps)
+j2=$((j - j1))
+[ "$j1" -gt 100 ] && [ "$j2" -gt 100 ] || fail "expected over 100 jumps in each interval, got $j1 and $j2"
+most=$((j1 > j2 ? j1 : j2))
+for n in "$most" $((j - 1)); do
+  run_rc 0 "$BIN" run "$(budget 4 ", max_jumps_per_output: $n" 3)" --out "$WORK/jn"
+  cmp -s "$WORK/j/summary.csv" "$WORK/jn/summary.csv" || fail "max_jumps_per_output: $n changed the results"
+done
+run_rc 1 "$BIN" run "$(budget 4 ", max_jumps_per_output: $((most - 1))" 3)" --out "$WORK/jf"
+t0=$([ "$j1" -ge "$j2" ] && echo 0 || echo 2)
+stderr_has "gransim: run 1: solver.max_jumps_per_output = $((most - 1)) jumps took the run from t = $t0 only to t = " \
+  "the interval needs about " "; mechanisms[0] (aggregation) with kernel constant gives 100 % of the rate (compartment 1): " \
+  "use output times closer together, fewer solver.particles, or a larger solver.max_jumps_per_output"
+stderr_lacks "diverges"
+no_result_files "$WORK/jf"
 
 echo "cli_swa: ok"

@@ -6,7 +6,8 @@
  * penetration against an ODE solver; inception unbiased for EWI and VWI;
  * breakage number growth; inception + transport steady state (c_z = R tau);
  * doubling and contraction (merge: mass exact; merge and drop: unbiased, the
- * new particle included). */
+ * new particle included); the jump budget of an output interval, counted
+ * exactly, and the runs stopped when the jump rate diverges. */
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_odeiv2.h>
 #include <math.h>
@@ -433,6 +434,97 @@ static void errors(void) {
   if (msg) fprintf(stderr, "error: %s\n", msg);
 }
 
+/* Test processes whose jumps change nothing: a constant rate (*self per
+ * second), and a rate that doubles at every jump of the run up to *self
+ * (HUGE_VAL: it overflows at the 1024th). */
+static double steady_rate(const void *self, const gs_swa_sim *s, size_t z) {
+  (void)s, (void)z;
+  return *(const double *)self;
+}
+static double runaway_rate(const void *self, const gs_swa_sim *s, size_t z) {
+  (void)z;
+  return fmin(ldexp(1, (int)fmin((double)gs_swa_sim_stats(s).jumps, 4096)), *(const double *)self);
+}
+static int no_change(const void *self, gs_swa_sim *s, size_t z, gs_error *err) {
+  (void)self, (void)s, (void)z, (void)err;
+  return GS_OK;
+}
+static const gs_swa_process_type steady_type = {.name = "steady", .rate = steady_rate, .jump = no_change};
+static const gs_swa_process_type runaway_type = {.name = "runaway", .rate = runaway_rate, .jump = no_change};
+
+/* A run of one such process from t = 0 to each of ends (budget 0: the
+ * default); returns the status of the first advance that failed (0: none),
+ * its message in msg and the jumps of the run in jumps. */
+static int budget_run(const gs_swa_process_type *t, double param, uint64_t budget, const double *ends, int nend,
+                      uint64_t *jumps, char *msg) {
+  gs_swa_case c;
+  sw_case(sw_fmt("grid:\n  axes: [{name: v, type: linear, min: 0, max: 1, cells: 2}]\n"
+                 "initial: {type: point, number: 10, at: 0.5}\n"
+                 "solver: {method: swa, particles: 16}\noutput: {end: 1}\n"), &c);
+  c.model.proc = calloc(1, sizeof *c.model.proc);
+  c.model.proc[0] = (gs_swa_process){.type = t, .self = &param};
+  snprintf(c.model.proc[0].label, sizeof c.model.proc[0].label, "mechanisms[0] (%s)", t->name);
+  c.model.nproc = 1;
+  gs_swa_sim *s = start(&c, 11);
+  if (budget) s->max_jumps = budget;
+  gs_error e = {0};
+  int rc = 0;
+  for (int i = 0; !rc && i < nend; i++) rc = gs_swa_sim_advance(s, ends[i], &e);
+  *jumps = gs_swa_sim_stats(s).jumps;
+  snprintf(msg, sizeof e.msg, "%s", e.msg);
+  gs_swa_sim_free(s);
+  gs_swa_case_free(&c);
+  return rc;
+}
+
+static void jump_budget(void) {
+  static char msg[sizeof((gs_error){0}).msg];
+  uint64_t j1, j, n;
+  const double t1 = 1, t12[2] = {1, 2};
+  /* a constant rate: the budget counts each interval's jumps from zero, and
+   * the run that just fits it is the run without it */
+  CHECK(budget_run(&steady_type, 500, 0, &t1, 1, &j1, msg) == 0);
+  CHECK(budget_run(&steady_type, 500, 0, t12, 2, &j, msg) == 0);
+  const uint64_t j2 = j - j1, most = j1 > j2 ? j1 : j2;
+  fprintf(stderr, "budget: %llu and %llu jumps in the two intervals\n", (unsigned long long)j1, (unsigned long long)j2);
+  CHECK(j1 > 400 && j2 > 400);
+  CHECK(budget_run(&steady_type, 500, most, t12, 2, &n, msg) == 0 && n == j);
+  CHECK(budget_run(&steady_type, 500, most - 1, t12, 2, &n, msg) == GS_ENUMERIC);
+  CHECK(n == (j1 > j2 ? most - 1 : j1 + most - 1));
+  char want[160];
+  snprintf(want, sizeof want, "solver.max_jumps_per_output = %llu jumps took the run from t = %d only to t = ",
+           (unsigned long long)(most - 1), j1 > j2 ? 0 : 1);
+  CHECK(strstr(msg, want) && strstr(msg, "at the present total rate (500 per second) the interval needs about ") &&
+        strstr(msg, "; mechanisms[0] (steady) gives 100 % of the rate (compartment 1): use output times closer "
+                    "together, fewer solver.particles, or a larger solver.max_jumps_per_output") &&
+        !strstr(msg, "diverges"));
+  fprintf(stderr, "budget: %s\n", msg);
+  /* a rate that doubles at every jump: with a budget, the last tenth of it
+   * took far less time than the first */
+  CHECK(budget_run(&runaway_type, HUGE_VAL, 500, &t1, 1, &n, msg) == GS_ENUMERIC && n == 500);
+  CHECK(strstr(msg, "solver.max_jumps_per_output = 500 jumps took the run from t = 0 only to t = ") &&
+        strstr(msg, ": the jump rate diverges, the simulated time advanced by only ") &&
+        strstr(msg, " over the last 50 jumps against ") &&
+        strstr(msg, "mechanisms[0] (runaway) gives 100 % of the rate (compartment 1): its rate grows without bound: "
+                    "check its rate constants, or use fewer solver.particles or a larger solver.max_jumps_per_output"));
+  fprintf(stderr, "budget: %s\n", msg);
+  /* without a budget it overflows at the 1024th jump */
+  CHECK(budget_run(&runaway_type, HUGE_VAL, 0, &t1, 1, &n, msg) == GS_ENUMERIC && n == 1024);
+  CHECK(strstr(msg, "the total jump rate is inf at t = ") && strstr(msg, " after 1024 jumps of the output interval from t = 0 to 1 (") &&
+        strstr(msg, ": the jump rate diverges; mechanisms[0] (runaway) has a rate that is not finite (compartment 1): "
+                    "its rate grows without bound: check its rate constants") &&
+        !strstr(msg, "max_jumps_per_output"));
+  fprintf(stderr, "budget: %s\n", msg);
+  /* capped at 1e30 per second, the waiting times are lost in t (about 2):
+   * a million jumps in a row that leave it unchanged stop the run */
+  CHECK(budget_run(&runaway_type, 1e30, 0, &t1, 1, &n, msg) == GS_ENUMERIC && n > 1000000 && n < 1000200);
+  CHECK(strstr(msg, "the simulated time stands still at t = ") &&
+        strstr(msg, "the jump rate diverges, and the last 1000000 jumps did not advance the time at all") &&
+        strstr(msg, "is 1e+30 now") && strstr(msg, "its rate grows without bound: check its rate constants") &&
+        !strstr(msg, "max_jumps_per_output"));
+  fprintf(stderr, "budget: %s\n", msg);
+}
+
 int main(void) {
   mass_per_jump();
   nucleation_event();
@@ -447,5 +539,6 @@ int main(void) {
   contraction_unbiased("drop");
   lpda();
   errors();
+  jump_budget();
   TEST_EXIT();
 }

@@ -3,6 +3,7 @@
  * the bins of the output distributions (each axis names a particle
  * coordinate); `initial`, `mechanisms` (SWA process types) and `output` have
  * the sectional meaning.  docs/case-files.md documents every key. */
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,12 +15,20 @@
 #include "swa/sim.h"
 #include "swa/spec.h"
 
+/* The private part of a case (gs_swa_case.initial): the initial entries,
+ * and the solver settings that only the runs read. */
 typedef struct initial_set {
   size_t n;
   gs_swa_spec *spec;
   size_t *comp;
   char (*key)[160]; /* "file:line: path" of each entry */
+  uint64_t max_jumps; /* solver.max_jumps_per_output */
 } initial_set;
+
+uint64_t gs_swa_case_max_jumps(const gs_swa_case *c) {
+  const initial_set *set = c->initial;
+  return set && set->max_jumps ? set->max_jumps : (uint64_t)GS_SWA_MAX_JUMPS_DEFAULT;
+}
 
 size_t gs_swa_case_initial_count(const gs_swa_case *c) {
   const initial_set *set = c->initial;
@@ -53,11 +62,12 @@ static int read_solver(gs_cfg_node *root, gs_swa_case *c, int size_axes, gs_erro
   const gs_grid *g = &c->grid;
   gs_cfg_node *n = gs_cfg_get(root, "solver");
   const char *method;
-  long particles, runs, seed;
+  long particles, runs, seed, max_jumps;
   int rc = gs_cfg_string_req(n, "method", &method, err);
   if (!rc) rc = gs_cfg_long_range(n, "particles", 0, 4096, 16, 1L << 26, &particles, err);
   if (!rc) rc = gs_cfg_long_range(n, "runs", 0, 10, 1, 100000, &runs, err);
   if (!rc) rc = gs_cfg_long_range(n, "seed", 0, 1, 0, 4294967295L, &seed, err);
+  if (!rc) rc = gs_cfg_long_range(n, "max_jumps_per_output", 0, GS_SWA_MAX_JUMPS_DEFAULT, 1, LONG_MAX, &max_jumps, err);
   if (!rc) rc = gs_cfg_double_range(n, "fill_fraction", 0, 0.75, 0, 1, 1, 0, &m->fill_fraction, err);
   if (!rc) rc = gs_cfg_double_range(n, "doubling_fraction", 0, 0.375, 0, 0, 0.5, 0, &m->nmin_fraction, err);
   if (!rc) rc = gs_cfg_double_range(n, "reference_number", 0, 0, 0, 0, HUGE_VAL, 0, &m->reference_number, err);
@@ -66,6 +76,7 @@ static int read_solver(gs_cfg_node *root, gs_swa_case *c, int size_axes, gs_erro
   if (!rc) rc = gs_cfg_enum_opt(n, "contraction", contractions, GS_SWA_MERGE, &m->contraction, err);
   if (rc) return rc;
   m->nmax = (size_t)particles;
+  ((initial_set *)c->initial)->max_jumps = (uint64_t)max_jumps;
   c->runs = (size_t)runs;
   c->seed = (uint64_t)seed;
   m->ncomp = g->ncomp;
@@ -129,9 +140,7 @@ static int read_solver(gs_cfg_node *root, gs_swa_case *c, int size_axes, gs_erro
 }
 
 static int read_initial(gs_cfg_node *root, gs_swa_case *c, gs_error *err) {
-  initial_set *set = gs_calloc(1, sizeof *set, err);
-  if (!set) return GS_ENOMEM;
-  c->initial = set;
+  initial_set *set = c->initial;
   gs_cfg_node *init = gs_cfg_get(root, "initial");
   if (!init) return GS_OK;
   int seq = gs_cfg_kind_of(init) == GS_CFG_SEQ;
@@ -191,6 +200,7 @@ int gs_swa_case_from_cfg(gs_cfg *cfg, gs_swa_case *c, gs_error *err) {
   int size_axes = 0;
   if (!rc) rc = gs_case_read_grid_only(root, &c->grid, &size_axes, &grid, err);
   if (!rc) rc = gs_cfg_check_unused(grid, err);
+  if (!rc && !(c->initial = gs_calloc(1, sizeof(initial_set), err))) rc = GS_ENOMEM;
   if (!rc) rc = read_solver(root, c, size_axes, err);
   if (!rc) {
     c->model.grid = &c->grid;

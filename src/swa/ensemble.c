@@ -30,6 +30,7 @@ gs_swa_sim *gs_swa_sim_alloc(const gs_swa_model *m, uint64_t seed, gs_error *err
     c->gain = 1;
   }
   s->next_checkpoint = m->lpda_interval > 0 ? m->lpda_interval : HUGE_VAL;
+  s->max_jumps = (uint64_t)GS_SWA_MAX_JUMPS_DEFAULT;
   return s;
 fail:
   if (err && !err->code) gs_error_set(err, GS_ENOMEM, "out of memory for the SWA ensemble");

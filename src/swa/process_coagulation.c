@@ -207,3 +207,10 @@ const gs_swa_process_type gs_swa_coagulation = {
     .jump = coag_jump,
     .free = coag_free,
 };
+
+const char *gs_swa_coag_kernel(const gs_swa_process *p, int *product) {
+  if (p->type != &gs_swa_coagulation) return NULL;
+  const coag *c = p->self;
+  *product = c->form.kind == GS_KERNEL_FORM_PRODUCT;
+  return c->kernel.type->name;
+}

@@ -97,6 +97,7 @@ static int one_run(const gs_swa_case *c, size_t r, double *obs, double *hist, do
   size_t nz = m->ncomp, ncol = (size_t)gs_swa_ncolumns(m), ncells = c->grid.ncells;
   gs_swa_sim *s = gs_swa_sim_alloc(m, gs_swa_run_seed(c->seed, r), err);
   if (!s) return err->code;
+  s->max_jumps = gs_swa_case_max_jumps(c);
   int rc = gs_swa_case_init_run(c, s, err);
   for (size_t t = 0; !rc && t < c->ntimes; t++) {
     rc = gs_swa_sim_advance(s, c->times[t], err);

@@ -28,12 +28,28 @@ struct gs_swa_sim {
   swa_comp *comp;
   gs_swa_stats stats;
   double *rates; /* nproc * ncomp scratch */
+  /* Jumps one gs_swa_sim_advance may take (solver.max_jumps_per_output):
+   * a gelling kernel makes the rate grow without bound, and the loop would
+   * otherwise run on with the time standing still. */
+  uint64_t max_jumps;
 };
+
+/* The default of solver.max_jumps_per_output, and of a run not made from a
+ * case: over 30 times the most jumps a bundled case takes in one output
+ * interval (3.1e6, the twin-screw example at N_max 65536; docs/case-files.md),
+ * and spent within a minute at the jump rates of a small ensemble. */
+#define GS_SWA_MAX_JUMPS_DEFAULT 100000000L
 
 /* Doubling when a compartment falls below nmin (called after every event). */
 void gs_swa_maintain(gs_swa_sim *s, size_t z);
 /* External liquid left after dt of penetration (a0, b0 > 0; see process_penetration.c). */
 double gs_swa_penetration_left(double a0, double b0, double k, double kappa, double dt);
+
+/* solver.max_jumps_per_output of a case. */
+uint64_t gs_swa_case_max_jumps(const gs_swa_case *c);
+/* Of an aggregation process, the name of its kernel and whether its form is
+ * the product one (a kernel that gels), else NULL. */
+const char *gs_swa_coag_kernel(const gs_swa_process *p, int *product);
 
 /* The seed of run r of a case seeded with seed (decorrelated streams). */
 unsigned long gs_swa_run_seed(uint64_t seed, size_t run);
