@@ -46,13 +46,20 @@ cmp -s "$WORK/a/summary.csv" "$WORK/b/summary.csv" || fail "1 and 2 threads give
 run_rc 2 "$BIN" run "$ok" --out "$WORK/c" --resume
 stderr_has "--resume is not available with the swa solver"
 
-bad=$(write_case bad.yaml "grid:
+# bad_solver NAME SOLVER_KEYS MESSAGE: a one-particle-type case whose solver
+# map holds SOLVER_KEYS is refused by check at line 4 with MESSAGE.
+bad_solver() {
+  local f
+  f=$(write_case "$1.yaml" "grid:
   axes: [{name: solid, type: linear, min: 0, max: 10, cells: 10}]
 initial: {type: point, number: 10, at: 1}
-solver: {method: swa, particles: 8}
+solver: {method: swa, $2}
 output: {end: 1}")
-run_rc 1 "$BIN" check "$bad"
-stderr_has "bad.yaml:4: solver.particles = '8': expected"
+  run_rc 1 "$BIN" check "$f"
+  stderr_has "$1.yaml:4: $3"
+}
+
+bad_solver bad "particles: 8" "solver.particles = '8': expected"
 
 bad=$(write_case bad2.yaml "grid:
   axes: [{name: solid, type: linear, min: 0, max: 10, cells: 10}]
@@ -76,21 +83,9 @@ output: {end: 1}")
 run_rc 1 "$BIN" check "$bad"
 stderr_has "bad3.yaml:5: mechanisms[0].type = 'growth': unknown mechanism (swa solver) type; expected one of: aggregation"
 
-bad=$(write_case bad4.yaml "grid:
-  axes: [{name: solid, type: linear, min: 0, max: 10, cells: 10}]
-initial: {type: point, number: 10, at: 1}
-solver: {method: swa, contraction: shrink}
-output: {end: 1}")
-run_rc 1 "$BIN" check "$bad"
-stderr_has "bad4.yaml:4: solver.contraction = 'shrink': expected one of: merge, drop"
+bad_solver bad4 "contraction: shrink" "solver.contraction = 'shrink': expected one of: merge, drop"
 
-bad=$(write_case bad5.yaml "grid:
-  axes: [{name: solid, type: linear, min: 0, max: 10, cells: 10}]
-initial: {type: point, number: 10, at: 1}
-solver: {method: swa, max_jumps_per_output: 0}
-output: {end: 1}")
-run_rc 1 "$BIN" check "$bad"
-stderr_has "bad5.yaml:4: solver.max_jumps_per_output = '0': expected an integer >= 1"
+bad_solver bad5 "max_jumps_per_output: 0" "solver.max_jumps_per_output = '0': expected an integer >= 1"
 
 empty=$(write_case empty.yaml "grid:
   axes: [{name: solid, type: linear, min: 0, max: 10, cells: 10}]
